@@ -1,0 +1,277 @@
+//! Bounding volume hierarchies: one bottom-level BVH per mesh, a top-level BVH over instances.
+//!
+//! Built with obvhs (PLOC + reinsertion), then flattened to a "child-pair" BVH2 (see [`GpuBvhNode`]): each GPU
+//! node holds the boxes of both its children, so traversal tests two boxes per node fetch, and a refit is one
+//! reverse sweep over the array (children always sit after their parent). Deformed meshes are refit in place;
+//! [`MeshBvh::sah_cost`] against the cost at build time tells when a refit has degraded and a rebuild is due.
+
+pub mod refit;
+
+use bytemuck::{Pod, Zeroable};
+use glam::{Vec3, Vec3A};
+use obvhs::{BvhBuildParams, aabb::Aabb, bvh2::Bvh2, triangle::Triangle};
+
+/// Deepest BVH the GPU traversal stack holds (see `shaders/bvh.wgsl`).
+pub const MAX_TRAVERSAL_DEPTH: u32 = 64;
+
+/// One child of a GPU node: its box, and either an inner node index (`count == 0`) or a leaf's first
+/// primitive and primitive count.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct GpuBvhChild {
+    pub min: [f32; 3],
+    pub index: u32,
+    pub max: [f32; 3],
+    pub count: u32,
+}
+
+impl GpuBvhChild {
+    /// An inverted box no ray can hit: the second child of a single-leaf tree.
+    pub const EMPTY: Self = Self { min: [1.0; 3], index: u32::MAX, max: [-1.0; 3], count: 0 };
+
+    pub fn is_leaf(&self) -> bool {
+        self.count > 0
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.count == 0 && self.index == u32::MAX
+    }
+
+    fn set_bounds(&mut self, lo: Vec3, hi: Vec3) {
+        self.min = lo.to_array();
+        self.max = hi.to_array();
+    }
+
+    fn half_area(&self) -> f32 {
+        if self.is_empty() {
+            return 0.0;
+        }
+        let d = (Vec3::from(self.max) - Vec3::from(self.min)).max(Vec3::ZERO);
+        d.x * d.y + d.y * d.z + d.z * d.x
+    }
+}
+
+/// 64 bytes: two children. Node 0 is the root.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct GpuBvhNode {
+    pub children: [GpuBvhChild; 2],
+}
+
+/// Build effort, from obvhs's presets.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub enum BvhQuality {
+    Fastest,
+    Fast,
+    #[default]
+    Medium,
+    Slow,
+}
+
+impl BvhQuality {
+    pub const ALL: [BvhQuality; 4] = [Self::Fastest, Self::Fast, Self::Medium, Self::Slow];
+
+    fn params(self) -> BvhBuildParams {
+        let mut p = match self {
+            Self::Fastest => BvhBuildParams::fastest_build(),
+            Self::Fast => BvhBuildParams::fast_build(),
+            Self::Medium => BvhBuildParams::medium_build(),
+            Self::Slow => BvhBuildParams::slow_build(),
+        };
+        // Spatial splits duplicate triangles across leaves, which refit cannot maintain; leaves of at most 4
+        // triangles keep the GPU's per-leaf loop short.
+        p.pre_split = false;
+        p.max_prims_per_leaf = p.max_prims_per_leaf.min(4);
+        p
+    }
+}
+
+#[derive(Debug, thiserror::Error)]
+#[error("BVH depth {depth} exceeds the GPU traversal stack ({MAX_TRAVERSAL_DEPTH}); the geometry is degenerate")]
+pub struct BvhTooDeep {
+    pub depth: u32,
+}
+
+/// A flattened BVH and the order its leaves expect primitives in.
+#[derive(Clone, Debug, Default)]
+pub struct FlatBvh {
+    pub nodes: Vec<GpuBvhNode>,
+    /// Slot `i` of the GPU primitive array holds original primitive `order[i]`.
+    pub order: Vec<u32>,
+    pub depth: u32,
+}
+
+impl FlatBvh {
+    fn from_obvhs(bvh: &Bvh2) -> Result<Self, BvhTooDeep> {
+        let mut flat = FlatBvh::default();
+        if bvh.nodes.is_empty() {
+            flat.nodes.push(GpuBvhNode { children: [GpuBvhChild::EMPTY; 2] });
+            return Ok(flat);
+        }
+        let leaf = |flat: &mut FlatBvh, n: &obvhs::bvh2::node::Bvh2Node| {
+            let start = flat.order.len() as u32;
+            let first = n.first_index as usize;
+            flat.order.extend_from_slice(&bvh.primitive_indices[first..first + n.prim_count as usize]);
+            child_from(n.aabb(), start, n.prim_count)
+        };
+        let root = &bvh.nodes[0];
+        if root.is_leaf() {
+            let c = leaf(&mut flat, root);
+            flat.nodes.push(GpuBvhNode { children: [c, GpuBvhChild::EMPTY] });
+            flat.depth = 1;
+            return Ok(flat);
+        }
+        flat.nodes.push(GpuBvhNode { children: [GpuBvhChild::EMPTY; 2] });
+        let mut stack = vec![(0usize, 0usize, 1u32)];
+        while let Some((src, slot, depth)) = stack.pop() {
+            flat.depth = flat.depth.max(depth);
+            let first = bvh.nodes[src].first_index as usize;
+            for k in 0..2 {
+                let child = &bvh.nodes[first + k];
+                flat.nodes[slot].children[k] = if child.is_leaf() {
+                    leaf(&mut flat, child)
+                } else {
+                    let new_slot = flat.nodes.len();
+                    flat.nodes.push(GpuBvhNode { children: [GpuBvhChild::EMPTY; 2] });
+                    stack.push((first + k, new_slot, depth + 1));
+                    child_from(child.aabb(), new_slot as u32, 0)
+                };
+            }
+        }
+        if flat.depth > MAX_TRAVERSAL_DEPTH {
+            return Err(BvhTooDeep { depth: flat.depth });
+        }
+        Ok(flat)
+    }
+
+    /// Surface-area-heuristic cost (traversal and intersection both cost 1), relative to the root's area.
+    pub fn sah_cost(&self) -> f32 {
+        let root = &self.nodes[0].children;
+        let root_area = union_half_area(&root[0], &root[1]).max(f32::MIN_POSITIVE);
+        let mut cost = 0.0;
+        for node in &self.nodes {
+            let [a, b] = &node.children;
+            cost += union_half_area(a, b);
+            for c in [a, b] {
+                if c.is_leaf() {
+                    cost += c.half_area() * c.count as f32;
+                }
+            }
+        }
+        cost / root_area
+    }
+
+    /// Bottom-up box update after primitives moved; `prim_bounds(i)` bounds GPU primitive slot `i`.
+    pub fn refit(&mut self, prim_bounds: impl Fn(usize) -> (Vec3, Vec3)) {
+        for i in (0..self.nodes.len()).rev() {
+            for k in 0..2 {
+                let c = self.nodes[i].children[k];
+                if c.is_empty() {
+                    continue;
+                }
+                let (lo, hi) = if c.is_leaf() {
+                    (c.index as usize..(c.index + c.count) as usize)
+                        .map(&prim_bounds)
+                        .fold((Vec3::MAX, Vec3::MIN), |(lo, hi), (a, b)| (lo.min(a), hi.max(b)))
+                } else {
+                    let [a, b] = self.nodes[c.index as usize].children;
+                    let lo = Vec3::from(a.min).min(Vec3::from(b.min));
+                    let hi = Vec3::from(a.max).max(Vec3::from(b.max));
+                    (lo, hi)
+                };
+                self.nodes[i].children[k].set_bounds(lo, hi);
+            }
+        }
+    }
+
+    pub fn root_bounds(&self) -> (Vec3, Vec3) {
+        let [a, b] = self.nodes[0].children;
+        let mut lo = Vec3::from(a.min);
+        let mut hi = Vec3::from(a.max);
+        if !b.is_empty() {
+            lo = lo.min(Vec3::from(b.min));
+            hi = hi.max(Vec3::from(b.max));
+        }
+        (lo, hi)
+    }
+}
+
+fn child_from(aabb: &Aabb, index: u32, count: u32) -> GpuBvhChild {
+    GpuBvhChild {
+        min: Vec3::from(aabb.min).to_array(),
+        index,
+        max: Vec3::from(aabb.max).to_array(),
+        count,
+    }
+}
+
+fn union_half_area(a: &GpuBvhChild, b: &GpuBvhChild) -> f32 {
+    if b.is_empty() {
+        return a.half_area();
+    }
+    let lo = Vec3::from(a.min).min(Vec3::from(b.min));
+    let hi = Vec3::from(a.max).max(Vec3::from(b.max));
+    let d = (hi - lo).max(Vec3::ZERO);
+    d.x * d.y + d.y * d.z + d.z * d.x
+}
+
+/// A mesh's BVH over its triangles, with its SAH cost at build time for the refit quality guard.
+#[derive(Clone, Debug)]
+pub struct MeshBvh {
+    pub flat: FlatBvh,
+    pub build_sah: f32,
+}
+
+impl MeshBvh {
+    pub fn build(positions: &[Vec3], triangles: &[[u32; 3]], quality: BvhQuality) -> Result<Self, BvhTooDeep> {
+        let tris: Vec<Triangle> = triangles
+            .iter()
+            .map(|t| Triangle {
+                v0: Vec3A::from(positions[t[0] as usize]),
+                v1: Vec3A::from(positions[t[1] as usize]),
+                v2: Vec3A::from(positions[t[2] as usize]),
+            })
+            .collect();
+        let mut core = std::time::Duration::ZERO;
+        let bvh = obvhs::bvh2::builder::build_bvh2_from_tris(&tris, quality.params(), &mut core);
+        let flat = FlatBvh::from_obvhs(&bvh)?;
+        let build_sah = flat.sah_cost();
+        Ok(Self { flat, build_sah })
+    }
+
+    /// Refits to moved vertices; `gpu_triangles` are the mesh's triangles in [`FlatBvh::order`].
+    pub fn refit(&mut self, positions: &[Vec3], gpu_triangles: &[[u32; 3]]) {
+        self.flat.refit(|i| {
+            let [a, b, c] = gpu_triangles[i].map(|v| positions[v as usize]);
+            (a.min(b).min(c), a.max(b).max(c))
+        });
+    }
+
+    /// Current SAH cost over the cost at build: 1 after a build, rising as a refit degrades the tree.
+    pub fn sah_ratio(&self) -> f32 {
+        self.flat.sah_cost() / self.build_sah.max(f32::MIN_POSITIVE)
+    }
+}
+
+struct InstanceBox(Aabb);
+impl obvhs::Boundable for InstanceBox {
+    fn aabb(&self) -> Aabb {
+        self.0
+    }
+}
+
+/// Builds the top-level BVH over instance world-space boxes; leaves hold one instance each.
+pub fn build_tlas(boxes: &[(Vec3, Vec3)]) -> Result<FlatBvh, BvhTooDeep> {
+    if boxes.is_empty() {
+        return FlatBvh::from_obvhs(&Bvh2::default());
+    }
+    let prims: Vec<InstanceBox> = boxes
+        .iter()
+        .map(|(lo, hi)| InstanceBox(Aabb::new(Vec3A::from(*lo), Vec3A::from(*hi))))
+        .collect();
+    let mut params = BvhBuildParams::fast_build();
+    params.max_prims_per_leaf = 1;
+    let mut core = std::time::Duration::ZERO;
+    let bvh = obvhs::bvh2::builder::build_bvh2(&prims, params, &mut core);
+    FlatBvh::from_obvhs(&bvh)
+}

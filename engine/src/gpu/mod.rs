@@ -1,0 +1,132 @@
+//! The wgpu device: one adapter picked at start-up, shared by every plugin as a resource.
+
+use bevy_ecs::prelude::Resource;
+use std::sync::Arc;
+
+/// What a user with no usable GPU driver should do.
+pub const NO_ADAPTER_HELP: &str = "no GPU adapter found (wgpu saw no Vulkan, Metal, DX12 or GL device). \
+On a machine without a GPU install Mesa's software Vulkan driver (lavapipe): \
+`sudo apt-get install -y mesa-vulkan-drivers libvulkan1` on Debian/Ubuntu; \
+with a GPU, install its vendor driver. WGPU_BACKEND=vulkan|gl|metal|dx12 picks a backend.";
+
+#[derive(Debug, thiserror::Error)]
+pub enum GpuError {
+    #[error("{NO_ADAPTER_HELP}")]
+    NoAdapter,
+    #[error("the GPU adapter `{adapter}` refused a device: {source}")]
+    Device {
+        adapter: String,
+        source: wgpu::RequestDeviceError,
+    },
+}
+
+/// The device and queue every GPU pass uses, plus what the adapter can do.
+#[derive(Resource, Clone)]
+pub struct GpuContext {
+    pub device: wgpu::Device,
+    pub queue: wgpu::Queue,
+    pub adapter: Arc<wgpu::Adapter>,
+    pub info: wgpu::AdapterInfo,
+    pub limits: wgpu::Limits,
+    pub features: wgpu::Features,
+}
+
+impl GpuContext {
+    /// Picks the highest-performance adapter (WGPU_BACKEND and WGPU_ADAPTER_NAME are honoured) and opens a
+    /// device with the adapter's own limits: the path tracer binds more storage buffers than wgpu's defaults.
+    pub fn new_headless() -> Result<Self, GpuError> {
+        // Vulkan/Metal/DX12 first: probing GL on a headless machine only prints EGL errors. GL is tried when
+        // nothing else exists, and WGPU_BACKEND picks explicitly.
+        let explicit = std::env::var_os("WGPU_BACKEND").is_some();
+        let mut descriptor = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
+        if !explicit {
+            descriptor.backends = wgpu::Backends::PRIMARY;
+        }
+        let instance = wgpu::Instance::new(descriptor);
+        match Self::from_instance(&instance, None) {
+            Err(GpuError::NoAdapter) if !explicit => {
+                let mut gl = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
+                gl.backends = wgpu::Backends::GL;
+                Self::from_instance(&wgpu::Instance::new(gl), None)
+            }
+            other => other,
+        }
+    }
+
+    pub fn from_instance(
+        instance: &wgpu::Instance,
+        surface: Option<&wgpu::Surface<'_>>,
+    ) -> Result<Self, GpuError> {
+        let adapter = pollster::block_on(wgpu::util::initialize_adapter_from_env_or_default(
+            instance, surface,
+        ))
+        .map_err(|_| GpuError::NoAdapter)?;
+        let info = adapter.get_info();
+        let wanted = wgpu::Features::TIMESTAMP_QUERY
+            | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS
+            | wgpu::Features::SUBGROUP;
+        let features = adapter.features() & wanted;
+        let limits = adapter.limits();
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("raykin"),
+            required_features: features,
+            required_limits: limits.clone(),
+            ..Default::default()
+        }))
+        .map_err(|source| GpuError::Device {
+            adapter: info.name.clone(),
+            source,
+        })?;
+        Ok(Self {
+            device,
+            queue,
+            adapter: Arc::new(adapter),
+            info,
+            limits,
+            features,
+        })
+    }
+
+    /// One line for logs and the start-up banner: name, backend, device type, driver.
+    pub fn describe(&self) -> String {
+        format!(
+            "{} ({:?}, {:?}, driver {} {})",
+            self.info.name,
+            self.info.backend,
+            self.info.device_type,
+            self.info.driver,
+            self.info.driver_info
+        )
+    }
+
+    pub fn supports_timestamps(&self) -> bool {
+        self.features.contains(wgpu::Features::TIMESTAMP_QUERY)
+    }
+
+    /// Blocks until the GPU has finished all submitted work.
+    pub fn wait_idle(&self) {
+        let _ = self.device.poll(wgpu::PollType::wait_indefinitely());
+    }
+
+    /// Copies `size` bytes of `src` to the CPU (blocking).
+    pub fn read_buffer(&self, src: &wgpu::Buffer, size: u64) -> Vec<u8> {
+        let staging = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("readback"),
+            size,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut encoder = self.device.create_command_encoder(&Default::default());
+        encoder.copy_buffer_to_buffer(src, 0, &staging, 0, size);
+        self.queue.submit([encoder.finish()]);
+        let slice = staging.slice(..);
+        slice.map_async(wgpu::MapMode::Read, |_| {});
+        self.wait_idle();
+        let data = slice
+            .get_mapped_range()
+            .expect("readback buffer was mapped above")
+            .to_vec();
+        staging.unmap();
+        data
+    }
+}

@@ -1,0 +1,99 @@
+//! A whole engine without a window: the frame schedule run N times, for the CLI, tests, recording and benches.
+
+use crate::camera::{CameraChoice, CameraView, resolve_camera};
+use crate::gpu::GpuContext;
+use crate::render::{Aovs, RenderPlugin, RenderSettings, Renderer};
+use crate::scene::{SceneAsset, ScenePlugin};
+use bevy_app::App;
+use std::sync::Arc;
+
+pub struct HeadlessApp {
+    pub app: App,
+    pub ctx: GpuContext,
+    pub notes: Vec<String>,
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum HeadlessError {
+    #[error(transparent)]
+    Upload(#[from] crate::render::UploadError),
+    #[error(transparent)]
+    Camera(#[from] crate::camera::NoSuchCamera),
+}
+
+impl HeadlessApp {
+    /// Spawns the scene, uploads it, and places the camera (after one transform propagation).
+    pub fn new(ctx: GpuContext, scene: Arc<SceneAsset>, settings: RenderSettings, camera: &CameraChoice) -> Result<Self, HeadlessError> {
+        Self::with_binding_limit(ctx, scene, settings, camera, None)
+    }
+
+    pub fn with_binding_limit(ctx: GpuContext, scene: Arc<SceneAsset>, settings: RenderSettings, camera: &CameraChoice, binding_limit: Option<u64>) -> Result<Self, HeadlessError> {
+        let (renderer, notes) = Renderer::new(&ctx, &scene, &settings, binding_limit)?;
+        let mut app = App::new();
+        crate::configure_frame_schedule(&mut app);
+        app.insert_resource(ctx.clone())
+            .insert_resource(settings.clone())
+            .insert_resource(renderer)
+            .add_plugins(ScenePlugin { scene: scene.clone() })
+            .add_plugins(crate::animation::AnimationPlugin)
+            .add_plugins(RenderPlugin);
+        // Transforms must be current before a camera node can be resolved.
+        use bevy_ecs::system::RunSystemOnce;
+        let _ = app.world_mut().run_system_once(crate::scene::propagate_transforms);
+        let aspect = settings.width as f32 / settings.height.max(1) as f32;
+        let view = resolve_camera(app.world_mut(), &scene, camera, aspect)?;
+        app.insert_resource(view);
+        Ok(Self { app, ctx, notes })
+    }
+
+    pub fn settings_mut(&mut self) -> bevy_ecs::world::Mut<'_, RenderSettings> {
+        self.app.world_mut().resource_mut::<RenderSettings>()
+    }
+
+    pub fn set_camera(&mut self, view: CameraView) {
+        self.app.insert_resource(view);
+    }
+
+    /// Runs the frame schedule once (animation, transforms, deformation, BVH, upload, `spp_per_frame` samples).
+    pub fn step(&mut self) {
+        self.app.update();
+    }
+
+    /// Accumulates `spp` samples per pixel in frames of at most `chunk` samples; `progress(done)` after each.
+    pub fn accumulate(&mut self, spp: u32, chunk: u32, mut progress: impl FnMut(u32)) {
+        let mut done = 0;
+        while done < spp {
+            let n = chunk.clamp(1, spp - done);
+            self.settings_mut().spp_per_frame = n;
+            self.step();
+            done += n;
+            // Waiting per chunk keeps the GPU queue short (and lavapipe's memory flat).
+            self.ctx.wait_idle();
+            progress(done);
+        }
+    }
+
+    pub fn renderer(&self) -> &Renderer {
+        self.app.world().resource::<Renderer>()
+    }
+
+    pub fn samples(&self) -> u32 {
+        self.renderer().tracer.samples
+    }
+
+    pub fn radiance(&self) -> Vec<[f32; 3]> {
+        self.renderer().tracer.read_radiance(&self.ctx)
+    }
+
+    pub fn aovs(&self) -> Aovs {
+        self.renderer().tracer.read_aovs(&self.ctx)
+    }
+
+    /// Tone-mapped sRGB RGBA8 of the current accumulation.
+    pub fn display_rgba8(&self) -> Vec<u8> {
+        let settings = self.app.world().resource::<RenderSettings>().clone();
+        let r = self.renderer();
+        r.tracer.tonemap(&self.ctx, &settings);
+        r.tracer.read_rgba8(&self.ctx)
+    }
+}

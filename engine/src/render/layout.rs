@@ -1,0 +1,141 @@
+//! GPU-side structs, byte-for-byte the WGSL structs in `shaders/common.wgsl`.
+
+use bytemuck::{Pod, Zeroable};
+use glam::{Mat4, Vec3, Vec4};
+
+/// "No texture / attribute absent" marker.
+pub const NONE: u32 = u32::MAX;
+/// Encoded normal/tangent that the shader treats as missing (never produced by `pack2x16snorm`).
+pub const INVALID_OCT: u32 = 0x8000_8000;
+
+pub const MATERIAL_DOUBLE_SIDED: u32 = 1;
+pub const MATERIAL_ALPHA_MASK: u32 = 2;
+pub const MATERIAL_ALPHA_BLEND: u32 = 4;
+
+pub const TEXTURE_NEAREST: u32 = 1 << 4;
+
+/// An object-to-world placement of a mesh (rows of 3x4 matrices).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct GpuInstance {
+    pub world_from_object: [[f32; 4]; 3],
+    pub object_from_world: [[f32; 4]; 3],
+    pub mesh: u32,
+    pub _pad: [u32; 3],
+}
+
+impl GpuInstance {
+    pub fn new(world: Mat4, mesh: u32) -> Self {
+        let rows = |m: Mat4| [m.row(0).to_array(), m.row(1).to_array(), m.row(2).to_array()];
+        Self {
+            world_from_object: rows(world),
+            object_from_world: rows(world.inverse()),
+            mesh,
+            _pad: [0; 3],
+        }
+    }
+}
+
+/// Where a mesh's data sits in the shared buffers. Attribute offsets are in 32-bit words of the vertex pool.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct GpuMesh {
+    pub blas_root: u32,
+    pub triangle_offset: u32,
+    pub position_offset: u32,
+    pub normal_offset: u32,
+    pub tangent_offset: u32,
+    pub uv0_offset: u32,
+    pub uv1_offset: u32,
+    pub color_offset: u32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct GpuMaterial {
+    pub base_color: [f32; 4],
+    pub emissive: [f32; 3],
+    pub metallic: f32,
+    pub roughness: f32,
+    pub alpha_cutoff: f32,
+    pub normal_scale: f32,
+    pub flags: u32,
+    /// Texture index in bits 0..24, TEXCOORD set in bit 24; [`NONE`] when absent.
+    pub base_color_texture: u32,
+    pub metallic_roughness_texture: u32,
+    pub normal_texture: u32,
+    pub emissive_texture: u32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct GpuTexture {
+    /// First texel in the texel buffer.
+    pub offset: u32,
+    pub width: u32,
+    pub height: u32,
+    /// wrap_s in bits 0..2, wrap_t in bits 2..4 (0 repeat, 1 mirrored, 2 clamp), [`TEXTURE_NEAREST`].
+    pub flags: u32,
+}
+
+/// An emissive triangle for next-event estimation, with the cumulative power used to pick it.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct GpuEmitter {
+    pub instance: u32,
+    /// Triangle slot in the triangle buffer (already offset by the mesh).
+    pub triangle: u32,
+    /// Cumulative selection probability up to and including this emitter.
+    pub cdf: f32,
+    /// Selection probability of this emitter.
+    pub pmf: f32,
+}
+
+/// Per-dispatch constants (a uniform buffer).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct GpuFrame {
+    pub world_from_camera: [[f32; 4]; 4],
+    pub env_color: [f32; 3],
+    pub tan_half_fov: f32,
+    pub width: u32,
+    pub height: u32,
+    /// Samples per pixel already accumulated before this dispatch (the sample index base for the RNG).
+    pub sample_base: u32,
+    pub spp: u32,
+    pub max_depth: u32,
+    pub seed: u32,
+    /// 0 constant colour, 1 sky gradient.
+    pub env_mode: u32,
+    /// Path depth from which Russian roulette may end a path (u32::MAX: never).
+    pub rr_depth: u32,
+    pub emitter_count: u32,
+    /// Bit 0: next-event estimation on.
+    pub flags: u32,
+    /// Sum over emitters of luminance(emissive) x world area: the normaliser of emitter selection.
+    pub emitter_total_power: f32,
+    pub _pad: u32,
+}
+
+pub const FRAME_NEE: u32 = 1;
+
+/// Octahedral encoding of a unit vector into two snorm16 values (WGSL `unpack2x16snorm` decodes it).
+pub fn oct_encode(v: Vec3) -> u32 {
+    let len = v.length();
+    if !len.is_finite() || len < 1e-12 {
+        return INVALID_OCT;
+    }
+    let n = v / (v.x.abs() + v.y.abs() + v.z.abs());
+    let (x, y) = if n.z >= 0.0 {
+        (n.x, n.y)
+    } else {
+        ((1.0 - n.y.abs()) * n.x.signum(), (1.0 - n.x.abs()) * n.y.signum())
+    };
+    let q = |f: f32| ((f.clamp(-1.0, 1.0) * 32767.0).round() as i32 as i16 as u16) as u32;
+    q(x) | (q(y) << 16)
+}
+
+pub fn pack_unorm4x8(c: Vec4) -> u32 {
+    let q = |f: f32| ((f.clamp(0.0, 1.0) * 255.0).round() as u32) & 0xff;
+    q(c.x) | (q(c.y) << 8) | (q(c.z) << 16) | (q(c.w) << 24)
+}

@@ -1,0 +1,365 @@
+//! Pipelines and per-view buffers of the path tracer: dispatch, accumulation, tone mapping, readback, and GPU
+//! timestamps around each pass where the adapter has them.
+
+use super::layout::*;
+use super::scene_buffers::GpuScene;
+use super::settings::{Environment, RenderSettings};
+use crate::camera::CameraView;
+use crate::gpu::GpuContext;
+use bytemuck::{Pod, Zeroable};
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct TonemapParams {
+    width: u32,
+    height: u32,
+    tonemapper: u32,
+    view: u32,
+    exposure_scale: f32,
+    depth_scale: f32,
+    _pad: [u32; 2],
+}
+
+/// Timestamp queries: [trace begin, trace end, tonemap begin, tonemap end].
+struct Timestamps {
+    set: wgpu::QuerySet,
+    resolve: wgpu::Buffer,
+    period_ns: f32,
+}
+
+/// GPU time of the last dispatch's passes, in milliseconds.
+#[derive(Clone, Copy, Debug, Default, serde::Serialize)]
+pub struct PassTimes {
+    pub trace_ms: f64,
+    pub tonemap_ms: f64,
+}
+
+pub struct PathTracer {
+    trace_pipeline: wgpu::ComputePipeline,
+    tonemap_pipeline: wgpu::ComputePipeline,
+    scene_layout: wgpu::BindGroupLayout,
+    accum_layout: wgpu::BindGroupLayout,
+    tonemap_layout: wgpu::BindGroupLayout,
+    frame_uniform: wgpu::Buffer,
+    tonemap_uniform: wgpu::Buffer,
+    pub accum: wgpu::Buffer,
+    pub aov_albedo_depth: wgpu::Buffer,
+    pub aov_normal: wgpu::Buffer,
+    pub output_rgba8: wgpu::Buffer,
+    scene_bind_group: Option<(u64, wgpu::BindGroup)>,
+    accum_bind_group: wgpu::BindGroup,
+    tonemap_bind_group: wgpu::BindGroup,
+    pub width: u32,
+    pub height: u32,
+    /// Samples per pixel accumulated since the last reset.
+    pub samples: u32,
+    timestamps: Option<Timestamps>,
+}
+
+fn layout_entry(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+fn uniform_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Uniform,
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+fn bind_group(ctx: &GpuContext, layout: &wgpu::BindGroupLayout, buffers: &[&wgpu::Buffer]) -> wgpu::BindGroup {
+    let entries: Vec<wgpu::BindGroupEntry> = buffers
+        .iter()
+        .enumerate()
+        .map(|(i, b)| wgpu::BindGroupEntry { binding: i as u32, resource: b.as_entire_binding() })
+        .collect();
+    ctx.device.create_bind_group(&wgpu::BindGroupDescriptor { label: None, layout, entries: &entries })
+}
+
+struct ViewBuffers {
+    accum: wgpu::Buffer,
+    albedo: wgpu::Buffer,
+    normal: wgpu::Buffer,
+    rgba8: wgpu::Buffer,
+}
+
+fn view_buffers(ctx: &GpuContext, width: u32, height: u32) -> ViewBuffers {
+    let pixels = (width as u64 * height as u64).max(1);
+    let make = |label, bytes_per_pixel: u64| {
+        ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(label),
+            size: pixels * bytes_per_pixel,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        })
+    };
+    ViewBuffers { accum: make("accum", 16), albedo: make("aov albedo", 16), normal: make("aov normal", 16), rgba8: make("rgba8", 4) }
+}
+
+impl PathTracer {
+    pub fn new(ctx: &GpuContext, width: u32, height: u32) -> Self {
+        let device = &ctx.device;
+        let scene_entries: Vec<_> = (0..10).map(|b| layout_entry(b, true)).chain([uniform_entry(10)]).collect();
+        let scene_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some("scene"), entries: &scene_entries });
+        let accum_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("accumulation"),
+            entries: &[layout_entry(0, false), layout_entry(1, false), layout_entry(2, false)],
+        });
+        let tonemap_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("tonemap"),
+            entries: &[layout_entry(0, true), layout_entry(1, true), layout_entry(2, true), layout_entry(3, false), uniform_entry(4)],
+        });
+        let pipeline = |label: &str, source: String, layouts: &[Option<&wgpu::BindGroupLayout>], entry: &str| {
+            let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some(label),
+                source: wgpu::ShaderSource::Wgsl(source.into()),
+            });
+            let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor { label: Some(label), bind_group_layouts: layouts, immediate_size: 0 });
+            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(label),
+                layout: Some(&layout),
+                module: &module,
+                entry_point: Some(entry),
+                compilation_options: Default::default(),
+                cache: None,
+            })
+        };
+        let trace_pipeline = pipeline("path trace", super::shaders::path_trace_source(), &[Some(&scene_layout), Some(&accum_layout)], "trace_pixels");
+        let tonemap_pipeline = pipeline("tonemap", super::shaders::tonemap_source(), &[Some(&tonemap_layout)], "tonemap");
+        let uniform = |label, size| {
+            device.create_buffer(&wgpu::BufferDescriptor { label: Some(label), size, usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST, mapped_at_creation: false })
+        };
+        let frame_uniform = uniform("frame", std::mem::size_of::<GpuFrame>() as u64);
+        let tonemap_uniform = uniform("tonemap params", std::mem::size_of::<TonemapParams>() as u64);
+        let v = view_buffers(ctx, width, height);
+        let accum_bind_group = bind_group(ctx, &accum_layout, &[&v.accum, &v.albedo, &v.normal]);
+        let tonemap_bind_group = bind_group(ctx, &tonemap_layout, &[&v.accum, &v.albedo, &v.normal, &v.rgba8, &tonemap_uniform]);
+        let timestamps = ctx.supports_timestamps().then(|| Timestamps {
+            set: device.create_query_set(&wgpu::QuerySetDescriptor { label: Some("pass timestamps"), ty: wgpu::QueryType::Timestamp, count: 4 }),
+            resolve: device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("timestamp resolve"),
+                size: 32,
+                usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            }),
+            period_ns: ctx.queue.get_timestamp_period(),
+        });
+        let mut tracer = Self {
+            trace_pipeline,
+            tonemap_pipeline,
+            scene_layout,
+            accum_layout,
+            tonemap_layout,
+            frame_uniform,
+            tonemap_uniform,
+            accum: v.accum,
+            aov_albedo_depth: v.albedo,
+            aov_normal: v.normal,
+            output_rgba8: v.rgba8,
+            scene_bind_group: None,
+            accum_bind_group,
+            tonemap_bind_group,
+            width,
+            height,
+            samples: 0,
+            timestamps,
+        };
+        tracer.reset(ctx);
+        tracer
+    }
+
+    pub fn resize(&mut self, ctx: &GpuContext, width: u32, height: u32) {
+        if (width, height) == (self.width, self.height) {
+            return;
+        }
+        let v = view_buffers(ctx, width, height);
+        self.accum_bind_group = bind_group(ctx, &self.accum_layout, &[&v.accum, &v.albedo, &v.normal]);
+        self.tonemap_bind_group = bind_group(ctx, &self.tonemap_layout, &[&v.accum, &v.albedo, &v.normal, &v.rgba8, &self.tonemap_uniform]);
+        (self.accum, self.aov_albedo_depth, self.aov_normal, self.output_rgba8) = (v.accum, v.albedo, v.normal, v.rgba8);
+        (self.width, self.height) = (width, height);
+        self.reset(ctx);
+    }
+
+    /// Restarts accumulation (camera, scene or settings changed).
+    pub fn reset(&mut self, ctx: &GpuContext) {
+        let mut encoder = ctx.device.create_command_encoder(&Default::default());
+        for b in [&self.accum, &self.aov_albedo_depth, &self.aov_normal] {
+            encoder.clear_buffer(b, 0, None);
+        }
+        ctx.queue.submit([encoder.finish()]);
+        self.samples = 0;
+    }
+
+    fn scene_bind_group(&mut self, ctx: &GpuContext, scene: &GpuScene) -> wgpu::BindGroup {
+        if let Some((generation, group)) = &self.scene_bind_group
+            && *generation == scene.generation
+        {
+            return group.clone();
+        }
+        let group = bind_group(
+            ctx,
+            &self.scene_layout,
+            &[
+                &scene.tlas_nodes,
+                &scene.blas_nodes,
+                &scene.instances,
+                &scene.meshes,
+                &scene.triangles,
+                &scene.vertex_pool,
+                &scene.materials,
+                &scene.texels,
+                &scene.texture_infos,
+                &scene.emitters,
+                &self.frame_uniform,
+            ],
+        );
+        self.scene_bind_group = Some((scene.generation, group.clone()));
+        group
+    }
+
+    /// Traces `spp` more samples per pixel into the accumulation buffers (and tone-maps if asked).
+    pub fn dispatch(&mut self, ctx: &GpuContext, scene: &GpuScene, settings: &RenderSettings, camera: &CameraView, spp: u32, tonemap: bool) {
+        let (env_mode, env_color) = match settings.environment {
+            Environment::Constant(c) => (0, c),
+            Environment::Sky => (1, [0.0; 3]),
+        };
+        let frame = GpuFrame {
+            world_from_camera: camera.world_from_camera.to_cols_array_2d(),
+            env_color,
+            tan_half_fov: (camera.yfov * 0.5).tan(),
+            width: self.width,
+            height: self.height,
+            sample_base: self.samples,
+            spp,
+            max_depth: settings.max_depth,
+            seed: settings.seed,
+            env_mode,
+            rr_depth: if settings.russian_roulette { settings.rr_depth } else { u32::MAX },
+            emitter_count: scene.emitter_count,
+            flags: if settings.nee { FRAME_NEE } else { 0 },
+            emitter_total_power: scene.emitter_total_power,
+            _pad: 0,
+        };
+        ctx.queue.write_buffer(&self.frame_uniform, 0, bytemuck::bytes_of(&frame));
+        let scene_group = self.scene_bind_group(ctx, scene);
+        let mut encoder = ctx.device.create_command_encoder(&Default::default());
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("path trace"),
+                timestamp_writes: self.timestamps.as_ref().map(|t| wgpu::ComputePassTimestampWrites {
+                    query_set: &t.set,
+                    beginning_of_pass_write_index: Some(0),
+                    end_of_pass_write_index: Some(1),
+                }),
+            });
+            pass.set_pipeline(&self.trace_pipeline);
+            pass.set_bind_group(0, &scene_group, &[]);
+            pass.set_bind_group(1, &self.accum_bind_group, &[]);
+            pass.dispatch_workgroups(self.width.div_ceil(8), self.height.div_ceil(8), 1);
+        }
+        self.samples += spp;
+        if tonemap {
+            self.encode_tonemap(ctx, &mut encoder, settings);
+        }
+        if let Some(t) = &self.timestamps {
+            encoder.resolve_query_set(&t.set, 0..if tonemap { 4 } else { 2 }, &t.resolve, 0);
+        }
+        ctx.queue.submit([encoder.finish()]);
+    }
+
+    fn encode_tonemap(&self, ctx: &GpuContext, encoder: &mut wgpu::CommandEncoder, settings: &RenderSettings) {
+        let params = TonemapParams {
+            width: self.width,
+            height: self.height,
+            tonemapper: settings.tonemapper as u32,
+            view: settings.view as u32,
+            exposure_scale: 2f32.powf(settings.exposure),
+            depth_scale: settings.depth_view_scale,
+            _pad: [0; 2],
+        };
+        ctx.queue.write_buffer(&self.tonemap_uniform, 0, bytemuck::bytes_of(&params));
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("tonemap"),
+            timestamp_writes: self.timestamps.as_ref().map(|t| wgpu::ComputePassTimestampWrites {
+                query_set: &t.set,
+                beginning_of_pass_write_index: Some(2),
+                end_of_pass_write_index: Some(3),
+            }),
+        });
+        pass.set_pipeline(&self.tonemap_pipeline);
+        pass.set_bind_group(0, &self.tonemap_bind_group, &[]);
+        pass.dispatch_workgroups(self.width.div_ceil(8), self.height.div_ceil(8), 1);
+    }
+
+    /// Tone-maps the current accumulation into `output_rgba8`.
+    pub fn tonemap(&self, ctx: &GpuContext, settings: &RenderSettings) {
+        let mut encoder = ctx.device.create_command_encoder(&Default::default());
+        self.encode_tonemap(ctx, &mut encoder, settings);
+        ctx.queue.submit([encoder.finish()]);
+    }
+
+    /// GPU times of the last dispatch (blocks until it finished); `None` without timestamp support.
+    pub fn read_pass_times(&self, ctx: &GpuContext) -> Option<PassTimes> {
+        let t = self.timestamps.as_ref()?;
+        let bytes = ctx.read_buffer(&t.resolve, 32);
+        let ticks: &[u64] = bytemuck::cast_slice(&bytes);
+        let ms = |a: u64, b: u64| b.saturating_sub(a) as f64 * t.period_ns as f64 * 1e-6;
+        Some(PassTimes { trace_ms: ms(ticks[0], ticks[1]), tonemap_ms: ms(ticks[2], ticks[3]) })
+    }
+
+    /// Mean linear radiance per pixel (RGB), row-major from the top-left.
+    pub fn read_radiance(&self, ctx: &GpuContext) -> Vec<[f32; 3]> {
+        let bytes = ctx.read_buffer(&self.accum, self.accum.size());
+        bytemuck::cast_slice::<u8, [f32; 4]>(&bytes)
+            .iter()
+            .map(|p| {
+                let n = p[3].max(1.0);
+                [p[0] / n, p[1] / n, p[2] / n]
+            })
+            .collect()
+    }
+
+    /// First-hit AOVs: albedo (mean), normal (mean, renormalised; zero where nothing was hit), camera depth
+    /// (mean over samples that hit; +inf where none did).
+    pub fn read_aovs(&self, ctx: &GpuContext) -> Aovs {
+        let samples = self.samples.max(1) as f32;
+        let ad = ctx.read_buffer(&self.aov_albedo_depth, self.aov_albedo_depth.size());
+        let nh = ctx.read_buffer(&self.aov_normal, self.aov_normal.size());
+        let ad: &[[f32; 4]] = bytemuck::cast_slice(&ad);
+        let nh: &[[f32; 4]] = bytemuck::cast_slice(&nh);
+        let mut aovs = Aovs::default();
+        for (a, n) in ad.iter().zip(nh) {
+            aovs.albedo.push([a[0] / samples, a[1] / samples, a[2] / samples]);
+            let v = glam::Vec3::new(n[0], n[1], n[2]).normalize_or_zero();
+            aovs.normal.push(v.to_array());
+            aovs.depth.push(if n[3] > 0.0 { a[3] / n[3] } else { f32::INFINITY });
+        }
+        aovs
+    }
+
+    pub fn read_rgba8(&self, ctx: &GpuContext) -> Vec<u8> {
+        ctx.read_buffer(&self.output_rgba8, self.output_rgba8.size())
+    }
+}
+
+#[derive(Clone, Debug, Default)]
+pub struct Aovs {
+    pub albedo: Vec<[f32; 3]>,
+    pub normal: Vec<[f32; 3]>,
+    pub depth: Vec<f32>,
+}

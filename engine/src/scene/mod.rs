@@ -1,0 +1,334 @@
+//! Scenes on the CPU: the asset data a glTF file becomes (meshes, materials, images, cameras, node tree),
+//! and the ECS side: one entity per node with its transform, mesh instance and camera.
+
+mod gltf_loader;
+pub mod procedural;
+mod spawn;
+mod tangents;
+
+pub use gltf_loader::{LoadOptions, load_gltf, load_gltf_slice};
+pub use spawn::{
+    CameraComponent, GlobalTransform, MeshInstance, SceneNode, ScenePlugin, SceneRoot,
+    Transform, propagate_transforms, spawn_scene,
+};
+
+use bevy_ecs::prelude::Resource;
+use glam::{Mat4, Quat, Vec2, Vec3, Vec4};
+use std::path::PathBuf;
+use std::sync::Arc;
+
+/// Errors that stop a scene from loading. Each names the file; problems that only affect one primitive or
+/// texture become warnings in [`SceneAsset::warnings`] instead, and the rest of the scene still renders.
+#[derive(Debug, thiserror::Error)]
+pub enum SceneError {
+    #[error("{path}: cannot read the file: {source}")]
+    Io { path: PathBuf, source: std::io::Error },
+    #[error("{path}: not a valid glTF 2.0 file: {reason}")]
+    Invalid { path: PathBuf, reason: String },
+    #[error("{path}: buffer {index} ({uri}) cannot be loaded: {reason}")]
+    Buffer { path: PathBuf, index: usize, uri: String, reason: String },
+    #[error("{path}: requires the glTF extension `{extension}`, which raykin does not support")]
+    UnsupportedExtension { path: PathBuf, extension: String },
+    #[error("{path}: the scene has no renderable triangles ({reason})")]
+    Empty { path: PathBuf, reason: String },
+}
+
+/// How a material treats base-colour alpha (glTF `alphaMode`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum AlphaMode {
+    Opaque,
+    /// Cut-out: a hit whose alpha is below the cutoff is ignored by traversal.
+    Mask(f32),
+    /// Treated as stochastic coverage: a path passes through with probability 1 - alpha.
+    Blend,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TextureRef {
+    /// Index into [`SceneAsset::textures`].
+    pub texture: u32,
+    /// TEXCOORD_n set (0 or 1).
+    pub tex_coord: u32,
+}
+
+/// The glTF metallic-roughness material, with the extensions raykin renders.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Material {
+    pub name: String,
+    pub base_color: Vec4,
+    pub base_color_texture: Option<TextureRef>,
+    pub metallic: f32,
+    pub roughness: f32,
+    /// Blue = metallic, green = roughness, both multiplied by the factors.
+    pub metallic_roughness_texture: Option<TextureRef>,
+    pub normal_texture: Option<TextureRef>,
+    pub normal_scale: f32,
+    /// Linear radiance: emissiveFactor x KHR_materials_emissive_strength.
+    pub emissive: Vec3,
+    pub emissive_texture: Option<TextureRef>,
+    pub alpha_mode: AlphaMode,
+    pub double_sided: bool,
+}
+
+impl Default for Material {
+    /// glTF's default material: white, fully metallic, fully rough.
+    fn default() -> Self {
+        Self {
+            name: "default".into(),
+            base_color: Vec4::ONE,
+            base_color_texture: None,
+            metallic: 1.0,
+            roughness: 1.0,
+            metallic_roughness_texture: None,
+            normal_texture: None,
+            normal_scale: 1.0,
+            emissive: Vec3::ZERO,
+            emissive_texture: None,
+            alpha_mode: AlphaMode::Opaque,
+            double_sided: false,
+        }
+    }
+}
+
+/// Decoded RGBA8 pixels of one glTF image.
+#[derive(Clone, Debug)]
+pub struct Image {
+    pub name: String,
+    pub width: u32,
+    pub height: u32,
+    pub rgba8: Vec<u8>,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Wrap {
+    #[default]
+    Repeat,
+    MirroredRepeat,
+    ClampToEdge,
+}
+
+/// A glTF texture: an image and how it is sampled.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Texture {
+    /// Index into [`SceneAsset::images`].
+    pub image: u32,
+    pub wrap_s: Wrap,
+    pub wrap_t: Wrap,
+    pub nearest: bool,
+}
+
+/// Where one glTF primitive's vertices and triangles sit inside its [`MeshData`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct PrimitiveRange {
+    pub vertex_offset: u32,
+    pub vertex_count: u32,
+    pub material: u32,
+}
+
+/// Skinning inputs of a mesh's vertices (4 influences per vertex set).
+#[derive(Clone, Debug, Default)]
+pub struct SkinWeights {
+    /// One entry per vertex per influence set (JOINTS_0/WEIGHTS_0, then JOINTS_1/WEIGHTS_1 ...).
+    pub joints: Vec<[u16; 4]>,
+    pub weights: Vec<[f32; 4]>,
+    /// Influence sets per vertex (1 for JOINTS_0 only).
+    pub sets: u32,
+}
+
+/// Position/normal/tangent offsets of one morph target, per vertex of the mesh (zero where a primitive lacks it).
+#[derive(Clone, Debug, Default)]
+pub struct MorphTarget {
+    pub positions: Vec<Vec3>,
+    pub normals: Option<Vec<Vec3>>,
+    pub tangents: Option<Vec<Vec3>>,
+}
+
+/// A triangle mesh: all primitives of one glTF mesh merged, each keeping its vertices in accessor order.
+/// Attributes no primitive has are `None`, so memory holds only what the file provides.
+#[derive(Clone, Debug, Default)]
+pub struct MeshData {
+    pub name: String,
+    pub positions: Vec<Vec3>,
+    /// Absent: the renderer shades with the geometric normal (the glTF rule: flat normals).
+    pub normals: Option<Vec<Vec3>>,
+    /// xyz tangent, w = handedness.
+    pub tangents: Option<Vec<Vec4>>,
+    pub uv0: Option<Vec<Vec2>>,
+    pub uv1: Option<Vec<Vec2>>,
+    /// Linear RGBA vertex colour (COLOR_0), multiplied into base colour.
+    pub colors: Option<Vec<Vec4>>,
+    /// Vertex indices (into this mesh's vertices) of each triangle, and the triangle's material.
+    pub triangles: Vec<[u32; 3]>,
+    pub triangle_materials: Vec<u32>,
+    pub primitives: Vec<PrimitiveRange>,
+    pub skin_weights: Option<SkinWeights>,
+    pub morph_targets: Vec<MorphTarget>,
+    pub default_morph_weights: Vec<f32>,
+}
+
+impl MeshData {
+    pub fn vertex_count(&self) -> usize {
+        self.positions.len()
+    }
+
+    pub fn bounds(&self) -> (Vec3, Vec3) {
+        self.positions
+            .iter()
+            .fold((Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)), |(lo, hi), p| {
+                (lo.min(*p), hi.max(*p))
+            })
+    }
+
+    /// True when the mesh deforms (skin or morph targets): its BVH is refit instead of built once.
+    pub fn is_deformable(&self) -> bool {
+        self.skin_weights.is_some() || !self.morph_targets.is_empty()
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PerspectiveCamera {
+    /// Vertical field of view in radians.
+    pub yfov: f32,
+    pub aspect_ratio: Option<f32>,
+    pub znear: f32,
+}
+
+/// A glTF skin: the joints' nodes and their inverse bind matrices.
+#[derive(Clone, Debug)]
+pub struct SkinData {
+    pub name: String,
+    pub joints: Vec<usize>,
+    pub inverse_bind_matrices: Vec<Mat4>,
+    pub skeleton: Option<usize>,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NodeTransform {
+    pub translation: Vec3,
+    pub rotation: Quat,
+    pub scale: Vec3,
+}
+
+impl Default for NodeTransform {
+    fn default() -> Self {
+        Self {
+            translation: Vec3::ZERO,
+            rotation: Quat::IDENTITY,
+            scale: Vec3::ONE,
+        }
+    }
+}
+
+impl NodeTransform {
+    pub fn matrix(&self) -> Mat4 {
+        Mat4::from_scale_rotation_translation(self.scale, self.rotation, self.translation)
+    }
+}
+
+#[derive(Clone, Debug, Default)]
+pub struct NodeData {
+    pub name: String,
+    pub parent: Option<usize>,
+    pub children: Vec<usize>,
+    pub transform: NodeTransform,
+    pub mesh: Option<usize>,
+    pub camera: Option<usize>,
+    pub skin: Option<usize>,
+    /// node.weights: overrides the mesh's default morph weights.
+    pub morph_weights: Option<Vec<f32>>,
+}
+
+/// Keyframe interpolation of an animation sampler.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Interpolation {
+    Step,
+    Linear,
+    CubicSpline,
+}
+
+#[derive(Clone, Debug)]
+pub enum ChannelValues {
+    Translation(Vec<Vec3>),
+    Rotation(Vec<Quat>),
+    Scale(Vec<Vec3>),
+    /// Morph weights: `count` values per keyframe (x3 for cubic splines).
+    Weights { values: Vec<f32>, count: usize },
+}
+
+#[derive(Clone, Debug)]
+pub struct AnimationChannel {
+    pub node: usize,
+    pub interpolation: Interpolation,
+    pub times: Vec<f32>,
+    /// For CUBICSPLINE: in-tangent, value, out-tangent per keyframe.
+    pub values: ChannelValues,
+}
+
+#[derive(Clone, Debug)]
+pub struct AnimationClip {
+    pub name: String,
+    pub channels: Vec<AnimationChannel>,
+    /// The last keyframe time over all channels.
+    pub duration: f32,
+}
+
+/// Everything a scene file holds, immutable once loaded (animation and editing write ECS components).
+#[derive(Clone, Debug, Default)]
+pub struct SceneAsset {
+    /// The file it came from (or a name for built-in scenes), for messages.
+    pub source: String,
+    pub meshes: Vec<MeshData>,
+    pub materials: Vec<Material>,
+    pub images: Vec<Image>,
+    pub textures: Vec<Texture>,
+    pub cameras: Vec<PerspectiveCamera>,
+    pub skins: Vec<SkinData>,
+    pub animations: Vec<AnimationClip>,
+    pub nodes: Vec<NodeData>,
+    /// Root nodes of the displayed glTF scene.
+    pub roots: Vec<usize>,
+    /// Problems that were worked around (skipped primitives, missing textures...), one line each.
+    pub warnings: Vec<String>,
+}
+
+impl SceneAsset {
+    /// Node world matrices in the file's rest pose.
+    pub fn rest_world_matrices(&self) -> Vec<Mat4> {
+        let mut world = vec![Mat4::IDENTITY; self.nodes.len()];
+        let mut stack: Vec<(usize, Mat4)> = self.roots.iter().map(|&r| (r, Mat4::IDENTITY)).collect();
+        while let Some((node, parent)) = stack.pop() {
+            let m = parent * self.nodes[node].transform.matrix();
+            world[node] = m;
+            for &c in &self.nodes[node].children {
+                stack.push((c, m));
+            }
+        }
+        world
+    }
+
+    /// World-space bounds of every mesh instance in the rest pose.
+    pub fn rest_bounds(&self) -> Option<(Vec3, Vec3)> {
+        let world = self.rest_world_matrices();
+        let mut lo = Vec3::splat(f32::MAX);
+        let mut hi = Vec3::splat(f32::MIN);
+        let mut any = false;
+        for (i, node) in self.nodes.iter().enumerate() {
+            let Some(mesh) = node.mesh else { continue };
+            for p in &self.meshes[mesh].positions {
+                let w = world[i].transform_point3(*p);
+                lo = lo.min(w);
+                hi = hi.max(w);
+                any = true;
+            }
+        }
+        any.then_some((lo, hi))
+    }
+
+    pub fn triangle_count(&self) -> usize {
+        self.meshes.iter().map(|m| m.triangles.len()).sum()
+    }
+}
+
+/// The loaded scene, shared by the systems that read asset data.
+#[derive(Resource, Clone)]
+pub struct SceneAssets(pub Arc<SceneAsset>);

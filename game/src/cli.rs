@@ -1,0 +1,92 @@
+//! Command-line interface.
+
+use clap::{Args, Parser, Subcommand};
+use std::path::PathBuf;
+
+#[derive(Parser, Debug)]
+#[command(name = "raykin", version, about = "Path-trace animated glTF scenes on any GPU (wgpu compute, software BVH traversal)")]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Option<Command>,
+}
+
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Render one image of a scene, headless.
+    Render(RenderArgs),
+}
+
+/// Scene, camera and sampling options shared by the commands that render.
+#[derive(Args, Debug, Clone)]
+pub struct SceneArgs {
+    /// A .gltf or .glb file.
+    pub scene: PathBuf,
+    /// Samples per pixel.
+    #[arg(long, default_value_t = 64)]
+    pub spp: u32,
+    /// Surface interactions after the camera ray.
+    #[arg(long, default_value_t = 6)]
+    pub max_depth: u32,
+    #[arg(long, default_value_t = 640)]
+    pub width: u32,
+    #[arg(long, default_value_t = 360)]
+    pub height: u32,
+    /// Index of the scene's camera to use (default: the first, else a framing of the scene).
+    #[arg(long, conflicts_with = "look_from")]
+    pub camera: Option<usize>,
+    /// Camera position X,Y,Z (with --look-at; overrides the scene's cameras).
+    #[arg(long, value_parser = parse_vec3, requires = "look_at")]
+    pub look_from: Option<glam::Vec3>,
+    /// Point the camera looks at, X,Y,Z.
+    #[arg(long, value_parser = parse_vec3, requires = "look_from")]
+    pub look_at: Option<glam::Vec3>,
+    /// Vertical field of view in degrees, with --look-from.
+    #[arg(long, default_value_t = 45.0)]
+    pub fov: f32,
+    /// Constant environment radiance R,G,B.
+    #[arg(long, value_parser = parse_vec3, conflicts_with = "sky")]
+    pub env: Option<glam::Vec3>,
+    /// Sky-gradient environment (the default when --env is not given).
+    #[arg(long)]
+    pub sky: bool,
+    #[arg(long, default_value_t = 0)]
+    pub seed: u32,
+    /// Exposure in stops for PNG output (EXR is never exposed or tone-mapped).
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    pub exposure: f32,
+    /// Disable next-event estimation (BRDF sampling only).
+    #[arg(long)]
+    pub no_nee: bool,
+    /// Disable Russian roulette.
+    #[arg(long)]
+    pub no_rr: bool,
+    /// Samples per pixel per GPU submission.
+    #[arg(long, default_value_t = 16)]
+    pub spp_per_dispatch: u32,
+}
+
+#[derive(Args, Debug)]
+pub struct RenderArgs {
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    /// Output image: .exr (linear radiance) or .png (tone-mapped sRGB).
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Also write first-hit AOVs next to the image: NAME.albedo.exr, NAME.normal.exr, NAME.depth.exr.
+    #[arg(long)]
+    pub aovs: bool,
+    /// Write a JSON report (adapter, timings, memory) to this file.
+    #[arg(long)]
+    pub report: Option<PathBuf>,
+}
+
+pub fn parse_vec3(s: &str) -> Result<glam::Vec3, String> {
+    let parts: Vec<f32> = s
+        .split(',')
+        .map(|p| p.trim().parse::<f32>().map_err(|e| format!("`{p}`: {e}")))
+        .collect::<Result<_, _>>()?;
+    match parts[..] {
+        [x, y, z] if x.is_finite() && y.is_finite() && z.is_finite() => Ok(glam::Vec3::new(x, y, z)),
+        _ => Err(format!("expected three finite numbers X,Y,Z, got `{s}`")),
+    }
+}

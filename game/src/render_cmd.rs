@@ -1,0 +1,191 @@
+//! `raykin render` and the no-argument default job.
+
+use crate::cli::{RenderArgs, SceneArgs};
+use anyhow::{Context, Result};
+use indicatif::{ProgressBar, ProgressStyle};
+use raykin::camera::CameraChoice;
+use raykin::gpu::GpuContext;
+use raykin::headless::HeadlessApp;
+use raykin::render::{Environment, RenderSettings};
+use raykin::scene::{LoadOptions, SceneAsset};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::Instant;
+
+/// The scene shipped inside the binary (assets/default/).
+const DEFAULT_SCENE: &[u8] = include_bytes!("../../assets/default/CornellBox.glb");
+
+pub fn load_scene(path: &Path) -> Result<Arc<SceneAsset>> {
+    let scene = raykin::scene::load_gltf(path, &LoadOptions::default())?;
+    report_warnings(&scene);
+    Ok(Arc::new(scene))
+}
+
+fn report_warnings(scene: &SceneAsset) {
+    for w in &scene.warnings {
+        eprintln!("raykin: warning: {}: {w}", scene.source);
+    }
+}
+
+pub fn open_gpu() -> Result<GpuContext> {
+    let ctx = GpuContext::new_headless()?;
+    eprintln!("raykin: adapter: {}", ctx.describe());
+    Ok(ctx)
+}
+
+pub fn settings_from(args: &SceneArgs) -> RenderSettings {
+    RenderSettings {
+        width: args.width.max(1),
+        height: args.height.max(1),
+        spp_per_frame: args.spp_per_dispatch.max(1),
+        max_depth: args.max_depth,
+        environment: match args.env {
+            Some(c) => Environment::Constant(c.to_array()),
+            None => Environment::Sky,
+        },
+        exposure: args.exposure,
+        seed: args.seed,
+        russian_roulette: !args.no_rr,
+        nee: !args.no_nee,
+        ..Default::default()
+    }
+}
+
+pub fn camera_from(args: &SceneArgs) -> CameraChoice {
+    match (args.look_from, args.look_at, args.camera) {
+        (Some(eye), Some(target), _) => CameraChoice::LookAt { eye, target, yfov: args.fov.to_radians() },
+        (_, _, Some(i)) => CameraChoice::Index(i),
+        _ => CameraChoice::Auto,
+    }
+}
+
+fn progress_bar(total: u64, what: &str) -> ProgressBar {
+    let bar = ProgressBar::new(total);
+    bar.set_style(
+        ProgressStyle::with_template("{prefix} [{bar:40}] {pos}/{len} spp, {elapsed} elapsed, ETA {eta}")
+            .expect("static template")
+            .progress_chars("=> "),
+    );
+    bar.set_prefix(what.to_string());
+    bar
+}
+
+#[derive(serde::Serialize)]
+struct RenderReport {
+    scene: String,
+    adapter: String,
+    backend: String,
+    width: u32,
+    height: u32,
+    spp: u32,
+    max_depth: u32,
+    triangles: usize,
+    bvh_build_and_upload_s: f64,
+    gpu_memory_geometry_bvh_bytes: u64,
+    gpu_memory_total_bytes: u64,
+    render_wall_s: f64,
+    samples_per_second: f64,
+}
+
+pub fn run(args: &RenderArgs) -> Result<()> {
+    let scene = load_scene(&args.scene.scene)?;
+    render_to_file(scene, &args.scene, camera_from(&args.scene), &args.out, args.aovs, args.report.as_deref())
+}
+
+fn render_to_file(scene: Arc<SceneAsset>, args: &SceneArgs, camera: CameraChoice, out: &Path, aovs: bool, report: Option<&Path>) -> Result<()> {
+    let ext = out.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+    if !matches!(ext.as_deref(), Some("exr") | Some("png")) {
+        anyhow::bail!("{}: the output must end in .exr (linear radiance) or .png (tone-mapped sRGB)", out.display());
+    }
+    if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).with_context(|| format!("{}: cannot create the output folder", dir.display()))?;
+    }
+    let ctx = open_gpu()?;
+    let settings = settings_from(args);
+    let mut app = HeadlessApp::new(ctx, scene.clone(), settings.clone(), &camera)?;
+    for n in &app.notes {
+        eprintln!("raykin: warning: {}: {n}", scene.source);
+    }
+    let start = Instant::now();
+    let bar = progress_bar(args.spp as u64, "rendering");
+    app.accumulate(args.spp, args.spp_per_dispatch, |done| bar.set_position(done as u64));
+    bar.finish_and_clear();
+    let wall = start.elapsed().as_secs_f64();
+    let (w, h) = (settings.width, settings.height);
+    let radiance = app.radiance();
+    if let Some(bad) = radiance.iter().flatten().find(|v| !v.is_finite()) {
+        anyhow::bail!("internal error: the render has a non-finite pixel value ({bad})");
+    }
+    if ext.as_deref() == Some("exr") {
+        raykin::image_io::write_atomically(out, |p| raykin::image_io::write_exr(p, w, h, &radiance))?;
+    } else {
+        let rgba = app.display_rgba8();
+        raykin::image_io::write_atomically(out, |p| raykin::image_io::write_png(p, w, h, &rgba))?;
+    }
+    if aovs {
+        let a = app.aovs();
+        let stem = out.with_extension("");
+        let depth: Vec<[f32; 3]> = a.depth.iter().map(|d| [*d; 3]).collect();
+        for (name, data) in [("albedo", &a.albedo), ("normal", &a.normal), ("depth", &depth)] {
+            let path = PathBuf::from(format!("{}.{name}.exr", stem.display()));
+            raykin::image_io::write_atomically(&path, |p| raykin::image_io::write_exr(p, w, h, data))?;
+        }
+    }
+    let renderer = app.renderer();
+    eprintln!(
+        "raykin: wrote {} ({w}x{h}, {} spp, {:.2} s, {:.2} M samples/s)",
+        out.display(),
+        args.spp,
+        wall,
+        (w as f64 * h as f64 * args.spp as f64) / wall / 1e6
+    );
+    if let Some(path) = report {
+        let r = RenderReport {
+            scene: scene.source.clone(),
+            adapter: app.ctx.info.name.clone(),
+            backend: format!("{:?}", app.ctx.info.backend),
+            width: w,
+            height: h,
+            spp: args.spp,
+            max_depth: args.max_depth,
+            triangles: scene.triangle_count(),
+            bvh_build_and_upload_s: renderer.scene.build_seconds,
+            gpu_memory_geometry_bvh_bytes: renderer.scene.memory.geometry_and_bvh(),
+            gpu_memory_total_bytes: renderer.scene.memory.total(),
+            render_wall_s: wall,
+            samples_per_second: (w as f64 * h as f64 * args.spp as f64) / wall,
+        };
+        std::fs::write(path, serde_json::to_string_pretty(&r)?).with_context(|| format!("{}: cannot write the report", path.display()))?;
+    }
+    Ok(())
+}
+
+/// `raykin` with no arguments: the embedded Cornell box, rendered to out/default.png.
+pub fn run_default() -> Result<()> {
+    let scene = raykin::scene::load_gltf_slice(DEFAULT_SCENE, Path::new("."), Path::new("<embedded default scene>"), &LoadOptions::default())?;
+    report_warnings(&scene);
+    let args = SceneArgs {
+        scene: PathBuf::from("<embedded>"),
+        spp: 256,
+        max_depth: 6,
+        width: 512,
+        height: 512,
+        camera: None,
+        look_from: None,
+        look_at: None,
+        fov: 39.3077,
+        env: Some(glam::Vec3::ZERO),
+        sky: false,
+        seed: 0,
+        exposure: 0.0,
+        no_nee: false,
+        no_rr: false,
+        spp_per_dispatch: 16,
+    };
+    let camera = CameraChoice::LookAt {
+        eye: glam::Vec3::new(-278.0, 273.0, 800.0),
+        target: glam::Vec3::new(-278.0, 273.0, 0.0),
+        yfov: 39.3077f32.to_radians(),
+    };
+    render_to_file(Arc::new(scene), &args, camera, Path::new("out/default.png"), false, None)
+}
