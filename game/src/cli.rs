@@ -60,6 +60,12 @@ pub struct SceneArgs {
     /// Disable Russian roulette.
     #[arg(long)]
     pub no_rr: bool,
+    /// Pose time in seconds (clip 0 unless --animation); the same time always gives the same image.
+    #[arg(long)]
+    pub time: Option<f32>,
+    /// Animation clip by name or index.
+    #[arg(long)]
+    pub animation: Option<String>,
     /// Samples per pixel per GPU submission.
     #[arg(long, default_value_t = 16)]
     pub spp_per_dispatch: u32,

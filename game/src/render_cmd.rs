@@ -180,6 +180,8 @@ pub fn run_default() -> Result<()> {
         exposure: 0.0,
         no_nee: false,
         no_rr: false,
+        time: None,
+        animation: None,
         spp_per_dispatch: 16,
     };
     let camera = CameraChoice::LookAt {
