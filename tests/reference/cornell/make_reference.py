@@ -32,7 +32,12 @@ UP = [0.0, 1.0, 0.0]
 YFOV_DEG = 39.3077
 RAYKIN_DEPTH = 8                      # surface bounces
 MITSUBA_MAX_DEPTH = RAYKIN_DEPTH + 1  # Mitsuba counts path segments
-LIGHT_BACK_OFFSET = 0.01              # +y offset of the reversed copy of each two-sided emissive primitive
+LIGHT_BACK_OFFSET = 0.001             # +y offset of the reversed copy of each two-sided emissive primitive
+# Rigid translation of the whole scene AND camera before it is handed to Mitsuba: None = put the centre of the
+# emissive primitives' bounding box at the origin.  Radiance is invariant under it; it only shrinks Mitsuba's
+# position-relative ray-spawn offset ((1 + max|p|) * 8.9e-5, i.e. ~0.05 units at |p| ~ 550) near the light,
+# whose top sits only 0.89 units below the ceiling.  Set to [0, 0, 0] to render in glTF coordinates.
+SCENE_SHIFT = None
 
 # ------------------------------------------------------------------ glTF parsing (numpy only)
 _COMP = {5120: np.int8, 5121: np.uint8, 5122: np.int16, 5123: np.uint16, 5125: np.uint32, 5126: np.float32}
@@ -177,8 +182,17 @@ def build_scene(mi, dr, glb_path, spp_per_pass, bsdf_mode='gltf'):
     """bsdf_mode: 'gltf' (exact glTF BRDF plugin) or 'principled' (Mitsuba's built-in, for comparison)."""
     gltf, binchunk = load_glb(glb_path)
     prims, notes = gather_primitives(gltf, binchunk)
+    if SCENE_SHIFT is None:
+        em = [p['positions'] for p in prims
+              if any(c > 0 for c in material_params(gltf, p['material'])['emission'])]
+        em = np.concatenate(em) if em else np.zeros((1, 3))
+        shift = -0.5 * (em.min(axis=0) + em.max(axis=0))
+    else:
+        shift = np.asarray(SCENE_SHIFT, dtype=np.float64)
+    for p in prims:
+        p['positions'] = p['positions'] + shift
     scene = {'type': 'scene'}
-    info = dict(primitives=[], notes=list(notes))
+    info = dict(primitives=[], notes=list(notes), mitsuba_scene_shift=[float(c) for c in shift])
     for k, p in enumerate(prims):
         mat = material_params(gltf, p['material'])
         if p['color'] is not None and not np.allclose(p['color'], 1.0):
@@ -217,7 +231,8 @@ def build_scene(mi, dr, glb_path, spp_per_pass, bsdf_mode='gltf'):
     scene['sensor'] = {
         'type': 'perspective', 'fov': YFOV_DEG, 'fov_axis': 'y',
         'near_clip': 0.01, 'far_clip': 1e5,
-        'to_world': mi.ScalarTransform4f().look_at(origin=EYE, target=TARGET, up=UP),
+        'to_world': mi.ScalarTransform4f().look_at(origin=(np.array(EYE) + shift).tolist(),
+                                                   target=(np.array(TARGET) + shift).tolist(), up=UP),
         'film': {'type': 'hdrfilm', 'width': WIDTH, 'height': HEIGHT, 'rfilter': {'type': 'box'},
                  'pixel_format': 'rgb', 'component_format': 'float32'},
         'sampler': {'type': 'independent', 'sample_count': spp_per_pass},
@@ -242,6 +257,25 @@ def render_accumulated(mi, dr, scene, spp_total, chunk, seed_base, log):
     return acc / passes, time.time() - t0
 
 
+def principled_comparison(mi, dr, glb, spp, chunk, ref):
+    """Render with Mitsuba's built-in principled BSDF (twosided) and compare brightness with `ref`."""
+    chunk = min(chunk, spp)
+    pscene, _ = build_scene(mi, dr, glb, chunk, bsdf_mode='principled')
+    img_p, t_p = render_accumulated(mi, dr, pscene, spp, chunk, 7, False)
+    lum = np.array([0.2126, 0.7152, 0.0722])
+    emitter_px = ref.max(axis=2) > 5.0  # pixels that see the light directly (radiance 100)
+    res = dict(spp=spp, render_time_s=round(t_p, 1),
+               note='Mitsuba built-in principled (wrapped in twosided; specular=0.5 i.e. F0=0.04, other lobes off) '
+                    'vs the glTF BRDF, same scene and settings; ratios are principled / glTF; not written as EXR')
+    for key, mask in (('all_pixels', np.ones_like(emitter_px)), ('excluding_emitter_pixels', ~emitter_px)):
+        mp = img_p[mask].mean(axis=0)
+        mr = ref[mask].mean(axis=0)
+        res[key] = dict(pixels=int(mask.sum()), mean_rgb_principled=[float(c) for c in mp],
+                        mean_rgb_gltf=[float(c) for c in mr], ratio_mean_rgb=[float(c) for c in mp / mr],
+                        ratio_mean_luminance=float(mp @ lum / (mr @ lum)))
+    return res
+
+
 def write_exr(mi, path, img):
     bmp = mi.Bitmap(np.ascontiguousarray(img.astype(np.float32)), pixel_format=mi.Bitmap.PixelFormat.RGB)
     bmp.write(path)
@@ -257,6 +291,9 @@ def main():
     ap.add_argument('--principled-spp', type=int, default=0,
                     help='if > 0, also render with Mitsuba\'s built-in principled BSDF at this spp and record '
                          'the brightness ratio (not written as EXR)')
+    ap.add_argument('--principled-only', action='store_true',
+                    help='only run the principled comparison against the existing EXRs in --out and add it to '
+                         'reference.json')
     ap.add_argument('--seed', type=int, default=0, help='base seed (half a: seed, half b: seed + 1e6)')
     args = ap.parse_args()
 
@@ -265,6 +302,19 @@ def main():
     import drjit as dr
     sys.path.insert(0, HERE)
     import gltf_brdf  # noqa: F401  registers 'gltf_brdf'
+
+    if args.principled_only:
+        # compare against the EXRs already in --out and update reference.json in place
+        img_a = np.array(mi.Bitmap(os.path.join(args.out, 'cornell_64_a.exr')), dtype=np.float64)
+        img_b = np.array(mi.Bitmap(os.path.join(args.out, 'cornell_64_b.exr')), dtype=np.float64)
+        path = os.path.join(args.out, 'reference.json')
+        out = json.load(open(path))
+        out['principled_comparison'] = principled_comparison(
+            mi, dr, args.glb, args.principled_spp or 8192, args.chunk, 0.5 * (img_a + img_b))
+        with open(path, 'w') as f:
+            json.dump(out, f, indent=2)
+        print(json.dumps(out['principled_comparison'], indent=1))
+        return 0
 
     half = args.spp_total // 2
     chunk = min(args.chunk, half)
@@ -304,7 +354,11 @@ def main():
         camera=dict(eye=EYE, target=TARGET, up=UP, yfov_deg=YFOV_DEG, pixel_filter='box',
                     mitsuba='perspective, fov_axis=y, look_at(eye, target, up)'),
         light=dict(radiance=[100.0, 100.0, 100.0], two_sided=True,
-                   back_copy_offset_y=LIGHT_BACK_OFFSET),
+                   back_copy_offset_y=LIGHT_BACK_OFFSET,
+                   note='Mitsuba area emitters are one-sided: the doubleSided emissive quad gets a second copy with '
+                        'reversed winding and normals, offset +y by back_copy_offset_y (see README)'),
+        coordinates='camera and geometry are given in glTF world coordinates; both are translated rigidly by '
+                    'scene.mitsuba_scene_shift before rendering (radiance is translation invariant)',
         environment='black',
         mitsuba_version=mi.__version__, drjit_version=dr.__version__, variant=args.variant,
         render_time_s=dict(a=round(t_a, 1), b=round(t_b, 1), total=round(t_a + t_b, 1)),
@@ -322,16 +376,7 @@ def main():
     )
 
     if args.principled_spp > 0:
-        pscene, _ = build_scene(mi, dr, args.glb, min(chunk, args.principled_spp), bsdf_mode='principled')
-        img_p, t_p = render_accumulated(mi, dr, pscene, args.principled_spp, min(chunk, args.principled_spp), 7,
-                                        False)
-        mp = img_p.reshape(-1, 3).mean(axis=0)
-        ma = avg.reshape(-1, 3).mean(axis=0)
-        out['principled_comparison'] = dict(
-            spp=args.principled_spp, mean_rgb=[float(c) for c in mp],
-            ratio_mean_rgb=[float(c) for c in mp / ma],
-            ratio_mean_luminance=float(np.dot(mp, [0.2126, 0.7152, 0.0722]) / np.dot(ma, [0.2126, 0.7152, 0.0722])),
-            note='Mitsuba built-in principled (wrapped in twosided) vs the glTF BRDF, same scene; not an EXR')
+        out['principled_comparison'] = principled_comparison(mi, dr, args.glb, args.principled_spp, chunk, avg)
 
     with open(os.path.join(args.out, 'reference.json'), 'w') as f:
         json.dump(out, f, indent=2)

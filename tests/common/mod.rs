@@ -1,0 +1,85 @@
+//! Shared by the integration tests: one GPU context per test binary, asset paths, image statistics.
+#![allow(dead_code)]
+
+use raykin::camera::CameraChoice;
+use raykin::gpu::GpuContext;
+use raykin::headless::HeadlessApp;
+use raykin::render::RenderSettings;
+use raykin::scene::SceneAsset;
+use std::path::PathBuf;
+use std::sync::{Arc, Mutex, OnceLock};
+
+/// The repository root (tests run with the `game` crate as working directory).
+pub fn repo_root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+/// `../shared/assets`, beside the repository, as in CI.
+pub fn shared_assets() -> PathBuf {
+    repo_root().join("../shared/assets")
+}
+
+/// One device per test binary; a lock serialises GPU tests (lavapipe has 2 cores to share).
+pub fn gpu() -> (GpuContext, std::sync::MutexGuard<'static, ()>) {
+    static CTX: OnceLock<GpuContext> = OnceLock::new();
+    static LOCK: Mutex<()> = Mutex::new(());
+    let guard = LOCK.lock().unwrap_or_else(|p| p.into_inner());
+    let ctx = CTX.get_or_init(|| {
+        let dir = std::env::temp_dir().join("raykin-xdg");
+        let _ = std::fs::create_dir_all(&dir);
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::PermissionsExt;
+            let _ = std::fs::set_permissions(&dir, std::fs::Permissions::from_mode(0o700));
+        }
+        // SAFETY: set before any GPU thread starts, once per process.
+        unsafe { std::env::set_var("XDG_RUNTIME_DIR", &dir) };
+        GpuContext::new_headless().expect("a GPU adapter (install mesa-vulkan-drivers for lavapipe)")
+    });
+    (ctx.clone(), guard)
+}
+
+/// Renders `spp` samples per pixel and returns mean linear radiance per pixel.
+pub fn render(ctx: &GpuContext, scene: &Arc<SceneAsset>, settings: RenderSettings, camera: &CameraChoice, spp: u32) -> Vec<[f32; 3]> {
+    let mut app = HeadlessApp::new(ctx.clone(), scene.clone(), settings, camera).expect("scene uploads");
+    app.accumulate(spp, 64, |_| {});
+    app.radiance()
+}
+
+/// Relative MSE over pixels and channels: (a - b)^2 / (b^2 + eps).
+pub fn rel_mse(a: &[[f32; 3]], reference: &[[f32; 3]], eps: f64) -> f64 {
+    let mut sum = 0.0;
+    for (p, r) in a.iter().zip(reference) {
+        for c in 0..3 {
+            let d = p[c] as f64 - r[c] as f64;
+            sum += d * d / (r[c] as f64 * r[c] as f64 + eps);
+        }
+    }
+    sum / (3 * a.len()) as f64
+}
+
+pub fn assert_all_finite(img: &[[f32; 3]], what: &str) {
+    let bad = img.iter().flatten().filter(|v| !v.is_finite()).count();
+    assert_eq!(bad, 0, "{what}: {bad} non-finite pixel values");
+}
+
+pub fn mean_rgb(img: &[[f32; 3]]) -> [f64; 3] {
+    let mut m = [0.0; 3];
+    for p in img {
+        for c in 0..3 {
+            m[c] += p[c] as f64;
+        }
+    }
+    m.map(|v| v / img.len() as f64)
+}
+
+/// Least-squares slope of log(y) against log(x).
+pub fn log_log_slope(points: &[(f64, f64)]) -> f64 {
+    let n = points.len() as f64;
+    let (lx, ly): (Vec<f64>, Vec<f64>) = points.iter().map(|(x, y)| (x.ln(), y.ln())).unzip();
+    let mx = lx.iter().sum::<f64>() / n;
+    let my = ly.iter().sum::<f64>() / n;
+    let cov: f64 = lx.iter().zip(&ly).map(|(x, y)| (x - mx) * (y - my)).sum();
+    let var: f64 = lx.iter().map(|x| (x - mx) * (x - mx)).sum();
+    cov / var
+}
