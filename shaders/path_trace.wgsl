@@ -7,6 +7,11 @@
 @group(1) @binding(1) var<storage, read_write> aov_albedo_depth: array<vec4<f32>>;
 // xyz: first-hit shading normal sum, w: number of samples that hit a surface.
 @group(1) @binding(2) var<storage, read_write> aov_normal: array<vec4<f32>>;
+// Rays traced by the last dispatch (camera, bounce and shadow rays), for rays/s figures.
+@group(1) @binding(3) var<storage, read_write> ray_counter: array<atomic<u32>>;
+
+var<private> rays_traced: u32;
+var<workgroup> workgroup_rays: atomic<u32>;
 
 struct Surface {
     p: vec3<f32>,
@@ -188,6 +193,7 @@ fn sample_direct(s: Surface, v_local: vec3<f32>, frame_basis: mat3x3<f32>, rng: 
     let f = brdf_eval(v_local, l_local, s.brdf);
     if all(f == vec3<f32>(0.0)) { return vec3<f32>(0.0); }
     // Shadow ray: stop just short of the light so it cannot hit the light itself.
+    rays_traced++;
     let blocker = trace(Ray(origin, dir), dist * (1.0 - 1e-4), true);
     if blocker.instance != NONE { return vec3<f32>(0.0); }
     var emission = m.emissive;
@@ -219,6 +225,7 @@ fn trace_path(camera_ray: Ray, forward: vec3<f32>, rng: ptr<function, Rng>) -> P
     var last_brdf_pdf = 0.0; // 0: camera ray, emission counts in full
     let nee = (frame.flags & FRAME_NEE) != 0u && frame.emitter_count > 0u;
     loop {
+        rays_traced++;
         let hit = trace(ray, MISS, false);
         if hit.instance == NONE {
             result.radiance += throughput * environment(ray.dir);
@@ -274,8 +281,20 @@ fn finite3(v: vec3<f32>) -> bool {
 }
 
 @compute @workgroup_size(8, 8)
-fn trace_pixels(@builtin(global_invocation_id) gid: vec3<u32>) {
-    if gid.x >= frame.width || gid.y >= frame.height { return; }
+fn trace_pixels(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
+    rays_traced = 0u;
+    if gid.x < frame.width && gid.y < frame.height {
+        trace_pixel(gid.xy);
+    }
+    // One global atomic per workgroup keeps the counter off the critical path.
+    atomicAdd(&workgroup_rays, rays_traced);
+    workgroupBarrier();
+    if lid == 0u {
+        atomicAdd(&ray_counter[0], atomicLoad(&workgroup_rays));
+    }
+}
+
+fn trace_pixel(gid: vec2<u32>) {
     let pixel = gid.y * frame.width + gid.x;
     let cam = frame.world_from_camera;
     let origin = cam[3].xyz;

@@ -158,6 +158,7 @@ fn furnace_case(metallic: f32, roughness: f32) {
         let b = render(&ctx, &scene, settings(22), &camera, spp);
         assert_all_finite(&a, "furnace");
         let mut worst = (0.0f64, 0u32, 0u32, 0.0, 0.0);
+        let mut ratio_sum = 0.0f64;
         let mut sigma2_sum = 0.0f64;
         let mut checked = 0;
         for y in 0..SIZE {
@@ -168,6 +169,7 @@ fn furnace_case(metallic: f32, roughness: f32) {
                 let value = 0.5 * (va + vb);
                 // Var(mean of two halves) = E[(a - b)^2] / 4, relative to the expected value.
                 sigma2_sum += ((va - vb) / 2.0 / expected).powi(2);
+                ratio_sum += value / expected;
                 let err = (value / expected - 1.0).abs();
                 if err > worst.0 {
                     worst = (err, x, y, value, expected);
@@ -183,8 +185,15 @@ fn furnace_case(metallic: f32, roughness: f32) {
             spp *= 2;
             continue;
         }
-        eprintln!("metallic {metallic} roughness {roughness}: {checked} pixels at {} spp, worst error {:.4} at ({}, {}) value {:.4} expected {:.4}", 2 * spp, worst.0, worst.1, worst.2, worst.3, worst.4);
-        assert!(worst.0 < 0.01, "metallic {metallic} roughness {roughness}: pixel ({}, {}) is {:.4}, expected {:.4} ({:.2}% off)", worst.1, worst.2, worst.3, worst.4, worst.0 * 100.0);
+        // Per pixel: 1% wherever the noise target was met. Metal at roughness 1 reflects most visible-normal
+        // samples below the horizon (albedo 0.31, per-sample sigma ~1.1x the mean): 0.25% noise would need ~200k
+        // spp, beyond CI on a CPU, so its per-pixel bound is 4 sigma and the mean ratio below carries the 1% claim.
+        let tolerance = 0.01f64.max(4.0 * sigma);
+        let mean_ratio = ratio_sum / checked as f64;
+        eprintln!("metallic {metallic} roughness {roughness}: {checked} pixels at {} spp, worst error {:.4} at ({}, {}) value {:.4} expected {:.4}; mean ratio {mean_ratio:.5}; tolerance {tolerance:.4}", 2 * spp, worst.0, worst.1, worst.2, worst.3, worst.4);
+        assert!(worst.0 < tolerance, "metallic {metallic} roughness {roughness}: pixel ({}, {}) is {:.4}, expected {:.4} ({:.2}% off)", worst.1, worst.2, worst.3, worst.4, worst.0 * 100.0);
+        let mean_tolerance = 0.002 + 4.0 * sigma / (checked as f64).sqrt();
+        assert!((mean_ratio - 1.0).abs() < mean_tolerance, "metallic {metallic} roughness {roughness}: mean rendered/expected {mean_ratio:.5} (tolerance {mean_tolerance:.4})");
         return;
     }
 }

@@ -14,6 +14,33 @@ pub struct Cli {
 pub enum Command {
     /// Render one image of a scene, headless.
     Render(RenderArgs),
+    /// Measure frame times, rays per second, BVH build time and GPU memory.
+    Bench(BenchArgs),
+}
+
+#[derive(Args, Debug)]
+pub struct BenchArgs {
+    /// Scene files or named bench scenes (cornell, flight-helmet, spheres); default: all named scenes.
+    #[arg(long)]
+    pub scene: Vec<String>,
+    /// quick (tiny, CI) or full (1920x1080 and 2560x1440, 300 frames).
+    #[arg(long, default_value = "quick")]
+    pub suite: String,
+    /// Folder of the shared glTF assets the named scenes come from.
+    #[arg(long, default_value = "../shared/assets")]
+    pub assets: PathBuf,
+    #[arg(long, default_value = "bench-out")]
+    pub out: PathBuf,
+    /// Override the suite's frame count.
+    #[arg(long)]
+    pub frames: Option<usize>,
+    #[arg(long, default_value_t = 6)]
+    pub max_depth: u32,
+    /// Override the suite's sizes with one size.
+    #[arg(long)]
+    pub width: Option<u32>,
+    #[arg(long)]
+    pub height: Option<u32>,
 }
 
 /// Scene, camera and sampling options shared by the commands that render.

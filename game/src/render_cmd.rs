@@ -89,10 +89,12 @@ struct RenderReport {
 
 pub fn run(args: &RenderArgs) -> Result<()> {
     let scene = load_scene(&args.scene.scene)?;
-    render_to_file(scene, &args.scene, camera_from(&args.scene), &args.out, args.aovs, args.report.as_deref())
+    check_output(&args.out)?;
+    let ctx = open_gpu()?;
+    render_to_file(ctx, scene, &args.scene, camera_from(&args.scene), &args.out, args.aovs, args.report.as_deref())
 }
 
-fn render_to_file(scene: Arc<SceneAsset>, args: &SceneArgs, camera: CameraChoice, out: &Path, aovs: bool, report: Option<&Path>) -> Result<()> {
+fn check_output(out: &Path) -> Result<()> {
     let ext = out.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
     if !matches!(ext.as_deref(), Some("exr") | Some("png")) {
         anyhow::bail!("{}: the output must end in .exr (linear radiance) or .png (tone-mapped sRGB)", out.display());
@@ -100,7 +102,11 @@ fn render_to_file(scene: Arc<SceneAsset>, args: &SceneArgs, camera: CameraChoice
     if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).with_context(|| format!("{}: cannot create the output folder", dir.display()))?;
     }
-    let ctx = open_gpu()?;
+    Ok(())
+}
+
+fn render_to_file(ctx: GpuContext, scene: Arc<SceneAsset>, args: &SceneArgs, camera: CameraChoice, out: &Path, aovs: bool, report: Option<&Path>) -> Result<()> {
+    let ext = out.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
     let settings = settings_from(args);
     let mut app = HeadlessApp::new(ctx, scene.clone(), settings.clone(), &camera)?;
     for n in &app.notes {
@@ -164,12 +170,17 @@ fn render_to_file(scene: Arc<SceneAsset>, args: &SceneArgs, camera: CameraChoice
 pub fn run_default() -> Result<()> {
     let scene = raykin::scene::load_gltf_slice(DEFAULT_SCENE, Path::new("."), Path::new("<embedded default scene>"), &LoadOptions::default())?;
     report_warnings(&scene);
+    let ctx = open_gpu()?;
+    // A software rasteriser (lavapipe) traces a few hundred thousand paths a second: keep its job under a minute.
+    let cpu = ctx.info.device_type == raykin::gpu::DeviceType::Cpu;
+    let (size, spp) = if cpu { (256, 32) } else { (1024, 1024) };
+    eprintln!("raykin: rendering the embedded Cornell box, {size}x{size} at {spp} spp (`raykin render --help` for more)");
     let args = SceneArgs {
         scene: PathBuf::from("<embedded>"),
-        spp: 256,
+        spp,
         max_depth: 6,
-        width: 512,
-        height: 512,
+        width: size,
+        height: size,
         camera: None,
         look_from: None,
         look_at: None,
@@ -189,5 +200,7 @@ pub fn run_default() -> Result<()> {
         target: glam::Vec3::new(-278.0, 273.0, 0.0),
         yfov: 39.3077f32.to_radians(),
     };
-    render_to_file(Arc::new(scene), &args, camera, Path::new("out/default.png"), false, None)
+    let out = Path::new("out/default.png");
+    check_output(out)?;
+    render_to_file(ctx, Arc::new(scene), &args, camera, out, false, None)
 }

@@ -2,6 +2,7 @@
 
 use bevy_ecs::prelude::Resource;
 use std::sync::Arc;
+pub use wgpu::DeviceType;
 
 /// What a user with no usable GPU driver should do.
 pub const NO_ADAPTER_HELP: &str = "no GPU adapter found (wgpu saw no Vulkan, Metal, DX12 or GL device). \

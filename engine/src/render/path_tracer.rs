@@ -46,6 +46,8 @@ pub struct PathTracer {
     pub aov_albedo_depth: wgpu::Buffer,
     pub aov_normal: wgpu::Buffer,
     pub output_rgba8: wgpu::Buffer,
+    /// Rays traced by the last dispatch.
+    ray_counter: wgpu::Buffer,
     scene_bind_group: Option<(u64, wgpu::BindGroup)>,
     accum_bind_group: wgpu::BindGroup,
     tonemap_bind_group: wgpu::BindGroup,
@@ -118,7 +120,7 @@ impl PathTracer {
         let scene_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some("scene"), entries: &scene_entries });
         let accum_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("accumulation"),
-            entries: &[layout_entry(0, false), layout_entry(1, false), layout_entry(2, false)],
+            entries: &[layout_entry(0, false), layout_entry(1, false), layout_entry(2, false), layout_entry(3, false)],
         });
         let tonemap_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("tonemap"),
@@ -147,7 +149,13 @@ impl PathTracer {
         let frame_uniform = uniform("frame", std::mem::size_of::<GpuFrame>() as u64);
         let tonemap_uniform = uniform("tonemap params", std::mem::size_of::<TonemapParams>() as u64);
         let v = view_buffers(ctx, width, height);
-        let accum_bind_group = bind_group(ctx, &accum_layout, &[&v.accum, &v.albedo, &v.normal]);
+        let ray_counter = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("ray counter"),
+            size: 16,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let accum_bind_group = bind_group(ctx, &accum_layout, &[&v.accum, &v.albedo, &v.normal, &ray_counter]);
         let tonemap_bind_group = bind_group(ctx, &tonemap_layout, &[&v.accum, &v.albedo, &v.normal, &v.rgba8, &tonemap_uniform]);
         let timestamps = ctx.supports_timestamps().then(|| Timestamps {
             set: device.create_query_set(&wgpu::QuerySetDescriptor { label: Some("pass timestamps"), ty: wgpu::QueryType::Timestamp, count: 4 }),
@@ -171,6 +179,7 @@ impl PathTracer {
             aov_albedo_depth: v.albedo,
             aov_normal: v.normal,
             output_rgba8: v.rgba8,
+            ray_counter,
             scene_bind_group: None,
             accum_bind_group,
             tonemap_bind_group,
@@ -188,7 +197,7 @@ impl PathTracer {
             return;
         }
         let v = view_buffers(ctx, width, height);
-        self.accum_bind_group = bind_group(ctx, &self.accum_layout, &[&v.accum, &v.albedo, &v.normal]);
+        self.accum_bind_group = bind_group(ctx, &self.accum_layout, &[&v.accum, &v.albedo, &v.normal, &self.ray_counter]);
         self.tonemap_bind_group = bind_group(ctx, &self.tonemap_layout, &[&v.accum, &v.albedo, &v.normal, &v.rgba8, &self.tonemap_uniform]);
         (self.accum, self.aov_albedo_depth, self.aov_normal, self.output_rgba8) = (v.accum, v.albedo, v.normal, v.rgba8);
         (self.width, self.height) = (width, height);
@@ -258,6 +267,7 @@ impl PathTracer {
         ctx.queue.write_buffer(&self.frame_uniform, 0, bytemuck::bytes_of(&frame));
         let scene_group = self.scene_bind_group(ctx, scene);
         let mut encoder = ctx.device.create_command_encoder(&Default::default());
+        encoder.clear_buffer(&self.ray_counter, 0, None);
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("path trace"),
@@ -320,6 +330,12 @@ impl PathTracer {
         let ticks: &[u64] = bytemuck::cast_slice(&bytes);
         let ms = |a: u64, b: u64| b.saturating_sub(a) as f64 * t.period_ns as f64 * 1e-6;
         Some(PassTimes { trace_ms: ms(ticks[0], ticks[1]), tonemap_ms: ms(ticks[2], ticks[3]) })
+    }
+
+    /// Rays (camera, bounce, shadow) traced by the last dispatch (blocks until it finished).
+    pub fn read_ray_count(&self, ctx: &GpuContext) -> u64 {
+        let bytes = ctx.read_buffer(&self.ray_counter, 4);
+        u32::from_le_bytes([bytes[0], bytes[1], bytes[2], bytes[3]]) as u64
     }
 
     /// Mean linear radiance per pixel (RGB), row-major from the top-left.

@@ -65,9 +65,17 @@ struct Loader<'a> {
 impl<'a> Loader<'a> {
     fn new(bytes: &[u8], base_dir: &'a Path, name: &Path, options: &'a LoadOptions) -> Result<Self, SceneError> {
         let path = name.to_path_buf();
-        let gltf = gltf::Gltf::from_slice(bytes).map_err(|e| SceneError::Invalid {
-            path: path.clone(),
-            reason: describe_gltf_error(&e),
+        let gltf = gltf::Gltf::from_slice(bytes).map_err(|e| {
+            // The crate's validation rejects unknown required extensions; name the extension plainly.
+            if let Ok(unvalidated) = gltf::Gltf::from_slice_without_validation(bytes)
+                && let Some(ext) = unvalidated
+                    .document
+                    .extensions_required()
+                    .find(|ext| !SUPPORTED_REQUIRED_EXTENSIONS.contains(ext))
+            {
+                return SceneError::UnsupportedExtension { path: path.clone(), extension: ext.to_string() };
+            }
+            SceneError::Invalid { path: path.clone(), reason: describe_gltf_error(&e) }
         })?;
         for ext in gltf.document.extensions_required() {
             if !SUPPORTED_REQUIRED_EXTENSIONS.contains(&ext) {
