@@ -51,6 +51,26 @@ pub fn settings_from(args: &SceneArgs) -> RenderSettings {
     }
 }
 
+/// `--time T` / `--animation NAME|INDEX`: the clip and time to pose the scene at (clip 0, time 0 by default);
+/// `None` when neither is given (the file's rest pose).
+pub fn pose_from(scene: &SceneAsset, args: &SceneArgs) -> Result<Option<(usize, f32)>> {
+    if args.time.is_none() && args.animation.is_none() {
+        return Ok(None);
+    }
+    if scene.animations.is_empty() {
+        anyhow::bail!("{}: the scene has no animations, so --time/--animation cannot pose it", scene.source);
+    }
+    let clip = match &args.animation {
+        Some(a) => raykin::animation::find_clip(scene, a).map_err(anyhow::Error::msg)?,
+        None => 0,
+    };
+    let time = args.time.unwrap_or(0.0);
+    if !time.is_finite() {
+        anyhow::bail!("--time {time}: not a finite number of seconds");
+    }
+    Ok(Some((clip, time)))
+}
+
 pub fn camera_from(args: &SceneArgs) -> CameraChoice {
     match (args.look_from, args.look_at, args.camera) {
         (Some(eye), Some(target), _) => CameraChoice::LookAt { eye, target, yfov: args.fov.to_radians() },
@@ -105,6 +125,9 @@ fn render_to_file(scene: Arc<SceneAsset>, args: &SceneArgs, camera: CameraChoice
     let mut app = HeadlessApp::new(ctx, scene.clone(), settings.clone(), &camera)?;
     for n in &app.notes {
         eprintln!("raykin: warning: {}: {n}", scene.source);
+    }
+    if let Some((clip, time)) = pose_from(&scene, args)? {
+        app.set_time(clip, time).map_err(anyhow::Error::msg)?;
     }
     let start = Instant::now();
     let bar = progress_bar(args.spp as u64, "rendering");

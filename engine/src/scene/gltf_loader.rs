@@ -157,7 +157,7 @@ impl<'a> Loader<'a> {
         let (nodes, roots) = self.load_nodes()?;
         let skins = self.load_skins();
         let animations = self.load_animations();
-        let scene = SceneAsset {
+        let mut scene = SceneAsset {
             source: self.path.display().to_string(),
             meshes,
             materials,
@@ -170,6 +170,7 @@ impl<'a> Loader<'a> {
             roots,
             warnings: self.warnings.take(),
         };
+        super::compose::unshare_deformable_meshes(&mut scene);
         if scene.triangle_count() == 0 {
             return Err(SceneError::Empty {
                 path: self.path,
@@ -553,6 +554,18 @@ impl<'a> Loader<'a> {
         }
         if roots.iter().any(|&r| nodes[r].parent.is_some()) {
             return Err(self.invalid("a scene lists a node that is also another node's child"));
+        }
+        // Nodes outside the displayed scene: every node must be reachable from a parentless node, else it
+        // sits on a cycle (each node has at most one parent, so an unreachable node loops back to itself).
+        stack = (0..nodes.len()).filter(|&i| nodes[i].parent.is_none() && !seen.contains(&i)).collect();
+        while let Some(n) = stack.pop() {
+            if !seen.insert(n) {
+                return Err(self.invalid(format!("the node hierarchy has a cycle through node {n}")));
+            }
+            stack.extend(&nodes[n].children);
+        }
+        if let Some(n) = (0..nodes.len()).find(|n| !seen.contains(n)) {
+            return Err(self.invalid(format!("the node hierarchy has a cycle through node {n}")));
         }
         Ok((nodes, roots))
     }
