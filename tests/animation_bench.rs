@@ -14,7 +14,10 @@ fn assets() -> PathBuf {
 
 fn root(app: &mut bevy_app::App) -> bevy_ecs::entity::Entity {
     let world = app.world_mut();
-    world.query_filtered::<bevy_ecs::entity::Entity, bevy_ecs::query::With<SceneRoot>>().single(world).unwrap()
+    world
+        .query_filtered::<bevy_ecs::entity::Entity, bevy_ecs::query::With<SceneRoot>>()
+        .single(world)
+        .unwrap()
 }
 
 /// SAH ratio of each skinned mesh's BVH, refit every frame (never rebuilt) from a build at the rest pose,
@@ -27,28 +30,50 @@ fn sah_ratio_curves() {
         ("Fox-Survey", "Fox/glTF-Binary/Fox.glb", 0),
         ("Fox-Walk", "Fox/glTF-Binary/Fox.glb", 1),
         ("Fox-Run", "Fox/glTF-Binary/Fox.glb", 2),
-        ("RobotExpressive-Dance", "RobotExpressive/RobotExpressive.glb", 0),
+        (
+            "RobotExpressive-Dance",
+            "RobotExpressive/RobotExpressive.glb",
+            0,
+        ),
     ] {
-        let scene = Arc::new(load_gltf(assets().join(path), &LoadOptions { skip_images: true }).unwrap());
+        let scene =
+            Arc::new(load_gltf(assets().join(path), &LoadOptions { skip_images: true }).unwrap());
         let mut app = cpu_app(scene.clone());
         let r = root(&mut app);
         let duration = scene.animations[clip].duration;
-        let meshes: Vec<usize> = (0..scene.meshes.len()).filter(|&m| scene.meshes[m].skin_weights.is_some()).collect();
+        let meshes: Vec<usize> = (0..scene.meshes.len())
+            .filter(|&m| scene.meshes[m].skin_weights.is_some())
+            .collect();
         let mut bvhs: Vec<(MeshBvh, Vec<[u32; 3]>)> = Vec::new();
         let frames = (duration * 30.0).ceil() as usize;
         println!("# {name} (clip {clip}, {duration:.2} s), SAH ratio per skinned mesh");
-        println!("asset,time_s,{}", meshes.iter().map(|m| format!("mesh{m}")).collect::<Vec<_>>().join(","));
+        println!(
+            "asset,time_s,{}",
+            meshes
+                .iter()
+                .map(|m| format!("mesh{m}"))
+                .collect::<Vec<_>>()
+                .join(",")
+        );
         for f in 0..=frames {
             let t = f as f32 / 30.0;
-            app.world_mut().entity_mut(r).insert(AnimationPlayer::paused_at(clip, t));
+            app.world_mut()
+                .entity_mut(r)
+                .insert(AnimationPlayer::paused_at(clip, t));
             app.update();
             let d = app.world().resource::<DeformedMeshes>();
             if bvhs.is_empty() {
                 // Build at the first posed frame, as the renderer does after upload + first refit.
                 for &m in &meshes {
                     let p = &d.meshes[m].as_ref().unwrap().positions;
-                    let b = MeshBvh::build(p, &scene.meshes[m].triangles, BvhQuality::Medium).unwrap();
-                    let tris = b.flat.order.iter().map(|&t| scene.meshes[m].triangles[t as usize]).collect();
+                    let b =
+                        MeshBvh::build(p, &scene.meshes[m].triangles, BvhQuality::Medium).unwrap();
+                    let tris = b
+                        .flat
+                        .order
+                        .iter()
+                        .map(|&t| scene.meshes[m].triangles[t as usize])
+                        .collect();
                     bvhs.push((b, tris));
                 }
             }
@@ -93,7 +118,9 @@ fn cpu_skinning_time() {
         secs / verts as f64 * 1e5 * 1e3
     );
     for (name, m) in [("CesiumMan", 1usize), ("Fox", scene.meshes.len() - 1)] {
-        let d = app.world().resource::<DeformedMeshes>().meshes[m].clone().unwrap();
+        let d = app.world().resource::<DeformedMeshes>().meshes[m]
+            .clone()
+            .unwrap();
         let tris = &scene.meshes[m].triangles;
         let t0 = std::time::Instant::now();
         let mut b = MeshBvh::build(&d.positions, tris, BvhQuality::Medium).unwrap();
@@ -104,6 +131,11 @@ fn cpu_skinning_time() {
             b.refit(&d.positions, &order);
         }
         let refit = t0.elapsed().as_secs_f64() / 100.0;
-        println!("{name}: {} triangles: rebuild {:.2} ms, refit {:.3} ms", tris.len(), build * 1e3, refit * 1e3);
+        println!(
+            "{name}: {} triangles: rebuild {:.2} ms, refit {:.3} ms",
+            tris.len(),
+            build * 1e3,
+            refit * 1e3
+        );
     }
 }

@@ -9,7 +9,10 @@ use raykin::camera::CameraChoice;
 use raykin::gpu::GpuContext;
 use raykin::headless::HeadlessApp;
 use raykin::render::{Environment, RenderSettings};
-use raykin::scene::{Material, MeshData, MorphTarget, MorphWeights, NodeTransform, PrimitiveRange, SceneAsset, procedural};
+use raykin::scene::{
+    Material, MeshData, MorphTarget, MorphWeights, NodeTransform, PrimitiveRange, SceneAsset,
+    procedural,
+};
 use std::sync::Arc;
 
 const N: u32 = 24;
@@ -17,16 +20,28 @@ const N: u32 = 24;
 /// A strip 4 x 1 in the XY plane, N*4 x N quads.
 fn sheet() -> MeshData {
     let (nx, ny) = (N * 4, N);
-    let mut m = MeshData { name: "sheet".into(), ..Default::default() };
+    let mut m = MeshData {
+        name: "sheet".into(),
+        ..Default::default()
+    };
     for j in 0..=ny {
         for i in 0..=nx {
-            m.positions.push(Vec3::new(i as f32 / nx as f32 * 4.0 - 2.0, j as f32 / ny as f32 - 0.5, 0.0));
+            m.positions.push(Vec3::new(
+                i as f32 / nx as f32 * 4.0 - 2.0,
+                j as f32 / ny as f32 - 0.5,
+                0.0,
+            ));
         }
     }
     let row = nx + 1;
     for j in 0..ny {
         for i in 0..nx {
-            let (a, b, c, d) = (j * row + i, j * row + i + 1, (j + 1) * row + i, (j + 1) * row + i + 1);
+            let (a, b, c, d) = (
+                j * row + i,
+                j * row + i + 1,
+                (j + 1) * row + i,
+                (j + 1) * row + i + 1,
+            );
             m.triangles.push([a, b, d]);
             m.triangles.push([a, d, c]);
         }
@@ -34,11 +49,29 @@ fn sheet() -> MeshData {
     m.normals = Some(vec![Vec3::Z; m.positions.len()]);
     m.uv0 = Some(m.positions.iter().map(|p| Vec2::new(p.x, p.y)).collect());
     m.triangle_materials = vec![0; m.triangles.len()];
-    m.primitives.push(PrimitiveRange { vertex_offset: 0, vertex_count: m.positions.len() as u32, material: 0 });
+    m.primitives.push(PrimitiveRange {
+        vertex_offset: 0,
+        vertex_count: m.positions.len() as u32,
+        material: 0,
+    });
     // Targets: fold (the right half folds back over the left), twist (two turns about X), scatter (each
     // 2x2-quad patch is thrown to a pseudo-random place), as deltas from the rest pose.
-    let fold: Vec<Vec3> = m.positions.iter().map(|p| if p.x > 0.0 { Vec3::new(-p.x, p.y, 0.02 + 0.1 * p.x) } else { *p }).collect();
-    let twist: Vec<Vec3> = m.positions.iter().map(|p| Quat::from_rotation_x(p.x * std::f32::consts::PI) * *p).collect();
+    let fold: Vec<Vec3> = m
+        .positions
+        .iter()
+        .map(|p| {
+            if p.x > 0.0 {
+                Vec3::new(-p.x, p.y, 0.02 + 0.1 * p.x)
+            } else {
+                *p
+            }
+        })
+        .collect();
+    let twist: Vec<Vec3> = m
+        .positions
+        .iter()
+        .map(|p| Quat::from_rotation_x(p.x * std::f32::consts::PI) * *p)
+        .collect();
     let hash = |k: u32| {
         let mut x = k.wrapping_mul(0x9E37_79B9) ^ 0x85EB_CA6B;
         x ^= x >> 13;
@@ -57,7 +90,15 @@ fn sheet() -> MeshData {
         })
         .collect();
     for target in [fold, twist, scatter] {
-        m.morph_targets.push(MorphTarget { positions: target.iter().zip(&m.positions).map(|(t, p)| *t - *p).collect(), normals: None, tangents: None });
+        m.morph_targets.push(MorphTarget {
+            positions: target
+                .iter()
+                .zip(&m.positions)
+                .map(|(t, p)| *t - *p)
+                .collect(),
+            normals: None,
+            tangents: None,
+        });
     }
     m.default_morph_weights = vec![0.0; 3];
     m
@@ -67,7 +108,13 @@ fn sheet_scene(mesh: MeshData) -> SceneAsset {
     procedural::scene_from_meshes(
         "sheet",
         vec![(mesh, NodeTransform::default())],
-        vec![Material { base_color: glam::Vec4::new(0.8, 0.5, 0.3, 1.0), metallic: 0.0, roughness: 0.6, double_sided: true, ..Default::default() }],
+        vec![Material {
+            base_color: glam::Vec4::new(0.8, 0.5, 0.3, 1.0),
+            metallic: 0.0,
+            roughness: 0.6,
+            double_sided: true,
+            ..Default::default()
+        }],
     )
 }
 
@@ -84,7 +131,12 @@ fn regimes_degrade_refit_past_threshold() {
     let mesh = sheet();
     for (r, name) in REGIMES.iter().enumerate() {
         let mut bvh = MeshBvh::build(&mesh.positions, &mesh.triangles, BvhQuality::Medium).unwrap();
-        let tris: Vec<[u32; 3]> = bvh.flat.order.iter().map(|&t| mesh.triangles[t as usize]).collect();
+        let tris: Vec<[u32; 3]> = bvh
+            .flat
+            .order
+            .iter()
+            .map(|&t| mesh.triangles[t as usize])
+            .collect();
         let mut ratios = Vec::new();
         for step in 1..=8 {
             let s = step as f32 / 8.0;
@@ -94,9 +146,16 @@ fn regimes_degrade_refit_past_threshold() {
             bvh.refit(&p, &tris);
             ratios.push(bvh.sah_ratio());
         }
-        let fresh = MeshBvh::build(&morphed(&mesh, r), &mesh.triangles, BvhQuality::Medium).unwrap();
-        eprintln!("{name}: refit SAH ratio over the morph {ratios:.2?}; a fresh build's cost vs refit: {:.2}", fresh.flat.sah_cost() / bvh.flat.sah_cost());
-        assert!(*ratios.last().unwrap() > DEFAULT_REBUILD_THRESHOLD, "{name}: {ratios:?}");
+        let fresh =
+            MeshBvh::build(&morphed(&mesh, r), &mesh.triangles, BvhQuality::Medium).unwrap();
+        eprintln!(
+            "{name}: refit SAH ratio over the morph {ratios:.2?}; a fresh build's cost vs refit: {:.2}",
+            fresh.flat.sah_cost() / bvh.flat.sah_cost()
+        );
+        assert!(
+            *ratios.last().unwrap() > DEFAULT_REBUILD_THRESHOLD,
+            "{name}: {ratios:?}"
+        );
     }
 }
 
@@ -116,11 +175,23 @@ fn gpu() -> GpuContext {
 }
 
 fn settings() -> RenderSettings {
-    RenderSettings { width: 32, height: 32, spp_per_frame: 4, max_depth: 2, environment: Environment::Sky, seed: 3, ..Default::default() }
+    RenderSettings {
+        width: 32,
+        height: 32,
+        spp_per_frame: 4,
+        max_depth: 2,
+        environment: Environment::Sky,
+        seed: 3,
+        ..Default::default()
+    }
 }
 
 fn camera() -> CameraChoice {
-    CameraChoice::LookAt { eye: Vec3::new(0.5, 1.5, 5.0), target: Vec3::ZERO, yfov: 50f32.to_radians() }
+    CameraChoice::LookAt {
+        eye: Vec3::new(0.5, 1.5, 5.0),
+        target: Vec3::ZERO,
+        yfov: 50f32.to_radians(),
+    }
 }
 
 fn set_weights(app: &mut HeadlessApp, w: Vec<f32>) {
@@ -138,7 +209,10 @@ fn rebuild_fires_and_image_matches_fresh_build() {
     for (r, name) in REGIMES.iter().enumerate() {
         for max_rebuilds in [0usize, 1] {
             let mut app = HeadlessApp::new(gpu(), scene.clone(), settings(), &camera()).unwrap();
-            app.app.world_mut().resource_mut::<raykin::bvh::refit::BvhStats>().max_rebuilds_per_frame = max_rebuilds;
+            app.app
+                .world_mut()
+                .resource_mut::<raykin::bvh::refit::BvhStats>()
+                .max_rebuilds_per_frame = max_rebuilds;
             app.step();
             let before = app.bvh_stats().rebuilds;
             let mut w = vec![0.0; 3];
@@ -149,23 +223,43 @@ fn rebuild_fires_and_image_matches_fresh_build() {
             let got = app.radiance();
             if max_rebuilds == 0 {
                 assert_eq!(stats.rebuilds, before);
-                assert!(stats.sah_ratio[0] > stats.threshold, "{name}: ratio {}", stats.sah_ratio[0]);
+                assert!(
+                    stats.sah_ratio[0] > stats.threshold,
+                    "{name}: ratio {}",
+                    stats.sah_ratio[0]
+                );
             } else {
                 assert_eq!(stats.rebuilds, before + 1, "{name}: the rebuild fired");
-                assert!(stats.sah_ratio[0] < 1.0001, "{name}: ratio after rebuild {}", stats.sah_ratio[0]);
+                assert!(
+                    stats.sah_ratio[0] < 1.0001,
+                    "{name}: ratio after rebuild {}",
+                    stats.sah_ratio[0]
+                );
             }
             // Reference: the morphed sheet as a static mesh with a freshly built BVH.
             let mut fixed = mesh.clone();
             fixed.positions = morphed(&mesh, r);
             fixed.morph_targets.clear();
             fixed.default_morph_weights.clear();
-            let mut reference = HeadlessApp::new(gpu(), Arc::new(sheet_scene(fixed)), settings(), &camera()).unwrap();
+            let mut reference =
+                HeadlessApp::new(gpu(), Arc::new(sheet_scene(fixed)), settings(), &camera())
+                    .unwrap();
             reference.accumulate(4, 4, |_| {});
             let want = reference.radiance();
-            let diff: f64 = got.iter().zip(&want).flat_map(|(a, b)| (0..3).map(move |k| (a[k] - b[k]).abs() as f64)).sum::<f64>();
+            let diff: f64 = got
+                .iter()
+                .zip(&want)
+                .flat_map(|(a, b)| (0..3).map(move |k| (a[k] - b[k]).abs() as f64))
+                .sum::<f64>();
             let mean: f64 = want.iter().flatten().map(|v| *v as f64).sum::<f64>();
-            eprintln!("{name} (max rebuilds {max_rebuilds}): ratio {:.2}, image diff {:.2e} of {mean:.2}", stats.sah_ratio[0], diff);
-            assert!(diff <= 1e-3 * mean, "{name}: refit/rebuilt image differs from a fresh build");
+            eprintln!(
+                "{name} (max rebuilds {max_rebuilds}): ratio {:.2}, image diff {:.2e} of {mean:.2}",
+                stats.sah_ratio[0], diff
+            );
+            assert!(
+                diff <= 1e-3 * mean,
+                "{name}: refit/rebuilt image differs from a fresh build"
+            );
         }
     }
 }

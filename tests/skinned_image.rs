@@ -46,12 +46,22 @@ fn settings() -> RenderSettings {
 }
 
 fn cesium() -> Arc<SceneAsset> {
-    Arc::new(load_gltf(repo_root().join("../shared/assets/CesiumMan/glTF-Binary/CesiumMan.glb"), &LoadOptions::default()).unwrap())
+    Arc::new(
+        load_gltf(
+            repo_root().join("../shared/assets/CesiumMan/glTF-Binary/CesiumMan.glb"),
+            &LoadOptions::default(),
+        )
+        .unwrap(),
+    )
 }
 
 fn camera() -> CameraChoice {
     // CesiumMan stands about 1.5 units tall on the XZ plane after its Z_UP node.
-    CameraChoice::LookAt { eye: Vec3::new(0.0, 0.8, 3.2), target: Vec3::new(0.0, 0.75, 0.0), yfov: 40f32.to_radians() }
+    CameraChoice::LookAt {
+        eye: Vec3::new(0.0, 0.8, 3.2),
+        target: Vec3::new(0.0, 0.75, 0.0),
+        yfov: 40f32.to_radians(),
+    }
 }
 
 fn render(scene: Arc<SceneAsset>, pose: Option<(usize, f32)>) -> Vec<[f32; 3]> {
@@ -66,7 +76,11 @@ fn render(scene: Arc<SceneAsset>, pose: Option<(usize, f32)>) -> Vec<[f32; 3]> {
 }
 
 fn mean_abs_diff(a: &[[f32; 3]], b: &[[f32; 3]]) -> (f64, f64) {
-    let d: f64 = a.iter().zip(b).flat_map(|(x, y)| (0..3).map(move |k| (x[k] - y[k]).abs() as f64)).sum();
+    let d: f64 = a
+        .iter()
+        .zip(b)
+        .flat_map(|(x, y)| (0..3).map(move |k| (x[k] - y[k]).abs() as f64))
+        .sum();
     let m: f64 = a.iter().flatten().map(|v| v.abs() as f64).sum();
     let n = (a.len() * 3) as f64;
     (d / n, m / n)
@@ -74,13 +88,27 @@ fn mean_abs_diff(a: &[[f32; 3]], b: &[[f32; 3]]) -> (f64, f64) {
 
 #[test]
 fn skinned_cesium_man_matches_static_reference_mesh() {
-    let fixtures: Value = serde_json::from_str(&std::fs::read_to_string(repo_root().join("tests/reference/skinning/fixtures.json")).unwrap()).unwrap();
+    let fixtures: Value = serde_json::from_str(
+        &std::fs::read_to_string(repo_root().join("tests/reference/skinning/fixtures.json"))
+            .unwrap(),
+    )
+    .unwrap();
     let case = fixtures["cases"]
         .as_array()
         .unwrap()
         .iter()
-        .find(|c| c["asset"].as_str().unwrap().contains("CesiumMan") && c["note"].as_str().unwrap_or("").contains("between"))
-        .or_else(|| fixtures["cases"].as_array().unwrap().iter().filter(|c| c["asset"].as_str().unwrap().contains("CesiumMan")).nth(2))
+        .find(|c| {
+            c["asset"].as_str().unwrap().contains("CesiumMan")
+                && c["note"].as_str().unwrap_or("").contains("between")
+        })
+        .or_else(|| {
+            fixtures["cases"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .filter(|c| c["asset"].as_str().unwrap().contains("CesiumMan"))
+                .nth(2)
+        })
         .unwrap();
     let time = case["time"].as_f64().unwrap() as f32;
     let scene = cesium();
@@ -95,25 +123,47 @@ fn skinned_cesium_man_matches_static_reference_mesh() {
     {
         let world = posed.world_mut();
         let root = world.query_filtered::<bevy_ecs::entity::Entity, bevy_ecs::query::With<raykin::scene::SceneRoot>>().single(world).unwrap();
-        world.entity_mut(root).insert(raykin::animation::AnimationPlayer::paused_at(0, time));
+        world
+            .entity_mut(root)
+            .insert(raykin::animation::AnimationPlayer::paused_at(0, time));
     }
     posed.update();
     let node = &case["nodes"][0];
     let n = node["node"].as_u64().unwrap() as usize;
     let mesh_index = scene.nodes[n].mesh.unwrap();
-    let deformed = posed.world().resource::<raykin::animation::DeformedMeshes>().meshes[mesh_index].clone().unwrap();
+    let deformed = posed
+        .world()
+        .resource::<raykin::animation::DeformedMeshes>()
+        .meshes[mesh_index]
+        .clone()
+        .unwrap();
     let mut mesh = scene.meshes[mesh_index].clone();
     mesh.positions = deformed.positions.clone();
     let range = &mesh.primitives[0];
     let prim = &node["primitives"][0];
-    for (v, p) in prim["vertex_indices"].as_array().unwrap().iter().zip(prim["positions"].as_array().unwrap()) {
-        let p: Vec<f32> = p.as_array().unwrap().iter().map(|x| x.as_f64().unwrap() as f32).collect();
-        mesh.positions[range.vertex_offset as usize + v.as_u64().unwrap() as usize] = Vec3::new(p[0], p[1], p[2]);
+    for (v, p) in prim["vertex_indices"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .zip(prim["positions"].as_array().unwrap())
+    {
+        let p: Vec<f32> = p
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_f64().unwrap() as f32)
+            .collect();
+        mesh.positions[range.vertex_offset as usize + v.as_u64().unwrap() as usize] =
+            Vec3::new(p[0], p[1], p[2]);
     }
     mesh.normals = deformed.normals.clone();
     mesh.tangents = deformed.tangents.clone();
     mesh.skin_weights = None;
-    let mut reference = procedural::scene_from_meshes("static CesiumMan", vec![(mesh, NodeTransform::default())], scene.materials.clone());
+    let mut reference = procedural::scene_from_meshes(
+        "static CesiumMan",
+        vec![(mesh, NodeTransform::default())],
+        scene.materials.clone(),
+    );
     reference.images = scene.images.clone();
     reference.textures = scene.textures.clone();
     let fixed = render(Arc::new(reference), None);
@@ -126,7 +176,10 @@ fn skinned_cesium_man_matches_static_reference_mesh() {
     // And the pose differs visibly from the rest pose (so the comparison is not vacuous).
     let rest = render(scene.clone(), None);
     let (rest_diff, _) = mean_abs_diff(&skinned, &rest);
-    assert!(rest_diff > 5.0 * diff.max(1e-4), "rest {rest_diff} vs {diff}");
+    assert!(
+        rest_diff > 5.0 * diff.max(1e-4),
+        "rest {rest_diff} vs {diff}"
+    );
 }
 
 #[test]
@@ -142,7 +195,11 @@ fn same_time_same_image_and_no_ghosting() {
     app.accumulate(SPP, SPP, |_| {});
     app.set_time(0, 1.0).unwrap();
     app.accumulate(SPP, SPP, |_| {});
-    assert_eq!(app.samples(), SPP, "accumulation restarted on the pose change");
+    assert_eq!(
+        app.samples(),
+        SPP,
+        "accumulation restarted on the pose change"
+    );
     let moved = app.radiance();
     let (ghost, mean) = mean_abs_diff(&moved, &a);
     eprintln!("ghosting: mean |diff| {ghost:.6} (mean {mean:.4})");

@@ -9,7 +9,10 @@
 //! ignored; weights are renormalised to sum to 1 over all JOINTS_n/WEIGHTS_n sets; a vertex with no usable
 //! weight follows the skinned node's world transform rigidly; a non-finite result falls back the same way.
 
-use crate::scene::{GlobalTransform, MeshData, MeshInstance, MorphWeights, SceneAsset, SceneAssets, SceneNode, SceneNodes, SkinnedMesh};
+use crate::scene::{
+    GlobalTransform, MeshData, MeshInstance, MorphWeights, SceneAsset, SceneAssets, SceneNode,
+    SceneNodes, SkinnedMesh,
+};
 use bevy_ecs::prelude::*;
 use glam::{Mat3, Mat4, Vec3, Vec4};
 
@@ -36,7 +39,11 @@ pub struct DeformedMeshes {
 }
 
 /// `global(joint_j) x inverseBindMatrix_j` for each joint of `skin`, from node world matrices by node index.
-pub fn joint_matrices(scene: &SceneAsset, skin: usize, global: impl Fn(usize) -> Option<Mat4>) -> Vec<Mat4> {
+pub fn joint_matrices(
+    scene: &SceneAsset,
+    skin: usize,
+    global: impl Fn(usize) -> Option<Mat4>,
+) -> Vec<Mat4> {
     let skin = &scene.skins[skin];
     skin.joints
         .iter()
@@ -47,12 +54,20 @@ pub fn joint_matrices(scene: &SceneAsset, skin: usize, global: impl Fn(usize) ->
 
 fn normal_matrix(m: &Mat3) -> Mat3 {
     let det = m.determinant();
-    if det.abs() > 1e-20 && det.is_finite() { m.inverse().transpose() } else { *m }
+    if det.abs() > 1e-20 && det.is_finite() {
+        m.inverse().transpose()
+    } else {
+        *m
+    }
 }
 
 /// Morphs then skins `mesh`. `skin`: the joint matrices and the node's world matrix (the fallback for
 /// vertices without usable weights); `None` for a morph-only mesh.
-pub fn deform_mesh(mesh: &MeshData, skin: Option<(&[Mat4], Mat4)>, weights: &[f32]) -> DeformedMesh {
+pub fn deform_mesh(
+    mesh: &MeshData,
+    skin: Option<(&[Mat4], Mat4)>,
+    weights: &[f32],
+) -> DeformedMesh {
     let mut positions = mesh.positions.clone();
     let mut normals = mesh.normals.clone();
     let mut tangents = mesh.tangents.clone();
@@ -60,12 +75,17 @@ pub fn deform_mesh(mesh: &MeshData, skin: Option<(&[Mat4], Mat4)>, weights: &[f3
         if w == 0.0 || !w.is_finite() {
             continue;
         }
-        positions.iter_mut().zip(&target.positions).for_each(|(p, d)| *p += *d * w);
+        positions
+            .iter_mut()
+            .zip(&target.positions)
+            .for_each(|(p, d)| *p += *d * w);
         if let (Some(n), Some(d)) = (&mut normals, &target.normals) {
             n.iter_mut().zip(d).for_each(|(n, d)| *n += *d * w);
         }
         if let (Some(t), Some(d)) = (&mut tangents, &target.tangents) {
-            t.iter_mut().zip(d).for_each(|(t, d)| *t += (*d * w).extend(0.0));
+            t.iter_mut()
+                .zip(d)
+                .for_each(|(t, d)| *t += (*d * w).extend(0.0));
         }
     }
     if let (Some((joints, node_world)), Some(sw)) = (skin, &mesh.skin_weights) {
@@ -84,7 +104,11 @@ pub fn deform_mesh(mesh: &MeshData, skin: Option<(&[Mat4], Mat4)>, weights: &[f3
                     }
                 }
             }
-            let m = if sum > 0.0 && sum.is_finite() { m * (1.0 / sum) } else { node_world };
+            let m = if sum > 0.0 && sum.is_finite() {
+                m * (1.0 / sum)
+            } else {
+                node_world
+            };
             let mut p = m.transform_point3(rest[v]);
             let mut m3 = Mat3::from_mat4(m);
             if !p.is_finite() {
@@ -105,7 +129,12 @@ pub fn deform_mesh(mesh: &MeshData, skin: Option<(&[Mat4], Mat4)>, weights: &[f3
             n.iter_mut().for_each(|n| *n = n.normalize_or_zero());
         }
         if let Some(t) = &mut tangents {
-            t.iter_mut().for_each(|t| *t = t.truncate().normalize_or_zero().extend(if t.w < 0.0 { -1.0 } else { 1.0 }));
+            t.iter_mut().for_each(|t| {
+                *t = t
+                    .truncate()
+                    .normalize_or_zero()
+                    .extend(if t.w < 0.0 { -1.0 } else { 1.0 })
+            });
         }
     }
     // Morph deltas from a file can be huge or NaN-producing; never hand a non-finite vertex to the BVH.
@@ -114,14 +143,25 @@ pub fn deform_mesh(mesh: &MeshData, skin: Option<(&[Mat4], Mat4)>, weights: &[f3
             *p = *r;
         }
     }
-    DeformedMesh { positions, normals, tangents, pose_key: Vec::new() }
+    DeformedMesh {
+        positions,
+        normals,
+        tangents,
+        pose_key: Vec::new(),
+    }
 }
 
 /// Deforms every deformable mesh whose joints or morph weights changed since its last deformation.
 pub fn deform_meshes(
     assets: Res<SceneAssets>,
     mut out: ResMut<DeformedMeshes>,
-    meshes: Query<(&MeshInstance, &SceneNode, &GlobalTransform, Option<&SkinnedMesh>, Option<&MorphWeights>)>,
+    meshes: Query<(
+        &MeshInstance,
+        &SceneNode,
+        &GlobalTransform,
+        Option<&SkinnedMesh>,
+        Option<&MorphWeights>,
+    )>,
     roots: Query<&SceneNodes>,
     globals: Query<&GlobalTransform>,
 ) {
@@ -134,22 +174,34 @@ pub fn deform_meshes(
     }
     let mut vertices = 0;
     for (instance, node, world, skinned, weights) in &meshes {
-        let Some(mesh) = scene.meshes.get(instance.mesh) else { continue };
+        let Some(mesh) = scene.meshes.get(instance.mesh) else {
+            continue;
+        };
         if !mesh.is_deformable() {
             continue;
         }
         let joints = skinned.and_then(|s| {
             let nodes = roots.get(node.root).ok()?;
-            Some(joint_matrices(scene, s.skin, |j| nodes.0.get(j).and_then(|&e| globals.get(e).ok()).map(|g| g.0)))
+            Some(joint_matrices(scene, s.skin, |j| {
+                nodes
+                    .0
+                    .get(j)
+                    .and_then(|&e| globals.get(e).ok())
+                    .map(|g| g.0)
+            }))
         });
         let weights: &[f32] = weights.map_or(&[][..], |w| w.0.as_slice());
-        let mut key: Vec<f32> = Vec::with_capacity(joints.as_ref().map_or(0, |j| j.len() * 16 + 16) + weights.len());
+        let mut key: Vec<f32> =
+            Vec::with_capacity(joints.as_ref().map_or(0, |j| j.len() * 16 + 16) + weights.len());
         if let Some(j) = &joints {
             key.extend(j.iter().flat_map(|m| m.to_cols_array()));
             key.extend(world.0.to_cols_array());
         }
         key.extend_from_slice(weights);
-        if out.meshes[instance.mesh].as_ref().is_some_and(|d| d.pose_key == key) {
+        if out.meshes[instance.mesh]
+            .as_ref()
+            .is_some_and(|d| d.pose_key == key)
+        {
             continue;
         }
         let mut d = deform_mesh(mesh, joints.as_deref().map(|j| (j, world.0)), weights);

@@ -52,8 +52,14 @@ impl Default for BvhStats {
 impl BvhStats {
     /// Meshes due for a rebuild this frame: ratio above the threshold, worst first, at most the per-frame cap.
     pub fn due(&self) -> Vec<usize> {
-        let mut due: Vec<usize> = (0..self.sah_ratio.len()).filter(|&m| self.sah_ratio[m] > self.threshold).collect();
-        due.sort_by(|&a, &b| self.sah_ratio[b].total_cmp(&self.sah_ratio[a]).then(a.cmp(&b)));
+        let mut due: Vec<usize> = (0..self.sah_ratio.len())
+            .filter(|&m| self.sah_ratio[m] > self.threshold)
+            .collect();
+        due.sort_by(|&a, &b| {
+            self.sah_ratio[b]
+                .total_cmp(&self.sah_ratio[a])
+                .then(a.cmp(&b))
+        });
         due.truncate(self.max_rebuilds_per_frame);
         due
     }

@@ -12,7 +12,9 @@ use std::path::Path;
 pub fn unshare_deformable_meshes(scene: &mut SceneAsset) {
     let mut used = vec![false; scene.meshes.len()];
     for n in 0..scene.nodes.len() {
-        let Some(m) = scene.nodes[n].mesh else { continue };
+        let Some(m) = scene.nodes[n].mesh else {
+            continue;
+        };
         if m >= scene.meshes.len() || !scene.meshes[m].is_deformable() {
             continue;
         }
@@ -27,10 +29,16 @@ pub fn unshare_deformable_meshes(scene: &mut SceneAsset) {
     }
     let mut warnings = Vec::new();
     for (n, node) in scene.nodes.iter().enumerate() {
-        let (Some(m), Some(s)) = (node.mesh, node.skin) else { continue };
-        let Some(skin) = scene.skins.get(s) else { continue };
+        let (Some(m), Some(s)) = (node.mesh, node.skin) else {
+            continue;
+        };
+        let Some(skin) = scene.skins.get(s) else {
+            continue;
+        };
         let Some(w) = &scene.meshes[m].skin_weights else {
-            warnings.push(format!("node {n}: has skin {s} but its mesh has no JOINTS_0/WEIGHTS_0; drawn unskinned"));
+            warnings.push(format!(
+                "node {n}: has skin {s} but its mesh has no JOINTS_0/WEIGHTS_0; drawn unskinned"
+            ));
             continue;
         };
         let sets = w.sets.max(1) as usize;
@@ -59,7 +67,9 @@ pub fn unshare_deformable_meshes(scene: &mut SceneAsset) {
             ));
         }
         if zero > 0 {
-            warnings.push(format!("node {n}: {zero} vertices have no usable skin weight; they follow the node rigidly"));
+            warnings.push(format!(
+                "node {n}: {zero} vertices have no usable skin weight; they follow the node rigidly"
+            ));
         }
     }
     scene.warnings.extend(warnings);
@@ -78,8 +88,14 @@ pub struct ComposedCopy {
 /// Merges placed copies of scenes into one. Materials, textures, images and static meshes are shared
 /// between copies of the same asset (`Arc` identity); deformable meshes, nodes, skins and clips are copied
 /// (clips re-targeted to the copy's nodes). Each copy hangs under a new group node carrying its placement.
-pub fn compose(name: &str, parts: &[(Arc<SceneAsset>, NodeTransform)]) -> (SceneAsset, Vec<ComposedCopy>) {
-    let mut out = SceneAsset { source: name.into(), ..Default::default() };
+pub fn compose(
+    name: &str,
+    parts: &[(Arc<SceneAsset>, NodeTransform)],
+) -> (SceneAsset, Vec<ComposedCopy>) {
+    let mut out = SceneAsset {
+        source: name.into(),
+        ..Default::default()
+    };
     let mut copies = Vec::new();
     // Per distinct asset: material offset, texture offset, and shared mesh indices.
     let mut seen: Vec<(*const SceneAsset, u32, Vec<Option<usize>>)> = Vec::new();
@@ -92,15 +108,24 @@ pub fn compose(name: &str, parts: &[(Arc<SceneAsset>, NodeTransform)]) -> (Scene
                 let texture_offset = out.textures.len() as u32;
                 let image_offset = out.images.len() as u32;
                 out.images.extend(asset.images.iter().cloned());
-                out.textures.extend(asset.textures.iter().map(|t| Texture { image: t.image + image_offset, ..*t }));
-                let shift = |t: Option<TextureRef>| t.map(|t| TextureRef { texture: t.texture + texture_offset, ..t });
-                out.materials.extend(asset.materials.iter().map(|m| Material {
-                    base_color_texture: shift(m.base_color_texture),
-                    metallic_roughness_texture: shift(m.metallic_roughness_texture),
-                    normal_texture: shift(m.normal_texture),
-                    emissive_texture: shift(m.emissive_texture),
-                    ..m.clone()
+                out.textures.extend(asset.textures.iter().map(|t| Texture {
+                    image: t.image + image_offset,
+                    ..*t
                 }));
+                let shift = |t: Option<TextureRef>| {
+                    t.map(|t| TextureRef {
+                        texture: t.texture + texture_offset,
+                        ..t
+                    })
+                };
+                out.materials
+                    .extend(asset.materials.iter().map(|m| Material {
+                        base_color_texture: shift(m.base_color_texture),
+                        metallic_roughness_texture: shift(m.metallic_roughness_texture),
+                        normal_texture: shift(m.normal_texture),
+                        emissive_texture: shift(m.emissive_texture),
+                        ..m.clone()
+                    }));
                 seen.push((key, material_offset, vec![None; asset.meshes.len()]));
                 seen.len() - 1
             }
@@ -119,10 +144,18 @@ pub fn compose(name: &str, parts: &[(Arc<SceneAsset>, NodeTransform)]) -> (Scene
             }
             let mut copy = mesh.clone();
             let remap = |mat: u32| {
-                if mat >= default_slot { u32::MAX } else { mat + material_offset }
+                if mat >= default_slot {
+                    u32::MAX
+                } else {
+                    mat + material_offset
+                }
             };
-            copy.triangle_materials.iter_mut().for_each(|t| *t = remap(*t));
-            copy.primitives.iter_mut().for_each(|p| p.material = remap(p.material));
+            copy.triangle_materials
+                .iter_mut()
+                .for_each(|t| *t = remap(*t));
+            copy.primitives
+                .iter_mut()
+                .for_each(|p| p.material = remap(p.material));
             let index = out.meshes.len();
             out.meshes.push(copy);
             if !mesh.is_deformable() {
@@ -164,18 +197,42 @@ pub fn compose(name: &str, parts: &[(Arc<SceneAsset>, NodeTransform)]) -> (Scene
             ..s.clone()
         }));
         let first_clip = out.animations.len();
-        out.animations.extend(asset.animations.iter().map(|a| AnimationClip {
-            channels: a.channels.iter().map(|c| AnimationChannel { node: c.node + node_offset, ..c.clone() }).collect(),
-            ..a.clone()
+        out.animations.extend(asset.animations.iter().map(|a| {
+            AnimationClip {
+                channels: a
+                    .channels
+                    .iter()
+                    .map(|c| AnimationChannel {
+                        node: c.node + node_offset,
+                        ..c.clone()
+                    })
+                    .collect(),
+                ..a.clone()
+            }
         }));
-        out.warnings.extend(asset.warnings.iter().map(|w| format!("{}: {w}", asset.source)));
-        copies.push(ComposedCopy { group_node: group, first_clip, clip_count: asset.animations.len() });
+        out.warnings.extend(
+            asset
+                .warnings
+                .iter()
+                .map(|w| format!("{}: {w}", asset.source)),
+        );
+        copies.push(ComposedCopy {
+            group_node: group,
+            first_clip,
+            clip_count: asset.animations.len(),
+        });
     }
     // Meshes that used a glTF default material get the composed scene's default (appended last).
     let default_material = out.materials.len() as u32;
     for mesh in &mut out.meshes {
-        mesh.triangle_materials.iter_mut().filter(|t| **t == u32::MAX).for_each(|t| *t = default_material);
-        mesh.primitives.iter_mut().filter(|p| p.material == u32::MAX).for_each(|p| p.material = default_material);
+        mesh.triangle_materials
+            .iter_mut()
+            .filter(|t| **t == u32::MAX)
+            .for_each(|t| *t = default_material);
+        mesh.primitives
+            .iter_mut()
+            .filter(|p| p.material == u32::MAX)
+            .for_each(|p| p.material = default_material);
     }
     (out, copies)
 }
@@ -194,18 +251,32 @@ pub struct CrowdScene {
 pub fn crowd_scene(shared_assets: impl AsRef<Path>) -> Result<CrowdScene, SceneError> {
     let dir = shared_assets.as_ref();
     let options = LoadOptions::default();
-    let man = Arc::new(load_gltf(dir.join("CesiumMan/glTF-Binary/CesiumMan.glb"), &options)?);
+    let man = Arc::new(load_gltf(
+        dir.join("CesiumMan/glTF-Binary/CesiumMan.glb"),
+        &options,
+    )?);
     let fox = Arc::new(load_gltf(dir.join("Fox/glTF-Binary/Fox.glb"), &options)?);
     let ground = Arc::new(procedural::scene_from_meshes(
         "ground",
         vec![(procedural::ground_quad(40.0, 0), NodeTransform::default())],
-        vec![Material { base_color: Vec4::new(0.6, 0.6, 0.6, 1.0), metallic: 0.0, roughness: 0.8, ..Default::default() }],
+        vec![Material {
+            base_color: Vec4::new(0.6, 0.6, 0.6, 1.0),
+            metallic: 0.0,
+            roughness: 0.8,
+            ..Default::default()
+        }],
     ));
     let mut parts = vec![(ground, NodeTransform::default())];
     let mut starts = Vec::new();
     for i in 0..64 {
         let (x, z) = ((i % 8) as f32 * 1.6 - 5.6, (i / 8) as f32 * 1.6 - 8.0);
-        parts.push((man.clone(), NodeTransform { translation: Vec3::new(x, 0.0, z), ..Default::default() }));
+        parts.push((
+            man.clone(),
+            NodeTransform {
+                translation: Vec3::new(x, 0.0, z),
+                ..Default::default()
+            },
+        ));
         starts.push((0usize, i as f32 * 0.097));
     }
     for i in 0..32 {
@@ -230,5 +301,9 @@ pub fn crowd_scene(shared_assets: impl AsRef<Path>) -> Result<CrowdScene, SceneE
             (c.group_node, p)
         })
         .collect();
-    Ok(CrowdScene { scene, copies, players })
+    Ok(CrowdScene {
+        scene,
+        copies,
+        players,
+    })
 }
