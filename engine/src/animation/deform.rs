@@ -151,17 +151,20 @@ pub fn deform_mesh(
     }
 }
 
+/// What the deform system reads of a mesh node.
+type DeformInputs = (
+    &'static MeshInstance,
+    &'static SceneNode,
+    &'static GlobalTransform,
+    Option<&'static SkinnedMesh>,
+    Option<&'static MorphWeights>,
+);
+
 /// Deforms every deformable mesh whose joints or morph weights changed since its last deformation.
 pub fn deform_meshes(
     assets: Res<SceneAssets>,
     mut out: ResMut<DeformedMeshes>,
-    meshes: Query<(
-        &MeshInstance,
-        &SceneNode,
-        &GlobalTransform,
-        Option<&SkinnedMesh>,
-        Option<&MorphWeights>,
-    )>,
+    meshes: Query<DeformInputs>,
     roots: Query<&SceneNodes>,
     globals: Query<&GlobalTransform>,
 ) {

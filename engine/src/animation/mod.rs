@@ -242,11 +242,9 @@ impl AnimationPlayer {
         }
         self.time += dt * self.speed;
         match self.mode {
-            PlayMode::Once => {
-                if self.time >= duration || self.time <= 0.0 {
-                    self.time = self.time.clamp(0.0, duration);
-                    self.playing = false;
-                }
+            PlayMode::Once if self.time >= duration || self.time <= 0.0 => {
+                self.time = self.time.clamp(0.0, duration);
+                self.playing = false;
             }
             // Keep the stored time small so f32 precision does not drift over long runs.
             PlayMode::Loop if duration > 0.0 => self.time = self.time.rem_euclid(duration),

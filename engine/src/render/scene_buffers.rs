@@ -176,7 +176,9 @@ fn pack_vertices(mesh: &MeshData, pool: &mut Vec<u32>) -> GpuMesh {
 }
 
 /// Halves images (box filter) until all texels fit `budget` bytes; returns the images and a note if any shrank.
-fn fit_images(scene: &SceneAsset, budget: u64) -> (Vec<(u32, u32, Vec<u8>)>, Option<String>) {
+type FittedImage = (u32, u32, Vec<u8>);
+
+fn fit_images(scene: &SceneAsset, budget: u64) -> (Vec<FittedImage>, Option<String>) {
     let mut images: Vec<(u32, u32, Vec<u8>)> = scene.images.iter().map(|i| (i.width, i.height, i.rgba8.clone())).collect();
     let total = |imgs: &[(u32, u32, Vec<u8>)]| imgs.iter().map(|i| i.2.len() as u64).sum::<u64>();
     let before = total(&images);
@@ -222,7 +224,7 @@ impl GpuScene {
         let start = std::time::Instant::now();
         let mut notes = Vec::new();
         let limit = binding_limit
-            .unwrap_or(ctx.limits.max_storage_buffer_binding_size as u64)
+            .unwrap_or(ctx.limits.max_storage_buffer_binding_size)
             .min(ctx.limits.max_buffer_size);
         let check = |what: &'static str, bytes: u64| -> Result<(), UploadError> {
             if bytes > limit {

@@ -631,7 +631,7 @@ impl<'a> Loader<'a> {
                     Some(ReadOutputs::MorphTargetWeights(v)) => {
                         let values: Vec<f32> = v.into_f32().collect();
                         let keys = times.len() * if interpolation == Interpolation::CubicSpline { 3 } else { 1 };
-                        ChannelValues::Weights { count: if keys == 0 { 0 } else { values.len() / keys }, values }
+                        ChannelValues::Weights { count: values.len().checked_div(keys).unwrap_or(0), values }
                     }
                     None => {
                         warnings.push(format!("{label}: keyframe values unreadable; channel skipped"));
