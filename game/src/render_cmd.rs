@@ -120,13 +120,14 @@ fn render_to_file(scene: Arc<SceneAsset>, args: &SceneArgs, camera: CameraChoice
     if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).with_context(|| format!("{}: cannot create the output folder", dir.display()))?;
     }
+    let pose = pose_from(&scene, args)?;
     let ctx = open_gpu()?;
     let settings = settings_from(args);
     let mut app = HeadlessApp::new(ctx, scene.clone(), settings.clone(), &camera)?;
     for n in &app.notes {
         eprintln!("raykin: warning: {}: {n}", scene.source);
     }
-    if let Some((clip, time)) = pose_from(&scene, args)? {
+    if let Some((clip, time)) = pose {
         app.set_time(clip, time).map_err(anyhow::Error::msg)?;
     }
     let start = Instant::now();
