@@ -46,6 +46,35 @@ impl HeadlessApp {
         Ok(Self { app, ctx, notes })
     }
 
+    /// Poses the scene at `seconds` into `clip` (held, not playing): the next [`Self::step`] renders exactly
+    /// that pose, whatever frames ran before. Errors name the clips when `clip` does not exist.
+    pub fn set_time(&mut self, clip: usize, seconds: f32) -> Result<(), String> {
+        let scene = self.app.world().resource::<crate::scene::SceneAssets>().0.clone();
+        if clip >= scene.animations.len() {
+            return Err(match scene.animations.len() {
+                0 => format!("{} has no animations, so it cannot be posed at a time", scene.source),
+                n => format!("{}: no animation {clip}; the scene has {n} clip(s), 0..{}", scene.source, n - 1),
+            });
+        }
+        if !seconds.is_finite() {
+            return Err(format!("time {seconds} is not a finite number of seconds"));
+        }
+        let world = self.app.world_mut();
+        let roots: Vec<bevy_ecs::entity::Entity> = world
+            .query_filtered::<bevy_ecs::entity::Entity, bevy_ecs::query::With<crate::scene::SceneRoot>>()
+            .iter(world)
+            .collect();
+        for root in roots {
+            world.entity_mut(root).insert(crate::animation::AnimationPlayer::paused_at(clip, seconds));
+        }
+        Ok(())
+    }
+
+    /// BVH refit quality and rebuild counters.
+    pub fn bvh_stats(&self) -> &crate::bvh::refit::BvhStats {
+        self.app.world().resource::<crate::bvh::refit::BvhStats>()
+    }
+
     pub fn settings_mut(&mut self) -> bevy_ecs::world::Mut<'_, RenderSettings> {
         self.app.world_mut().resource_mut::<RenderSettings>()
     }

@@ -51,6 +51,26 @@ pub fn settings_from(args: &SceneArgs) -> RenderSettings {
     }
 }
 
+/// `--time T` / `--animation NAME|INDEX`: the clip and time to pose the scene at (clip 0, time 0 by default);
+/// `None` when neither is given (the file's rest pose).
+pub fn pose_from(scene: &SceneAsset, args: &SceneArgs) -> Result<Option<(usize, f32)>> {
+    if args.time.is_none() && args.animation.is_none() {
+        return Ok(None);
+    }
+    if scene.animations.is_empty() {
+        anyhow::bail!("{}: the scene has no animations, so --time/--animation cannot pose it", scene.source);
+    }
+    let clip = match &args.animation {
+        Some(a) => raykin::animation::find_clip(scene, a).map_err(anyhow::Error::msg)?,
+        None => 0,
+    };
+    let time = args.time.unwrap_or(0.0);
+    if !time.is_finite() {
+        anyhow::bail!("--time {time}: not a finite number of seconds");
+    }
+    Ok(Some((clip, time)))
+}
+
 pub fn camera_from(args: &SceneArgs) -> CameraChoice {
     match (args.look_from, args.look_at, args.camera) {
         (Some(eye), Some(target), _) => CameraChoice::LookAt { eye, target, yfov: args.fov.to_radians() },
@@ -90,8 +110,10 @@ struct RenderReport {
 pub fn run(args: &RenderArgs) -> Result<()> {
     let scene = load_scene(&args.scene.scene)?;
     check_output(&args.out)?;
+    // Pose arguments are checked before the GPU opens: a typo fails at once.
+    let pose = pose_from(&scene, &args.scene)?;
     let ctx = open_gpu()?;
-    render_to_file(ctx, scene, &args.scene, camera_from(&args.scene), &args.out, args.aovs, args.report.as_deref())
+    render_to_file(ctx, scene, &args.scene, camera_from(&args.scene), pose, &args.out, args.aovs, args.report.as_deref())
 }
 
 fn check_output(out: &Path) -> Result<()> {
@@ -105,12 +127,16 @@ fn check_output(out: &Path) -> Result<()> {
     Ok(())
 }
 
-fn render_to_file(ctx: GpuContext, scene: Arc<SceneAsset>, args: &SceneArgs, camera: CameraChoice, out: &Path, aovs: bool, report: Option<&Path>) -> Result<()> {
+#[allow(clippy::too_many_arguments)]
+fn render_to_file(ctx: GpuContext, scene: Arc<SceneAsset>, args: &SceneArgs, camera: CameraChoice, pose: Option<(usize, f32)>, out: &Path, aovs: bool, report: Option<&Path>) -> Result<()> {
     let ext = out.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
     let settings = settings_from(args);
     let mut app = HeadlessApp::new(ctx, scene.clone(), settings.clone(), &camera)?;
     for n in &app.notes {
         eprintln!("raykin: warning: {}: {n}", scene.source);
+    }
+    if let Some((clip, time)) = pose {
+        app.set_time(clip, time).map_err(anyhow::Error::msg)?;
     }
     let start = Instant::now();
     let bar = progress_bar(args.spp as u64, "rendering");
@@ -202,5 +228,5 @@ pub fn run_default() -> Result<()> {
     };
     let out = Path::new("out/default.png");
     check_output(out)?;
-    render_to_file(ctx, Arc::new(scene), &args, camera, out, false, None)
+    render_to_file(ctx, Arc::new(scene), &args, camera, None, out, false, None)
 }

@@ -1,6 +1,13 @@
-//! Keyframe sampling of glTF animation channels (STEP, LINEAR with slerp, CUBICSPLINE).
+//! Keyframe sampling of glTF animation channels (STEP, LINEAR with slerp, CUBICSPLINE), animation players,
+//! and CPU skinning and morphing ([`deform`]).
 
-use crate::scene::{AnimationChannel, ChannelValues, Interpolation};
+mod deform;
+
+pub use deform::{DeformedMesh, DeformedMeshes, deform_mesh, deform_meshes, joint_matrices};
+
+use crate::FrameSet;
+use crate::scene::{AnimationChannel, ChannelValues, Interpolation, MorphWeights, SceneAssets, SceneNode, SceneNodes, Transform};
+use bevy_ecs::prelude::*;
 use glam::{Quat, Vec3};
 
 /// A sampled channel value.
@@ -158,9 +165,179 @@ pub fn sample_channel(c: &AnimationChannel, t: f32) -> Sampled {
     }
 }
 
-/// Animation players (issue 3 fills this in).
+/// Explicit time: every frame advances playing players by `delta` seconds (no wall clock), so the same
+/// frame count always gives the same pose.
+#[derive(Resource, Clone, Copy, Debug, PartialEq)]
+pub struct FrameClock {
+    /// Seconds per frame (default 1/60).
+    pub delta: f32,
+    /// Frames run so far.
+    pub frame: u64,
+}
+
+impl Default for FrameClock {
+    fn default() -> Self {
+        Self { delta: 1.0 / 60.0, frame: 0 }
+    }
+}
+
+/// What a player does at the end of its clip.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum PlayMode {
+    /// Wraps to the start.
+    #[default]
+    Loop,
+    /// Holds the last pose and stops playing.
+    Once,
+    /// Plays forwards then backwards.
+    PingPong,
+}
+
+/// Plays one clip of the scene on the copy of the scene it sits in. Put it on a scene root entity, or on
+/// any node entity (a crowd puts one on each copy's group node); several players run at once.
+/// The pose of a frame is the clip at `time` as the frame starts; playing players then advance by
+/// `speed` x [`FrameClock::delta`].
+#[derive(Component, Clone, Copy, Debug, PartialEq)]
+pub struct AnimationPlayer {
+    /// Index into [`crate::scene::SceneAsset::animations`].
+    pub clip: usize,
+    pub time: f32,
+    pub speed: f32,
+    pub mode: PlayMode,
+    pub playing: bool,
+}
+
+impl AnimationPlayer {
+    /// Plays `clip` in a loop from 0 at normal speed.
+    pub fn new(clip: usize) -> Self {
+        Self { clip, time: 0.0, speed: 1.0, mode: PlayMode::Loop, playing: true }
+    }
+
+    /// Holds `clip` at `time` seconds (times outside the clip clamp to its ends).
+    pub fn paused_at(clip: usize, time: f32) -> Self {
+        Self { clip, time, speed: 1.0, mode: PlayMode::Once, playing: false }
+    }
+
+    /// The clip-local sampling time for a clip of `duration` seconds.
+    pub fn local_time(&self, duration: f32) -> f32 {
+        if !self.time.is_finite() {
+            return 0.0;
+        }
+        if duration <= 0.0 {
+            return self.time.max(0.0);
+        }
+        match self.mode {
+            PlayMode::Once => self.time.clamp(0.0, duration),
+            PlayMode::Loop => self.time.rem_euclid(duration),
+            PlayMode::PingPong => {
+                let t = self.time.rem_euclid(2.0 * duration);
+                if t > duration { 2.0 * duration - t } else { t }
+            }
+        }
+    }
+
+    fn advance(&mut self, dt: f32, duration: f32) {
+        if !self.playing {
+            return;
+        }
+        self.time += dt * self.speed;
+        match self.mode {
+            PlayMode::Once if self.time >= duration || self.time <= 0.0 => {
+                self.time = self.time.clamp(0.0, duration);
+                self.playing = false;
+            }
+            // Keep the stored time small so f32 precision does not drift over long runs.
+            PlayMode::Loop if duration > 0.0 => self.time = self.time.rem_euclid(duration),
+            PlayMode::PingPong if duration > 0.0 => self.time = self.time.rem_euclid(2.0 * duration),
+            _ => {}
+        }
+    }
+}
+
+/// Resolves `--animation NAME|INDEX` to a clip index; the error lists the clips.
+pub fn find_clip(scene: &crate::scene::SceneAsset, name_or_index: &str) -> Result<usize, String> {
+    let list = || {
+        scene
+            .animations
+            .iter()
+            .enumerate()
+            .map(|(i, a)| format!("{i}: `{}` ({:.3} s)", a.name, a.duration))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    if scene.animations.is_empty() {
+        return Err(format!("{} has no animations", scene.source));
+    }
+    if let Some(i) = scene.animations.iter().position(|a| a.name == name_or_index) {
+        return Ok(i);
+    }
+    match name_or_index.parse::<usize>() {
+        Ok(i) if i < scene.animations.len() => Ok(i),
+        _ => Err(format!("{}: no animation `{name_or_index}`; the clips are {}", scene.source, list())),
+    }
+}
+
+/// Adds `(node, player)` pairs to a spawned scene copy whose root is `root` (see [`crate::scene::crowd_scene`]).
+pub fn attach_players(world: &mut World, root: Entity, players: &[(usize, AnimationPlayer)]) {
+    let Some(nodes) = world.get::<SceneNodes>(root).map(|n| n.0.clone()) else { return };
+    for (node, player) in players {
+        if let Some(&e) = nodes.get(*node) {
+            world.entity_mut(e).insert(*player);
+        }
+    }
+}
+
+/// Samples every player's clip and writes node [`Transform`]s and [`MorphWeights`], then advances time.
+pub fn animate(
+    mut clock: ResMut<FrameClock>,
+    assets: Res<SceneAssets>,
+    mut players: Query<(Entity, &mut AnimationPlayer, Option<&SceneNode>)>,
+    roots: Query<&SceneNodes>,
+    mut targets: Query<(&mut Transform, Option<&mut MorphWeights>)>,
+) {
+    let scene = &assets.0;
+    for (entity, mut player, node) in &mut players {
+        let Some(clip) = scene.animations.get(player.clip) else { continue };
+        let root = node.map_or(entity, |n| n.root);
+        let Ok(nodes) = roots.get(root) else { continue };
+        let t = player.local_time(clip.duration);
+        for channel in &clip.channels {
+            let Some(&target) = nodes.0.get(channel.node) else { continue };
+            let Ok((mut transform, weights)) = targets.get_mut(target) else { continue };
+            match sample_channel(channel, t) {
+                Sampled::Translation(v) => transform.translation = v,
+                Sampled::Rotation(q) => transform.rotation = q,
+                Sampled::Scale(v) => transform.scale = v,
+                Sampled::Weights(w) => {
+                    if let Some(mut weights) = weights {
+                        let n = weights.0.len();
+                        weights.0.iter_mut().zip(w.iter().chain(std::iter::repeat(&0.0)).take(n)).for_each(|(a, b)| *a = *b);
+                    }
+                }
+            }
+        }
+        player.advance(clock.delta, clip.duration);
+    }
+    clock.frame += 1;
+}
+
+/// Animation players (Animate set) and CPU skinning/morphing (Deform set).
 pub struct AnimationPlugin;
 
 impl bevy_app::Plugin for AnimationPlugin {
-    fn build(&self, _app: &mut bevy_app::App) {}
+    fn build(&self, app: &mut bevy_app::App) {
+        use bevy_ecs::schedule::IntoScheduleConfigs;
+        app.init_resource::<FrameClock>()
+            .init_resource::<DeformedMeshes>()
+            .add_systems(bevy_app::Update, (animate.in_set(FrameSet::Animate), deform_meshes.in_set(FrameSet::Deform)));
+    }
+}
+
+/// A world with the scene spawned and the CPU frame systems (animation, transforms, deformation) but no
+/// GPU: tests and benches pose scenes with it.
+pub fn cpu_app(scene: std::sync::Arc<crate::scene::SceneAsset>) -> bevy_app::App {
+    let mut app = bevy_app::App::new();
+    crate::configure_frame_schedule(&mut app);
+    app.add_plugins(crate::scene::ScenePlugin { scene }).add_plugins(AnimationPlugin);
+    app
 }

@@ -1,1 +1,85 @@
-//! (issue 3) per-frame refit of deformed meshes with a SAH quality guard.
+//! Refit with a quality guard.
+//!
+//! A deformed mesh's BVH is refit every frame it moves (one reverse sweep, see [`super::FlatBvh::refit`]).
+//! Refitting keeps the topology chosen for the build pose, so when parts of the mesh move far from where
+//! they were built (a fold, a twist, limbs scattering), boxes overlap and traversal slows. The guard
+//! compares the refit tree's SAH cost with its cost at build ([`MeshBvh::sah_ratio`]); above
+//! [`DEFAULT_REBUILD_THRESHOLD`] the mesh's BVH is rebuilt in place (its GPU node range is reserved at
+//! upload). At most [`BvhStats::max_rebuilds_per_frame`] rebuilds run per frame, the worst ratios
+//! first, so a crowd crossing the threshold together spreads its rebuilds over frames instead of hitching;
+//! meshes that wait keep a correct (only slower) refit tree. docs/ANIMATION.md has the measurements.
+
+use super::MeshBvh;
+use bevy_ecs::prelude::Resource;
+use glam::Vec3;
+
+/// SAH-ratio above which a refit BVH is rebuilt (chosen from measured ratio curves, docs/ANIMATION.md).
+pub const DEFAULT_REBUILD_THRESHOLD: f32 = 1.5;
+
+/// Refit quality and rebuild counters, for the editor and benches.
+#[derive(Resource, Clone, Debug)]
+pub struct BvhStats {
+    pub threshold: f32,
+    pub max_rebuilds_per_frame: usize,
+    /// Current SAH cost over cost at build, per mesh (1 for static meshes).
+    pub sah_ratio: Vec<f32>,
+    /// Rebuilds per mesh since upload.
+    pub mesh_rebuilds: Vec<u32>,
+    /// Rebuilds over all meshes since upload.
+    pub rebuilds: u64,
+    /// Mesh refits since upload.
+    pub refits: u64,
+    /// CPU seconds of the last frame's refits and rebuilds.
+    pub last_refit_seconds: f64,
+    pub last_rebuild_seconds: f64,
+}
+
+impl Default for BvhStats {
+    fn default() -> Self {
+        Self {
+            threshold: DEFAULT_REBUILD_THRESHOLD,
+            max_rebuilds_per_frame: 1,
+            sah_ratio: Vec::new(),
+            mesh_rebuilds: Vec::new(),
+            rebuilds: 0,
+            refits: 0,
+            last_refit_seconds: 0.0,
+            last_rebuild_seconds: 0.0,
+        }
+    }
+}
+
+impl BvhStats {
+    /// Meshes due for a rebuild this frame: ratio above the threshold, worst first, at most the per-frame cap.
+    pub fn due(&self) -> Vec<usize> {
+        let mut due: Vec<usize> = (0..self.sah_ratio.len())
+            .filter(|&m| self.sah_ratio[m] > self.threshold)
+            .collect();
+        due.sort_by(|&a, &b| {
+            self.sah_ratio[b]
+                .total_cmp(&self.sah_ratio[a])
+                .then(a.cmp(&b))
+        });
+        due.truncate(self.max_rebuilds_per_frame);
+        due
+    }
+
+    pub fn ensure_len(&mut self, meshes: usize) {
+        if self.sah_ratio.len() < meshes {
+            self.sah_ratio.resize(meshes, 1.0);
+            self.mesh_rebuilds.resize(meshes, 0);
+        }
+    }
+}
+
+/// Refits `bvh` to `positions` (triangles in BVH order) and returns its SAH ratio.
+pub fn refit_and_measure(bvh: &mut MeshBvh, positions: &[Vec3], gpu_triangles: &[[u32; 3]]) -> f32 {
+    bvh.refit(positions, gpu_triangles);
+    bvh.sah_ratio()
+}
+
+/// Upper bound of a child-pair BVH's node count over `triangles` triangles (>= 1 triangle per leaf):
+/// a binary tree with L <= T leaves has L - 1 inner nodes, and a single leaf still takes one node.
+pub fn node_capacity(triangles: usize) -> usize {
+    triangles.max(1)
+}

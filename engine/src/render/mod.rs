@@ -13,7 +13,9 @@ pub use settings::{AovView, Environment, RenderSettings, Tonemapper};
 use crate::FrameSet;
 use crate::camera::CameraView;
 use crate::gpu::GpuContext;
-use crate::scene::{GlobalTransform, MeshInstance, SceneAssets};
+use crate::animation::DeformedMeshes;
+use crate::bvh::refit::BvhStats;
+use crate::scene::{GlobalTransform, MeshInstance, SceneAssets, SkinnedMesh};
 use bevy_app::{App, Plugin, Update};
 use bevy_ecs::prelude::*;
 
@@ -64,11 +66,12 @@ pub fn update_instances(
     ctx: Res<GpuContext>,
     assets: Res<SceneAssets>,
     mut renderer: ResMut<Renderer>,
-    instances: Query<(&GlobalTransform, &MeshInstance)>,
+    instances: Query<(&GlobalTransform, &MeshInstance, Option<&SkinnedMesh>)>,
 ) {
+    // Skinned vertices are already in world space (the joint matrices place them).
     let mut inputs: Vec<InstanceInput> = instances
         .iter()
-        .map(|(g, m)| InstanceInput { world: g.0, mesh: m.mesh as u32 })
+        .map(|(g, m, skinned)| InstanceInput { world: if skinned.is_some() { glam::Mat4::IDENTITY } else { g.0 }, mesh: m.mesh as u32 })
         .collect();
     // Query order is not stable across archetype changes; sort for a deterministic TLAS.
     inputs.sort_by(|a, b| a.mesh.cmp(&b.mesh).then_with(|| a.world.to_cols_array().partial_cmp(&b.world.to_cols_array()).unwrap_or(std::cmp::Ordering::Equal)));
@@ -81,6 +84,47 @@ pub fn update_instances(
     }
     renderer.last_instances = inputs;
     renderer.tracer.reset(&ctx);
+}
+
+/// Uploads this frame's deformed meshes (only their vertex ranges), refits their BLAS, and rebuilds the
+/// worst ones past the SAH-ratio threshold (at most `max_rebuilds_per_frame`). Any change sets
+/// `geometry_changed`: the TLAS is rebuilt with the new root bounds and accumulation restarts.
+pub fn refit_deformed(
+    ctx: Res<GpuContext>,
+    assets: Res<SceneAssets>,
+    settings: Res<RenderSettings>,
+    deformed: Res<DeformedMeshes>,
+    mut stats: ResMut<BvhStats>,
+    mut renderer: ResMut<Renderer>,
+) {
+    let scene = &assets.0;
+    let renderer = &mut *renderer;
+    stats.ensure_len(scene.meshes.len());
+    let start = std::time::Instant::now();
+    for &m in &deformed.changed {
+        let Some(d) = deformed.meshes.get(m).and_then(Option::as_ref) else { continue };
+        renderer.scene.write_deformed_vertices(&ctx, m, d);
+        stats.sah_ratio[m] = renderer.scene.refit_mesh(&ctx, scene, m);
+        stats.refits += 1;
+        renderer.geometry_changed = true;
+    }
+    stats.last_refit_seconds = start.elapsed().as_secs_f64();
+    let start = std::time::Instant::now();
+    for m in stats.due() {
+        match renderer.scene.rebuild_mesh(&ctx, scene, m, settings.bvh_quality) {
+            Ok(()) => {
+                stats.sah_ratio[m] = renderer.scene.mesh_slots[m].bvh.sah_ratio();
+                stats.mesh_rebuilds[m] += 1;
+                stats.rebuilds += 1;
+                renderer.geometry_changed = true;
+            }
+            Err(e) => {
+                tracing::error!("mesh `{}`: BVH rebuild: {e}; keeping the refit tree", scene.meshes[m].name);
+                stats.sah_ratio[m] = 1.0;
+            }
+        }
+    }
+    stats.last_rebuild_seconds = start.elapsed().as_secs_f64();
 }
 
 /// Traces this frame's samples, restarting accumulation when the camera or settings changed.
@@ -106,6 +150,12 @@ pub struct RenderPlugin;
 
 impl Plugin for RenderPlugin {
     fn build(&self, app: &mut App) {
-        app.add_systems(Update, (update_instances.in_set(FrameSet::Bvh), render_frame.in_set(FrameSet::Render)));
+        app.init_resource::<BvhStats>().init_resource::<DeformedMeshes>().add_systems(
+            Update,
+            (
+                (refit_deformed, update_instances).chain().in_set(FrameSet::Bvh),
+                render_frame.in_set(FrameSet::Render),
+            ),
+        );
     }
 }

@@ -37,6 +37,8 @@ pub struct MeshSlot {
     pub bvh: MeshBvh,
     /// Current vertex positions of a deformed mesh; `None` while it is in its rest pose.
     pub positions: Option<Vec<Vec3>>,
+    /// BLAS nodes reserved for this mesh (a deformable mesh reserves room for any rebuilt tree).
+    pub blas_capacity: u32,
 }
 
 /// Byte counts of what the scene occupies on the GPU.
@@ -174,7 +176,9 @@ fn pack_vertices(mesh: &MeshData, pool: &mut Vec<u32>) -> GpuMesh {
 }
 
 /// Halves images (box filter) until all texels fit `budget` bytes; returns the images and a note if any shrank.
-fn fit_images(scene: &SceneAsset, budget: u64) -> (Vec<(u32, u32, Vec<u8>)>, Option<String>) {
+type FittedImage = (u32, u32, Vec<u8>);
+
+fn fit_images(scene: &SceneAsset, budget: u64) -> (Vec<FittedImage>, Option<String>) {
     let mut images: Vec<(u32, u32, Vec<u8>)> = scene.images.iter().map(|i| (i.width, i.height, i.rgba8.clone())).collect();
     let total = |imgs: &[(u32, u32, Vec<u8>)]| imgs.iter().map(|i| i.2.len() as u64).sum::<u64>();
     let before = total(&images);
@@ -220,7 +224,7 @@ impl GpuScene {
         let start = std::time::Instant::now();
         let mut notes = Vec::new();
         let limit = binding_limit
-            .unwrap_or(ctx.limits.max_storage_buffer_binding_size as u64)
+            .unwrap_or(ctx.limits.max_storage_buffer_binding_size)
             .min(ctx.limits.max_buffer_size);
         let check = |what: &'static str, bytes: u64| -> Result<(), UploadError> {
             if bytes > limit {
@@ -267,7 +271,13 @@ impl GpuScene {
             }
             emissive_triangles.push(emissive);
             blas_nodes.extend_from_slice(&bvh.flat.nodes);
-            slots.push(MeshSlot { gpu, gpu_triangles, blas_node_offset: gpu.blas_root, bvh, positions: None });
+            // Deformable meshes reserve the largest tree a rebuild can produce, so it rewrites in place.
+            if mesh.is_deformable() {
+                let capacity = crate::bvh::refit::node_capacity(mesh.triangles.len()).max(bvh.flat.nodes.len());
+                blas_nodes.resize(gpu.blas_root as usize + capacity, crate::bvh::GpuBvhNode { children: [crate::bvh::GpuBvhChild::EMPTY; 2] });
+            }
+            let blas_capacity = (blas_nodes.len() - gpu.blas_root as usize) as u32;
+            slots.push(MeshSlot { gpu, gpu_triangles, blas_node_offset: gpu.blas_root, bvh, positions: None, blas_capacity });
         }
 
         let texel_budget = limit.min(ctx.limits.max_buffer_size);
@@ -334,6 +344,70 @@ impl GpuScene {
             build_seconds: start.elapsed().as_secs_f64(),
         };
         Ok((gpu_scene, notes))
+    }
+
+    /// Writes a deformed mesh's positions, normals and tangents over its own ranges of the vertex pool
+    /// (same encodings as the initial upload) and keeps the positions for refits and emitters.
+    pub fn write_deformed_vertices(&mut self, ctx: &GpuContext, mesh: usize, d: &crate::animation::DeformedMesh) {
+        let slot = &mut self.mesh_slots[mesh];
+        let gpu = slot.gpu;
+        let words: Vec<u32> = d.positions.iter().flat_map(|p| p.to_array().map(f32::to_bits)).collect();
+        ctx.queue.write_buffer(&self.vertex_pool, gpu.position_offset as u64 * 4, bytemuck::cast_slice(&words));
+        if let (Some(n), true) = (&d.normals, gpu.normal_offset != NONE) {
+            let words: Vec<u32> = n.iter().map(|n| oct_encode(*n)).collect();
+            ctx.queue.write_buffer(&self.vertex_pool, gpu.normal_offset as u64 * 4, bytemuck::cast_slice(&words));
+        }
+        if let (Some(t), true) = (&d.tangents, gpu.tangent_offset != NONE) {
+            let words: Vec<u32> = t
+                .iter()
+                .flat_map(|t| [oct_encode(t.truncate()), if t.w < 0.0 { -1f32 } else { 1f32 }.to_bits()])
+                .collect();
+            ctx.queue.write_buffer(&self.vertex_pool, gpu.tangent_offset as u64 * 4, bytemuck::cast_slice(&words));
+        }
+        slot.positions = Some(d.positions.clone());
+    }
+
+    /// Refits a deformed mesh's BLAS to its current positions, uploads its nodes, returns the SAH ratio.
+    pub fn refit_mesh(&mut self, ctx: &GpuContext, scene: &SceneAsset, mesh: usize) -> f32 {
+        let slot = &mut self.mesh_slots[mesh];
+        let positions = slot.positions.as_deref().unwrap_or(&scene.meshes[mesh].positions);
+        let ratio = crate::bvh::refit::refit_and_measure(&mut slot.bvh, positions, &slot.gpu_triangles);
+        ctx.queue.write_buffer(&self.blas_nodes, slot.gpu.blas_root as u64 * 64, bytemuck::cast_slice(&slot.bvh.flat.nodes));
+        ratio
+    }
+
+    /// Rebuilds a mesh's BLAS from its current positions inside its reserved node range, and rewrites its
+    /// triangle range in the new BVH order (same triangles, same count).
+    pub fn rebuild_mesh(&mut self, ctx: &GpuContext, scene: &SceneAsset, mesh: usize, quality: crate::bvh::BvhQuality) -> Result<(), crate::bvh::BvhTooDeep> {
+        let data = &scene.meshes[mesh];
+        let slot = &self.mesh_slots[mesh];
+        let positions = slot.positions.as_deref().unwrap_or(&data.positions);
+        let bvh = MeshBvh::build(positions, &data.triangles, quality)?;
+        if bvh.flat.nodes.len() > slot.blas_capacity as usize {
+            // Cannot happen for a tree with >= 1 triangle per leaf; keep the refit tree rather than overrun.
+            tracing::warn!("mesh `{}`: rebuilt BVH needs {} nodes, {} reserved; kept the refit tree", data.name, bvh.flat.nodes.len(), slot.blas_capacity);
+            return Ok(());
+        }
+        let mut nodes = bvh.flat.nodes.clone();
+        nodes.resize(slot.blas_capacity as usize, crate::bvh::GpuBvhNode { children: [crate::bvh::GpuBvhChild::EMPTY; 2] });
+        let gpu_triangles: Vec<[u32; 3]> = bvh.flat.order.iter().map(|&t| data.triangles[t as usize]).collect();
+        let mut packed: Vec<[u32; 4]> = Vec::with_capacity(gpu_triangles.len());
+        let mut emissive = Vec::new();
+        for (i, &t) in bvh.flat.order.iter().enumerate() {
+            let material = data.triangle_materials[t as usize];
+            let [a, b, c] = data.triangles[t as usize];
+            packed.push([a, b, c, material]);
+            if luminance(Vec3::from(self.material_data[material as usize].emissive)) > 0.0 {
+                emissive.push((slot.gpu.triangle_offset + i as u32, material));
+            }
+        }
+        ctx.queue.write_buffer(&self.blas_nodes, slot.gpu.blas_root as u64 * 64, bytemuck::cast_slice(&nodes));
+        ctx.queue.write_buffer(&self.triangles, slot.gpu.triangle_offset as u64 * 16, bytemuck::cast_slice(&packed));
+        self.emissive_triangles[mesh] = emissive;
+        let slot = &mut self.mesh_slots[mesh];
+        slot.gpu_triangles = gpu_triangles;
+        slot.bvh = bvh;
+        Ok(())
     }
 
     /// Uploads instances (in TLAS leaf order), the TLAS and the emitter list for this frame's placements.

@@ -165,7 +165,7 @@ impl<'a> Loader<'a> {
         let (nodes, roots) = self.load_nodes()?;
         let skins = self.load_skins();
         let animations = self.load_animations();
-        let scene = SceneAsset {
+        let mut scene = SceneAsset {
             source: self.path.display().to_string(),
             meshes,
             materials,
@@ -178,6 +178,7 @@ impl<'a> Loader<'a> {
             roots,
             warnings: self.warnings.take(),
         };
+        super::compose::unshare_deformable_meshes(&mut scene);
         if scene.triangle_count() == 0 {
             return Err(SceneError::Empty {
                 path: self.path,
@@ -562,6 +563,18 @@ impl<'a> Loader<'a> {
         if roots.iter().any(|&r| nodes[r].parent.is_some()) {
             return Err(self.invalid("a scene lists a node that is also another node's child"));
         }
+        // Nodes outside the displayed scene: every node must be reachable from a parentless node, else it
+        // sits on a cycle (each node has at most one parent, so an unreachable node loops back to itself).
+        stack = (0..nodes.len()).filter(|&i| nodes[i].parent.is_none() && !seen.contains(&i)).collect();
+        while let Some(n) = stack.pop() {
+            if !seen.insert(n) {
+                return Err(self.invalid(format!("the node hierarchy has a cycle through node {n}")));
+            }
+            stack.extend(&nodes[n].children);
+        }
+        if let Some(n) = (0..nodes.len()).find(|n| !seen.contains(n)) {
+            return Err(self.invalid(format!("the node hierarchy has a cycle through node {n}")));
+        }
         Ok((nodes, roots))
     }
 
@@ -626,7 +639,7 @@ impl<'a> Loader<'a> {
                     Some(ReadOutputs::MorphTargetWeights(v)) => {
                         let values: Vec<f32> = v.into_f32().collect();
                         let keys = times.len() * if interpolation == Interpolation::CubicSpline { 3 } else { 1 };
-                        ChannelValues::Weights { count: if keys == 0 { 0 } else { values.len() / keys }, values }
+                        ChannelValues::Weights { count: values.len().checked_div(keys).unwrap_or(0), values }
                     }
                     None => {
                         warnings.push(format!("{label}: keyframe values unreadable; channel skipped"));

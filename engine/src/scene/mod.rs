@@ -1,15 +1,17 @@
 //! Scenes on the CPU: the asset data a glTF file becomes (meshes, materials, images, cameras, node tree),
 //! and the ECS side: one entity per node with its transform, mesh instance and camera.
 
+pub mod compose;
 mod gltf_loader;
 pub mod procedural;
 mod spawn;
 mod tangents;
 
+pub use compose::{CrowdScene, compose, crowd_scene, unshare_deformable_meshes};
 pub use gltf_loader::{LoadOptions, load_gltf, load_gltf_slice};
 pub use spawn::{
-    CameraComponent, GlobalTransform, MeshInstance, SceneNode, ScenePlugin, SceneRoot,
-    Transform, propagate_transforms, spawn_scene,
+    CameraComponent, GlobalTransform, MeshInstance, MorphWeights, SceneNode, SceneNodes, ScenePlugin,
+    SceneRoot, SkinnedMesh, Transform, propagate_transforms, spawn_scene,
 };
 
 use bevy_ecs::prelude::Resource;

@@ -53,6 +53,21 @@ pub struct MeshInstance {
     pub mesh: usize,
 }
 
+/// A mesh node with a glTF skin: its deformed vertices come out in world space (the joint matrices place
+/// them), so its instance transform is the identity.
+#[derive(Component, Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SkinnedMesh {
+    pub skin: usize,
+}
+
+/// Current morph-target weights of a mesh node (node.weights, else mesh.weights, else zeros; animated).
+#[derive(Component, Clone, Debug, PartialEq, Default)]
+pub struct MorphWeights(pub Vec<f32>);
+
+/// On a scene root: the entity of every glTF node of that spawned copy, by node index.
+#[derive(Component, Clone, Debug, Default)]
+pub struct SceneNodes(pub Vec<Entity>);
+
 /// A node that carries a glTF perspective camera.
 #[derive(Component, Clone, Copy, Debug)]
 pub struct CameraComponent {
@@ -78,6 +93,15 @@ pub fn spawn_scene(world: &mut World, scene: &SceneAsset, root_transform: Transf
             ));
             if let Some(mesh) = node.mesh {
                 e.insert(MeshInstance { mesh });
+                let data = &scene.meshes[mesh];
+                if let Some(skin) = node.skin.filter(|&s| s < scene.skins.len() && data.skin_weights.is_some()) {
+                    e.insert(SkinnedMesh { skin });
+                }
+                if !data.morph_targets.is_empty() {
+                    let mut w = node.morph_weights.clone().unwrap_or_else(|| data.default_morph_weights.clone());
+                    w.resize(data.morph_targets.len(), 0.0);
+                    e.insert(MorphWeights(w));
+                }
             }
             if let Some(camera) = node.camera {
                 e.insert(CameraComponent { camera, yfov: scene.cameras[camera].yfov });
@@ -92,6 +116,7 @@ pub fn spawn_scene(world: &mut World, scene: &SceneAsset, root_transform: Transf
             world.entity_mut(entities[i]).insert(ChildOf(parent));
         }
     }
+    world.entity_mut(root).insert(SceneNodes(entities.clone()));
     (root, entities)
 }
 
