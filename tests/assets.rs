@@ -16,7 +16,10 @@ fn all_asset_files() -> Vec<PathBuf> {
             let path = entry.unwrap().path();
             if path.is_dir() {
                 stack.push(path);
-            } else if matches!(path.extension().and_then(|e| e.to_str()), Some("gltf" | "glb")) {
+            } else if matches!(
+                path.extension().and_then(|e| e.to_str()),
+                Some("gltf" | "glb")
+            ) {
                 files.push(path);
             }
         }
@@ -28,23 +31,41 @@ fn all_asset_files() -> Vec<PathBuf> {
 #[test]
 fn every_asset_loads_and_every_static_one_renders() {
     let files = all_asset_files();
-    assert!(files.len() >= 20, "expected the shared assets beside the repo, found {}", files.len());
+    assert!(
+        files.len() >= 20,
+        "expected the shared assets beside the repo, found {}",
+        files.len()
+    );
     let (ctx, _gpu) = gpu();
     let mut rendered = 0;
     for path in &files {
-        let scene = raykin::scene::load_gltf(path, &Default::default()).unwrap_or_else(|e| panic!("{e}"));
+        let scene =
+            raykin::scene::load_gltf(path, &Default::default()).unwrap_or_else(|e| panic!("{e}"));
         assert!(scene.triangle_count() > 0, "{}", path.display());
         let is_static = scene.skins.is_empty() && scene.animations.is_empty();
         if !is_static {
             continue;
         }
-        let settings = RenderSettings { width: 16, height: 16, max_depth: 2, environment: Environment::Sky, ..Default::default() };
+        let settings = RenderSettings {
+            width: 16,
+            height: 16,
+            max_depth: 2,
+            environment: Environment::Sky,
+            ..Default::default()
+        };
         let img = render(&ctx, &Arc::new(scene), settings, &CameraChoice::Auto, 1);
         assert_all_finite(&img, &path.display().to_string());
         let mean = mean_rgb(&img);
-        assert!(mean.iter().sum::<f64>() > 0.01, "{}: black image", path.display());
+        assert!(
+            mean.iter().sum::<f64>() > 0.01,
+            "{}: black image",
+            path.display()
+        );
         rendered += 1;
     }
-    eprintln!("{} files loaded, {rendered} static ones rendered", files.len());
+    eprintln!(
+        "{} files loaded, {rendered} static ones rendered",
+        files.len()
+    );
     assert!(rendered >= 13);
 }

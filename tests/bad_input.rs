@@ -32,16 +32,30 @@ fn gltf_json(prims: &[(Vec<[f32; 3]>, Vec<u32>)]) -> serde_json::Value {
         for i in indices {
             bin.extend_from_slice(&i.to_le_bytes());
         }
-        let finite: Vec<&[f32; 3]> = positions.iter().filter(|p| p.iter().all(|c| c.is_finite())).collect();
-        let lo: Vec<f32> = (0..3).map(|c| finite.iter().map(|p| p[c]).fold(f32::MAX, f32::min)).collect();
-        let hi: Vec<f32> = (0..3).map(|c| finite.iter().map(|p| p[c]).fold(f32::MIN, f32::max)).collect();
-        views.push(json!({"buffer": 0, "byteOffset": pos_offset, "byteLength": idx_offset - pos_offset}));
+        let finite: Vec<&[f32; 3]> = positions
+            .iter()
+            .filter(|p| p.iter().all(|c| c.is_finite()))
+            .collect();
+        let lo: Vec<f32> = (0..3)
+            .map(|c| finite.iter().map(|p| p[c]).fold(f32::MAX, f32::min))
+            .collect();
+        let hi: Vec<f32> = (0..3)
+            .map(|c| finite.iter().map(|p| p[c]).fold(f32::MIN, f32::max))
+            .collect();
+        views.push(
+            json!({"buffer": 0, "byteOffset": pos_offset, "byteLength": idx_offset - pos_offset}),
+        );
         accessors.push(json!({"bufferView": views.len() - 1, "componentType": 5126, "count": positions.len(), "type": "VEC3", "min": lo, "max": hi}));
-        views.push(json!({"buffer": 0, "byteOffset": idx_offset, "byteLength": bin.len() - idx_offset}));
+        views.push(
+            json!({"buffer": 0, "byteOffset": idx_offset, "byteLength": bin.len() - idx_offset}),
+        );
         accessors.push(json!({"bufferView": views.len() - 1, "componentType": 5125, "count": indices.len(), "type": "SCALAR"}));
         primitives.push(json!({"attributes": {"POSITION": accessors.len() - 2}, "indices": accessors.len() - 1}));
     }
-    let uri = format!("data:application/octet-stream;base64,{}", base64::engine::general_purpose::STANDARD.encode(&bin));
+    let uri = format!(
+        "data:application/octet-stream;base64,{}",
+        base64::engine::general_purpose::STANDARD.encode(&bin)
+    );
     json!({
         "asset": {"version": "2.0"},
         "scene": 0, "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0}],
@@ -52,7 +66,15 @@ fn gltf_json(prims: &[(Vec<[f32; 3]>, Vec<u32>)]) -> serde_json::Value {
 }
 
 fn quad() -> (Vec<[f32; 3]>, Vec<u32>) {
-    (vec![[-1.0, -1.0, 0.0], [1.0, -1.0, 0.0], [1.0, 1.0, 0.0], [-1.0, 1.0, 0.0]], vec![0, 1, 2, 0, 2, 3])
+    (
+        vec![
+            [-1.0, -1.0, 0.0],
+            [1.0, -1.0, 0.0],
+            [1.0, 1.0, 0.0],
+            [-1.0, 1.0, 0.0],
+        ],
+        vec![0, 1, 2, 0, 2, 3],
+    )
 }
 
 fn write(name: &str, value: &serde_json::Value) -> PathBuf {
@@ -68,7 +90,13 @@ fn load(path: &Path) -> Result<raykin::scene::SceneAsset, SceneError> {
 /// Renders a loaded scene tiny and checks the image is finite and not black.
 fn renders_visibly(scene: raykin::scene::SceneAsset) {
     let (ctx, _gpu) = gpu();
-    let settings = RenderSettings { width: 16, height: 16, environment: Environment::Sky, max_depth: 2, ..Default::default() };
+    let settings = RenderSettings {
+        width: 16,
+        height: 16,
+        environment: Environment::Sky,
+        max_depth: 2,
+        ..Default::default()
+    };
     let img = render(&ctx, &Arc::new(scene), settings, &CameraChoice::Auto, 2);
     assert_all_finite(&img, "bad-input render");
     assert!(mean_rgb(&img).iter().all(|c| *c > 0.01), "image is black");
@@ -77,16 +105,26 @@ fn renders_visibly(scene: raykin::scene::SceneAsset) {
 fn assert_names(err: &dyn std::fmt::Display, path: &Path, words: &[&str]) {
     let msg = err.to_string();
     let file = path.file_name().unwrap().to_string_lossy();
-    assert!(msg.contains(file.as_ref()), "error does not name the file: {msg}");
+    assert!(
+        msg.contains(file.as_ref()),
+        "error does not name the file: {msg}"
+    );
     for w in words {
-        assert!(msg.to_lowercase().contains(&w.to_lowercase()), "error does not mention `{w}`: {msg}");
+        assert!(
+            msg.to_lowercase().contains(&w.to_lowercase()),
+            "error does not mention `{w}`: {msg}"
+        );
     }
 }
 
 #[test]
 fn malformed_json_is_a_clear_error() {
     let path = scratch("malformed.gltf");
-    std::fs::write(&path, b"{ \"asset\": { \"version\": \"2.0\" }, \"meshes\": [ {").unwrap();
+    std::fs::write(
+        &path,
+        b"{ \"asset\": { \"version\": \"2.0\" }, \"meshes\": [ {",
+    )
+    .unwrap();
     let err = load(&path).unwrap_err();
     assert!(matches!(err, SceneError::Invalid { .. }), "{err}");
     assert_names(&err, &path, &["not a valid glTF"]);
@@ -122,7 +160,14 @@ fn missing_texture_warns_and_renders_without_it() {
     doc["meshes"][0]["primitives"][0]["material"] = json!(0);
     let path = write("missing_texture.gltf", &doc);
     let scene = load(&path).expect("a missing texture is not fatal");
-    assert!(scene.warnings.iter().any(|w| w.contains("no_such_texture.png") || w.contains("image 0")), "{:?}", scene.warnings);
+    assert!(
+        scene
+            .warnings
+            .iter()
+            .any(|w| w.contains("no_such_texture.png") || w.contains("image 0")),
+        "{:?}",
+        scene.warnings
+    );
     assert!(scene.materials[0].base_color_texture.is_none());
     renders_visibly(scene);
 }
@@ -133,7 +178,14 @@ fn out_of_range_indices_skip_the_primitive() {
     let doc = gltf_json(&[quad(), (p, vec![0, 1, 7])]);
     let path = write("bad_indices.gltf", &doc);
     let scene = load(&path).expect("the good primitive still loads");
-    assert!(scene.warnings.iter().any(|w| w.contains("index 7 is out of range")), "{:?}", scene.warnings);
+    assert!(
+        scene
+            .warnings
+            .iter()
+            .any(|w| w.contains("index 7 is out of range")),
+        "{:?}",
+        scene.warnings
+    );
     assert_eq!(scene.triangle_count(), 2);
     renders_visibly(scene);
 
@@ -153,7 +205,11 @@ fn nan_vertices_drop_their_triangles() {
     idx.extend([4, 0, 1, 5, 1, 2]);
     let path = write("nan_vertices.gltf", &gltf_json(&[(p, idx)]));
     let scene = load(&path).expect("finite triangles still load");
-    assert!(scene.warnings.iter().any(|w| w.contains("NaN or infinite")), "{:?}", scene.warnings);
+    assert!(
+        scene.warnings.iter().any(|w| w.contains("NaN or infinite")),
+        "{:?}",
+        scene.warnings
+    );
     assert_eq!(scene.triangle_count(), 2);
     assert!(scene.meshes[0].positions.iter().all(|v| v.is_finite()));
     renders_visibly(scene);
@@ -166,7 +222,14 @@ fn zero_area_triangles_are_dropped() {
     i.extend([0, 0, 1, 0, 2, 4]); // repeated vertex; collinear (0, 2 and 4 on the diagonal)
     let path = write("zero_area.gltf", &gltf_json(&[(p, i)]));
     let scene = load(&path).expect("loads");
-    assert!(scene.warnings.iter().any(|w| w.contains("2 zero-area triangles dropped")), "{:?}", scene.warnings);
+    assert!(
+        scene
+            .warnings
+            .iter()
+            .any(|w| w.contains("2 zero-area triangles dropped")),
+        "{:?}",
+        scene.warnings
+    );
     assert_eq!(scene.triangle_count(), 2);
     renders_visibly(scene);
 }
@@ -178,7 +241,10 @@ fn unsupported_required_extension_is_refused() {
     doc["extensionsRequired"] = json!(["KHR_draco_mesh_compression"]);
     let path = write("draco.gltf", &doc);
     let err = load(&path).unwrap_err();
-    assert!(matches!(err, SceneError::UnsupportedExtension { .. }), "{err}");
+    assert!(
+        matches!(err, SceneError::UnsupportedExtension { .. }),
+        "{err}"
+    );
     assert_names(&err, &path, &["KHR_draco_mesh_compression"]);
 }
 
@@ -210,18 +276,43 @@ fn accessor_outside_its_buffer_skips_the_primitive() {
 fn scene_over_gpu_limits_is_a_clear_error() {
     let (ctx, _gpu) = gpu();
     let scene = Arc::new(load(&shared_assets().join("CornellBox/CornellBox.glb")).unwrap());
-    let settings = RenderSettings { width: 8, height: 8, ..Default::default() };
-    let err = raykin::headless::HeadlessApp::with_binding_limit(ctx, scene, settings, &CameraChoice::Auto, Some(256))
-        .err()
-        .expect("a 256-byte limit cannot hold the Cornell box");
+    let settings = RenderSettings {
+        width: 8,
+        height: 8,
+        ..Default::default()
+    };
+    let err = raykin::headless::HeadlessApp::with_binding_limit(
+        ctx,
+        scene,
+        settings,
+        &CameraChoice::Auto,
+        Some(256),
+    )
+    .err()
+    .expect("a 256-byte limit cannot hold the Cornell box");
     let msg = err.to_string();
-    assert!(msg.contains("CornellBox.glb") && msg.contains("over this GPU's limits") && msg.contains("MiB"), "{msg}");
+    assert!(
+        msg.contains("CornellBox.glb")
+            && msg.contains("over this GPU's limits")
+            && msg.contains("MiB"),
+        "{msg}"
+    );
 }
 
 #[test]
 fn no_gpu_adapter_says_how_to_install_one() {
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_raykin"))
-        .args(["render", "../shared/assets/CornellBox/CornellBox.glb", "--spp", "1", "--width", "8", "--height", "8", "--out"])
+        .args([
+            "render",
+            "../shared/assets/CornellBox/CornellBox.glb",
+            "--spp",
+            "1",
+            "--width",
+            "8",
+            "--height",
+            "8",
+            "--out",
+        ])
         .arg(scratch("never.png"))
         .current_dir(repo_root())
         .env("WGPU_BACKEND", "vulkan")
@@ -231,5 +322,8 @@ fn no_gpu_adapter_says_how_to_install_one() {
         .unwrap();
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success());
-    assert!(stderr.contains("no GPU adapter") && stderr.contains("mesa-vulkan-drivers"), "{stderr}");
+    assert!(
+        stderr.contains("no GPU adapter") && stderr.contains("mesa-vulkan-drivers"),
+        "{stderr}"
+    );
 }

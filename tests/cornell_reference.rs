@@ -34,14 +34,22 @@ fn settings(seed: u32) -> RenderSettings {
 
 fn load_reference() -> (Vec<[f32; 3]>, Vec<[f32; 3]>) {
     let dir = repo_root().join("tests/reference/cornell");
-    let (w, h, a) = raykin::image_io::read_exr(&dir.join("cornell_64_a.exr")).expect("reference half a");
-    let (_, _, b) = raykin::image_io::read_exr(&dir.join("cornell_64_b.exr")).expect("reference half b");
+    let (w, h, a) =
+        raykin::image_io::read_exr(&dir.join("cornell_64_a.exr")).expect("reference half a");
+    let (_, _, b) =
+        raykin::image_io::read_exr(&dir.join("cornell_64_b.exr")).expect("reference half b");
     assert_eq!((w, h), (SIZE, SIZE));
     (a, b)
 }
 
 fn cornell() -> Arc<raykin::scene::SceneAsset> {
-    Arc::new(raykin::scene::load_gltf(shared_assets().join("CornellBox/CornellBox.glb"), &Default::default()).expect("CornellBox loads"))
+    Arc::new(
+        raykin::scene::load_gltf(
+            shared_assets().join("CornellBox/CornellBox.glb"),
+            &Default::default(),
+        )
+        .expect("CornellBox loads"),
+    )
 }
 
 /// Our image and Mitsuba's agree within the noise of both: the expected relMSE of two unbiased estimates is the
@@ -56,20 +64,38 @@ fn cornell_box_matches_mitsuba_within_noise() {
     let a = render(&ctx, &scene, settings(1), &camera(), spp);
     let b = render(&ctx, &scene, settings(2), &camera(), spp);
     assert_all_finite(&a, "raykin half a");
-    let ours: Vec<[f32; 3]> = a.iter().zip(&b).map(|(x, y)| [0, 1, 2].map(|c| 0.5 * (x[c] + y[c]))).collect();
+    let ours: Vec<[f32; 3]> = a
+        .iter()
+        .zip(&b)
+        .map(|(x, y)| [0, 1, 2].map(|c| 0.5 * (x[c] + y[c])))
+        .collect();
     let (ra, rb) = load_reference();
-    let reference: Vec<[f32; 3]> = ra.iter().zip(&rb).map(|(x, y)| [0, 1, 2].map(|c| 0.5 * (x[c] + y[c]))).collect();
+    let reference: Vec<[f32; 3]> = ra
+        .iter()
+        .zip(&rb)
+        .map(|(x, y)| [0, 1, 2].map(|c| 0.5 * (x[c] + y[c])))
+        .collect();
     // Var of a mean of two halves = E[(a-b)^2] / 4, in relMSE units.
     let ours_noise = rel_mse(&a, &b, EPS) / 4.0;
     let ref_noise = rel_mse(&ra, &rb, EPS) / 4.0;
     let measured = rel_mse(&ours, &reference, EPS);
     let bound = 1.5 * (ours_noise + ref_noise) + 1e-4;
     let (mo, mr) = (mean_rgb(&ours), mean_rgb(&reference));
-    eprintln!("relMSE vs Mitsuba {measured:.3e}; noise ours {ours_noise:.3e} ref {ref_noise:.3e}; bound {bound:.3e}; mean ours {mo:?} ref {mr:?}");
+    eprintln!(
+        "relMSE vs Mitsuba {measured:.3e}; noise ours {ours_noise:.3e} ref {ref_noise:.3e}; bound {bound:.3e}; mean ours {mo:?} ref {mr:?}"
+    );
     for c in 0..3 {
-        assert!((mo[c] / mr[c] - 1.0).abs() < 0.02, "mean channel {c}: ours {} vs reference {}", mo[c], mr[c]);
+        assert!(
+            (mo[c] / mr[c] - 1.0).abs() < 0.02,
+            "mean channel {c}: ours {} vs reference {}",
+            mo[c],
+            mr[c]
+        );
     }
-    assert!(measured < bound, "relMSE {measured:.3e} exceeds the noise bound {bound:.3e}");
+    assert!(
+        measured < bound,
+        "relMSE {measured:.3e} exceeds the noise bound {bound:.3e}"
+    );
 }
 
 /// Error falls at the Monte Carlo rate: relative RMSE ~ spp^-0.5 (relMSE ~ spp^-1).
@@ -85,12 +111,21 @@ fn error_converges_at_monte_carlo_rate() {
     let mut scene = (*cornell()).clone();
     scene.materials[0].double_sided = false;
     let scene = Arc::new(scene);
-    let small = |seed| RenderSettings { width: 32, height: 32, ..settings(seed) };
+    let small = |seed| RenderSettings {
+        width: 32,
+        height: 32,
+        ..settings(seed)
+    };
     let half_a = render(&ctx, &scene, small(100), &camera(), 512);
     let half_b = render(&ctx, &scene, small(200), &camera(), 512);
-    let reference: Vec<[f32; 3]> = half_a.iter().zip(&half_b).map(|(x, y)| [0, 1, 2].map(|c| 0.5 * (x[c] + y[c]))).collect();
+    let reference: Vec<[f32; 3]> = half_a
+        .iter()
+        .zip(&half_b)
+        .map(|(x, y)| [0, 1, 2].map(|c| 0.5 * (x[c] + y[c])))
+        .collect();
     let reference_noise = rel_mse(&half_a, &half_b, EPS) / 4.0;
-    let mut app = raykin::headless::HeadlessApp::new(ctx.clone(), scene, small(7), &camera()).unwrap();
+    let mut app =
+        raykin::headless::HeadlessApp::new(ctx.clone(), scene, small(7), &camera()).unwrap();
     let mut points = Vec::new();
     let mut done = 0;
     for spp in [4u32, 8, 16, 32, 64] {
@@ -98,10 +133,17 @@ fn error_converges_at_monte_carlo_rate() {
         done = spp;
         let img = app.radiance();
         assert_all_finite(&img, "convergence render");
-        let rmse = (rel_mse(&img, &reference, EPS) - reference_noise).max(1e-12).sqrt();
+        let rmse = (rel_mse(&img, &reference, EPS) - reference_noise)
+            .max(1e-12)
+            .sqrt();
         points.push((spp as f64, rmse));
     }
     let slope = log_log_slope(&points);
-    eprintln!("rel RMSE vs spp: {points:?}, slope {slope:.3}, reference noise {reference_noise:.2e}");
-    assert!((slope + 0.5).abs() < 0.1, "log-log slope of relative RMSE vs spp is {slope:.3}, expected -0.5 +- 0.1");
+    eprintln!(
+        "rel RMSE vs spp: {points:?}, slope {slope:.3}, reference noise {reference_noise:.2e}"
+    );
+    assert!(
+        (slope + 0.5).abs() < 0.1,
+        "log-log slope of relative RMSE vs spp is {slope:.3}, expected -0.5 +- 0.1"
+    );
 }

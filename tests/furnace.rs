@@ -21,7 +21,8 @@ fn brdf_cos(v: [f64; 3], l: [f64; 3], metallic: f64, alpha: f64) -> f64 {
     let k = h[0] * h[0] + h[1] * h[1] + a2 * h[2] * h[2];
     let d = a2 / (PI * k * k);
     let (nl, nv) = (l[2], v[2]);
-    let vis = 0.5 / (nl * (nv * nv * (1.0 - a2) + a2).sqrt() + nv * (nl * nl * (1.0 - a2) + a2).sqrt());
+    let vis =
+        0.5 / (nl * (nv * nv * (1.0 - a2) + a2).sqrt() + nv * (nl * nl * (1.0 - a2) + a2).sqrt());
     let vh = dot(v, h).abs();
     let fw = (1.0 - vh).powi(5);
     let f_dielectric = 0.04 + 0.96 * fw;
@@ -66,14 +67,22 @@ fn albedo(mu: f64, metallic: f64, roughness: f64) -> f64 {
             let h = [st * phi.cos(), st * phi.sin(), ct];
             let vh = dot(v, h);
             if vh > 0.0 {
-                let l = [2.0 * vh * h[0] - v[0], 2.0 * vh * h[1] - v[1], 2.0 * vh * h[2] - v[2]];
+                let l = [
+                    2.0 * vh * h[0] - v[0],
+                    2.0 * vh * h[1] - v[1],
+                    2.0 * vh * h[2] - v[2],
+                ];
                 if l[2] > 0.0 {
                     let (p1, p2) = (ndf_pdf_l(l), cos_pdf(l));
                     total += brdf_cos(v, l, metallic, alpha) / (p1 + p2);
                 }
             }
             // Cosine substitution.
-            let l = [xi.sqrt() * phi.cos(), xi.sqrt() * phi.sin(), (1.0 - xi).sqrt()];
+            let l = [
+                xi.sqrt() * phi.cos(),
+                xi.sqrt() * phi.sin(),
+                (1.0 - xi).sqrt(),
+            ];
             let (p1, p2) = (ndf_pdf_l(l), cos_pdf(l));
             total += brdf_cos(v, l, metallic, alpha) / (p1 + p2);
         }
@@ -86,7 +95,10 @@ fn quadrature_reproduces_known_albedos() {
     // Near-normal-incidence values quoted in the issue for the glTF BRDF.
     for (m, r, expected) in [(0.0, 1.0, 0.97), (1.0, 0.5, 0.92), (1.0, 1.0, 0.31)] {
         let a = albedo(0.99, m, r);
-        assert!((a - expected).abs() < 0.01, "albedo(metallic {m}, roughness {r}) = {a}, expected about {expected}");
+        assert!(
+            (a - expected).abs() < 0.01,
+            "albedo(metallic {m}, roughness {r}) = {a}, expected about {expected}"
+        );
     }
     // A smooth dielectric gains energy at grazing angles (Schlick Fresnel plus the undiminished diffuse).
     assert!(albedo(0.15, 0.0, 0.05) > 1.0);
@@ -118,7 +130,9 @@ fn expected_pixel(x: u32, y: u32, table: &[(f64, f64)]) -> Option<f64> {
             if mu < 0.3 {
                 return None;
             }
-            let i = table.partition_point(|(m, _)| *m < mu).clamp(1, table.len() - 1);
+            let i = table
+                .partition_point(|(m, _)| *m < mu)
+                .clamp(1, table.len() - 1);
             let ((m0, a0), (m1, a1)) = (table[i - 1], table[i]);
             sum += a0 + (a1 - a0) * (mu - m0) / (m1 - m0);
         }
@@ -135,7 +149,11 @@ fn furnace_case(metallic: f32, roughness: f32) {
         ..Default::default()
     };
     let sphere = procedural::uv_sphere(1.0, 128, 64, 0);
-    let scene = Arc::new(procedural::scene_from_meshes("furnace", vec![(sphere, NodeTransform::default())], vec![material]));
+    let scene = Arc::new(procedural::scene_from_meshes(
+        "furnace",
+        vec![(sphere, NodeTransform::default())],
+        vec![material],
+    ));
     let settings = |seed| RenderSettings {
         width: SIZE,
         height: SIZE,
@@ -145,11 +163,17 @@ fn furnace_case(metallic: f32, roughness: f32) {
         seed,
         ..Default::default()
     };
-    let camera = CameraChoice::LookAt { eye: glam::Vec3::new(0.0, 0.0, EYE_Z as f32), target: glam::Vec3::ZERO, yfov: (YFOV_DEG as f32).to_radians() };
-    let table: Vec<(f64, f64)> = (0..=56).map(|i| {
-        let mu = 0.2 + 0.8 * i as f64 / 56.0;
-        (mu, albedo(mu, metallic as f64, roughness as f64))
-    }).collect();
+    let camera = CameraChoice::LookAt {
+        eye: glam::Vec3::new(0.0, 0.0, EYE_Z as f32),
+        target: glam::Vec3::ZERO,
+        yfov: (YFOV_DEG as f32).to_radians(),
+    };
+    let table: Vec<(f64, f64)> = (0..=56)
+        .map(|i| {
+            let mu = 0.2 + 0.8 * i as f64 / 56.0;
+            (mu, albedo(mu, metallic as f64, roughness as f64))
+        })
+        .collect();
 
     // Two independent halves; more samples until the estimated per-pixel noise is a fifth of the tolerance.
     let mut spp = 2048;
@@ -163,7 +187,9 @@ fn furnace_case(metallic: f32, roughness: f32) {
         let mut checked = 0;
         for y in 0..SIZE {
             for x in 0..SIZE {
-                let Some(expected) = expected_pixel(x, y, &table) else { continue };
+                let Some(expected) = expected_pixel(x, y, &table) else {
+                    continue;
+                };
                 let i = (y * SIZE + x) as usize;
                 let (va, vb) = (a[i][1] as f64, b[i][1] as f64);
                 let value = 0.5 * (va + vb);
@@ -180,7 +206,10 @@ fn furnace_case(metallic: f32, roughness: f32) {
         assert!(checked > 90, "only {checked} interior pixels");
         // Per-pixel noise (RMS over pixels) must be a quarter of the tolerance, so a 1% miss is a bias.
         let sigma = (sigma2_sum / checked as f64).sqrt();
-        eprintln!("metallic {metallic} roughness {roughness}: {} spp, relative noise {sigma:.4}", 2 * spp);
+        eprintln!(
+            "metallic {metallic} roughness {roughness}: {} spp, relative noise {sigma:.4}",
+            2 * spp
+        );
         if sigma > 0.0025 && spp < 16384 {
             spp *= 2;
             continue;
@@ -190,10 +219,29 @@ fn furnace_case(metallic: f32, roughness: f32) {
         // spp, beyond CI on a CPU, so its per-pixel bound is 4 sigma and the mean ratio below carries the 1% claim.
         let tolerance = 0.01f64.max(4.0 * sigma);
         let mean_ratio = ratio_sum / checked as f64;
-        eprintln!("metallic {metallic} roughness {roughness}: {checked} pixels at {} spp, worst error {:.4} at ({}, {}) value {:.4} expected {:.4}; mean ratio {mean_ratio:.5}; tolerance {tolerance:.4}", 2 * spp, worst.0, worst.1, worst.2, worst.3, worst.4);
-        assert!(worst.0 < tolerance, "metallic {metallic} roughness {roughness}: pixel ({}, {}) is {:.4}, expected {:.4} ({:.2}% off)", worst.1, worst.2, worst.3, worst.4, worst.0 * 100.0);
+        eprintln!(
+            "metallic {metallic} roughness {roughness}: {checked} pixels at {} spp, worst error {:.4} at ({}, {}) value {:.4} expected {:.4}; mean ratio {mean_ratio:.5}; tolerance {tolerance:.4}",
+            2 * spp,
+            worst.0,
+            worst.1,
+            worst.2,
+            worst.3,
+            worst.4
+        );
+        assert!(
+            worst.0 < tolerance,
+            "metallic {metallic} roughness {roughness}: pixel ({}, {}) is {:.4}, expected {:.4} ({:.2}% off)",
+            worst.1,
+            worst.2,
+            worst.3,
+            worst.4,
+            worst.0 * 100.0
+        );
         let mean_tolerance = 0.002 + 4.0 * sigma / (checked as f64).sqrt();
-        assert!((mean_ratio - 1.0).abs() < mean_tolerance, "metallic {metallic} roughness {roughness}: mean rendered/expected {mean_ratio:.5} (tolerance {mean_tolerance:.4})");
+        assert!(
+            (mean_ratio - 1.0).abs() < mean_tolerance,
+            "metallic {metallic} roughness {roughness}: mean rendered/expected {mean_ratio:.5} (tolerance {mean_tolerance:.4})"
+        );
         return;
     }
 }

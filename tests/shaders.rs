@@ -4,11 +4,18 @@
 #[test]
 fn all_wgsl_modules_validate() {
     for (name, source) in raykin::render::shaders::all_modules() {
-        let module = naga::front::wgsl::parse_str(&source).unwrap_or_else(|e| panic!("{name}.wgsl: {}", e.emit_to_string(&source)));
-        let mut validator = naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::all());
-        validator
-            .validate(&module)
-            .unwrap_or_else(|e| panic!("{name}.wgsl does not validate: {}", e.emit_to_string(&source)));
+        let module = naga::front::wgsl::parse_str(&source)
+            .unwrap_or_else(|e| panic!("{name}.wgsl: {}", e.emit_to_string(&source)));
+        let mut validator = naga::valid::Validator::new(
+            naga::valid::ValidationFlags::all(),
+            naga::valid::Capabilities::all(),
+        );
+        validator.validate(&module).unwrap_or_else(|e| {
+            panic!(
+                "{name}.wgsl does not validate: {}",
+                e.emit_to_string(&source)
+            )
+        });
     }
 }
 
@@ -20,11 +27,18 @@ fn gpu_struct_sizes_match_wgsl() {
     let mut layouter = naga::proc::Layouter::default();
     layouter.update(module.to_ctx()).expect("layout");
     let size_of = |name: &str| {
-        let (handle, _) = module.types.iter().find(|(_, t)| t.name.as_deref() == Some(name)).unwrap_or_else(|| panic!("type {name}"));
+        let (handle, _) = module
+            .types
+            .iter()
+            .find(|(_, t)| t.name.as_deref() == Some(name))
+            .unwrap_or_else(|| panic!("type {name}"));
         layouter[handle].size as usize
     };
     use raykin::render::layout::*;
-    assert_eq!(size_of("BvhNode"), std::mem::size_of::<raykin::bvh::GpuBvhNode>());
+    assert_eq!(
+        size_of("BvhNode"),
+        std::mem::size_of::<raykin::bvh::GpuBvhNode>()
+    );
     assert_eq!(size_of("Instance"), std::mem::size_of::<GpuInstance>());
     assert_eq!(size_of("Mesh"), std::mem::size_of::<GpuMesh>());
     assert_eq!(size_of("Material"), std::mem::size_of::<GpuMaterial>());

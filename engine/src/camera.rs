@@ -16,12 +16,21 @@ pub struct CameraView {
 impl CameraView {
     pub fn look_at(eye: Vec3, target: Vec3, up: Vec3, yfov: f32) -> Self {
         let forward = (target - eye).normalize_or(Vec3::NEG_Z);
-        let up = if forward.cross(up).length_squared() < 1e-8 { Vec3::Z } else { up };
+        let up = if forward.cross(up).length_squared() < 1e-8 {
+            Vec3::Z
+        } else {
+            up
+        };
         // Columns: camera +X (right), +Y (up), +Z (backwards, glTF cameras look down -Z), position.
         let right = forward.cross(up).normalize();
         let true_up = right.cross(forward);
         Self {
-            world_from_camera: Mat4::from_cols(right.extend(0.0), true_up.extend(0.0), (-forward).extend(0.0), eye.extend(1.0)),
+            world_from_camera: Mat4::from_cols(
+                right.extend(0.0),
+                true_up.extend(0.0),
+                (-forward).extend(0.0),
+                eye.extend(1.0),
+            ),
             yfov,
         }
     }
@@ -34,7 +43,12 @@ impl CameraView {
         // The sphere must fit both the vertical and the horizontal field of view.
         let half = (yfov * 0.5).min(((yfov * 0.5).tan() * aspect.max(1e-3)).atan());
         let distance = radius / half.sin().max(1e-3);
-        Self::look_at(center + Vec3::new(0.0, radius * 0.15, distance), center, Vec3::Y, yfov)
+        Self::look_at(
+            center + Vec3::new(0.0, radius * 0.15, distance),
+            center,
+            Vec3::Y,
+            yfov,
+        )
     }
 
     pub fn position(&self) -> Vec3 {
@@ -50,7 +64,11 @@ pub enum CameraChoice {
     Auto,
     /// The i-th camera node in the scene (glTF node order).
     Index(usize),
-    LookAt { eye: Vec3, target: Vec3, yfov: f32 },
+    LookAt {
+        eye: Vec3,
+        target: Vec3,
+        yfov: f32,
+    },
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -61,7 +79,12 @@ pub struct NoSuchCamera {
 }
 
 /// Resolves the choice against the ECS (camera node world transforms are current after propagation).
-pub fn resolve_camera(world: &mut World, scene: &SceneAsset, choice: &CameraChoice, aspect: f32) -> Result<CameraView, NoSuchCamera> {
+pub fn resolve_camera(
+    world: &mut World,
+    scene: &SceneAsset,
+    choice: &CameraChoice,
+    aspect: f32,
+) -> Result<CameraView, NoSuchCamera> {
     let mut cameras: Vec<(usize, Mat4, f32)> = world
         .query::<(&crate::scene::SceneNode, &CameraComponent, &GlobalTransform)>()
         .iter(world)
@@ -74,15 +97,28 @@ pub fn resolve_camera(world: &mut World, scene: &SceneAsset, choice: &CameraChoi
         Mat4::from_rotation_translation(r, t)
     };
     Ok(match choice {
-        CameraChoice::LookAt { eye, target, yfov } => CameraView::look_at(*eye, *target, Vec3::Y, *yfov),
+        CameraChoice::LookAt { eye, target, yfov } => {
+            CameraView::look_at(*eye, *target, Vec3::Y, *yfov)
+        }
         CameraChoice::Index(i) => {
-            let (_, m, yfov) = *cameras.get(*i).ok_or(NoSuchCamera { requested: *i, available: cameras.len() })?;
-            CameraView { world_from_camera: rigid(m), yfov }
+            let (_, m, yfov) = *cameras.get(*i).ok_or(NoSuchCamera {
+                requested: *i,
+                available: cameras.len(),
+            })?;
+            CameraView {
+                world_from_camera: rigid(m),
+                yfov,
+            }
         }
         CameraChoice::Auto => match cameras.first() {
-            Some(&(_, m, yfov)) => CameraView { world_from_camera: rigid(m), yfov },
+            Some(&(_, m, yfov)) => CameraView {
+                world_from_camera: rigid(m),
+                yfov,
+            },
             None => {
-                let bounds = scene.rest_bounds().unwrap_or((Vec3::splat(-1.0), Vec3::ONE));
+                let bounds = scene
+                    .rest_bounds()
+                    .unwrap_or((Vec3::splat(-1.0), Vec3::ONE));
                 CameraView::framing(bounds, 45f32.to_radians(), aspect)
             }
         },

@@ -23,23 +23,38 @@ pub enum HeadlessError {
 
 impl HeadlessApp {
     /// Spawns the scene, uploads it, and places the camera (after one transform propagation).
-    pub fn new(ctx: GpuContext, scene: Arc<SceneAsset>, settings: RenderSettings, camera: &CameraChoice) -> Result<Self, HeadlessError> {
+    pub fn new(
+        ctx: GpuContext,
+        scene: Arc<SceneAsset>,
+        settings: RenderSettings,
+        camera: &CameraChoice,
+    ) -> Result<Self, HeadlessError> {
         Self::with_binding_limit(ctx, scene, settings, camera, None)
     }
 
-    pub fn with_binding_limit(ctx: GpuContext, scene: Arc<SceneAsset>, settings: RenderSettings, camera: &CameraChoice, binding_limit: Option<u64>) -> Result<Self, HeadlessError> {
+    pub fn with_binding_limit(
+        ctx: GpuContext,
+        scene: Arc<SceneAsset>,
+        settings: RenderSettings,
+        camera: &CameraChoice,
+        binding_limit: Option<u64>,
+    ) -> Result<Self, HeadlessError> {
         let (renderer, notes) = Renderer::new(&ctx, &scene, &settings, binding_limit)?;
         let mut app = App::new();
         crate::configure_frame_schedule(&mut app);
         app.insert_resource(ctx.clone())
             .insert_resource(settings.clone())
             .insert_resource(renderer)
-            .add_plugins(ScenePlugin { scene: scene.clone() })
+            .add_plugins(ScenePlugin {
+                scene: scene.clone(),
+            })
             .add_plugins(crate::animation::AnimationPlugin)
             .add_plugins(RenderPlugin);
         // Transforms must be current before a camera node can be resolved.
         use bevy_ecs::system::RunSystemOnce;
-        let _ = app.world_mut().run_system_once(crate::scene::propagate_transforms);
+        let _ = app
+            .world_mut()
+            .run_system_once(crate::scene::propagate_transforms);
         let aspect = settings.width as f32 / settings.height.max(1) as f32;
         let view = resolve_camera(app.world_mut(), &scene, camera, aspect)?;
         app.insert_resource(view);
@@ -49,11 +64,23 @@ impl HeadlessApp {
     /// Poses the scene at `seconds` into `clip` (held, not playing): the next [`Self::step`] renders exactly
     /// that pose, whatever frames ran before. Errors name the clips when `clip` does not exist.
     pub fn set_time(&mut self, clip: usize, seconds: f32) -> Result<(), String> {
-        let scene = self.app.world().resource::<crate::scene::SceneAssets>().0.clone();
+        let scene = self
+            .app
+            .world()
+            .resource::<crate::scene::SceneAssets>()
+            .0
+            .clone();
         if clip >= scene.animations.len() {
             return Err(match scene.animations.len() {
-                0 => format!("{} has no animations, so it cannot be posed at a time", scene.source),
-                n => format!("{}: no animation {clip}; the scene has {n} clip(s), 0..{}", scene.source, n - 1),
+                0 => format!(
+                    "{} has no animations, so it cannot be posed at a time",
+                    scene.source
+                ),
+                n => format!(
+                    "{}: no animation {clip}; the scene has {n} clip(s), 0..{}",
+                    scene.source,
+                    n - 1
+                ),
             });
         }
         if !seconds.is_finite() {
@@ -65,7 +92,9 @@ impl HeadlessApp {
             .iter(world)
             .collect();
         for root in roots {
-            world.entity_mut(root).insert(crate::animation::AnimationPlayer::paused_at(clip, seconds));
+            world
+                .entity_mut(root)
+                .insert(crate::animation::AnimationPlayer::paused_at(clip, seconds));
         }
         Ok(())
     }

@@ -14,7 +14,10 @@ use std::time::Instant;
 const NAMED: &[(&str, &str)] = &[
     ("cornell", "CornellBox/CornellBox.glb"),
     ("flight-helmet", "FlightHelmet/glTF/FlightHelmet.gltf"),
-    ("spheres", "MetalRoughSpheresNoTextures/glTF-Binary/MetalRoughSpheresNoTextures.glb"),
+    (
+        "spheres",
+        "MetalRoughSpheresNoTextures/glTF-Binary/MetalRoughSpheresNoTextures.glb",
+    ),
 ];
 
 #[derive(serde::Serialize)]
@@ -64,19 +67,42 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let scenes: Vec<PathBuf> = if args.scene.is_empty() {
         NAMED.iter().map(|(_, p)| args.assets.join(p)).collect()
     } else {
-        args.scene.iter().map(|s| NAMED.iter().find(|(n, _)| n == s).map_or_else(|| PathBuf::from(s), |(_, p)| args.assets.join(p))).collect()
+        args.scene
+            .iter()
+            .map(|s| {
+                NAMED
+                    .iter()
+                    .find(|(n, _)| n == s)
+                    .map_or_else(|| PathBuf::from(s), |(_, p)| args.assets.join(p))
+            })
+            .collect()
     };
-    let sizes = if args.width.is_some() { vec![(args.width.unwrap_or(64), args.height.unwrap_or(36))] } else { sizes };
+    let sizes = if args.width.is_some() {
+        vec![(args.width.unwrap_or(64), args.height.unwrap_or(36))]
+    } else {
+        sizes
+    };
     let mut rows = Vec::new();
     for path in &scenes {
         let scene = load_scene(path)?;
         for &(width, height) in &sizes {
-            let settings = RenderSettings { width, height, spp_per_frame: 1, max_depth: args.max_depth, environment: Environment::Sky, ..Default::default() };
+            let settings = RenderSettings {
+                width,
+                height,
+                spp_per_frame: 1,
+                max_depth: args.max_depth,
+                environment: Environment::Sky,
+                ..Default::default()
+            };
             let start = Instant::now();
-            let mut app = HeadlessApp::new(ctx.clone(), scene.clone(), settings, &CameraChoice::Auto)?;
+            let mut app =
+                HeadlessApp::new(ctx.clone(), scene.clone(), settings, &CameraChoice::Auto)?;
             ctx.wait_idle();
             let build_ms = start.elapsed().as_secs_f64() * 1e3;
-            app.app.world_mut().resource_mut::<raykin::render::Renderer>().time_passes = true;
+            app.app
+                .world_mut()
+                .resource_mut::<raykin::render::Renderer>()
+                .time_passes = true;
             let (mut times, mut rays) = (Vec::new(), 0u64);
             for f in 0..warmup + frames {
                 let t0 = Instant::now();
@@ -89,7 +115,11 @@ pub fn run(args: &BenchArgs) -> Result<()> {
                     rays += renderer.tracer.read_ray_count(&app.ctx);
                 }
             }
-            let timing_source = if app.renderer().last_pass_times.is_some() { "gpu-timestamps" } else { "cpu-wall" };
+            let timing_source = if app.renderer().last_pass_times.is_some() {
+                "gpu-timestamps"
+            } else {
+                "cpu-wall"
+            };
             times.sort_by(f64::total_cmp);
             let total_ms: f64 = times.iter().sum();
             let memory = app.renderer().scene.memory;
@@ -104,7 +134,8 @@ pub fn run(args: &BenchArgs) -> Result<()> {
                 frames,
                 bvh_build_and_upload_ms: app.renderer().scene.build_seconds * 1e3,
                 gpu_memory_geometry_bvh_mib: memory.geometry_and_bvh() as f64 / 1048576.0,
-                bytes_per_triangle_geometry_bvh: memory.geometry_and_bvh() as f64 / scene.triangle_count().max(1) as f64,
+                bytes_per_triangle_geometry_bvh: memory.geometry_and_bvh() as f64
+                    / scene.triangle_count().max(1) as f64,
                 trace_ms_median: percentile(&times, 0.5),
                 trace_ms_p99: percentile(&times, 0.99),
                 timing_source,
@@ -115,7 +146,15 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             let _ = build_ms;
             eprintln!(
                 "{} {}x{}: {:.2} ms/frame median ({:.2} p99), {:.0} M primary rays/s, {:.0} M rays/s, BVH+upload {:.0} ms, {:.1} MiB geometry+BVH",
-                row.scene, width, height, row.trace_ms_median, row.trace_ms_p99, row.primary_rays_per_s / 1e6, row.all_rays_per_s / 1e6, row.bvh_build_and_upload_ms, row.gpu_memory_geometry_bvh_mib
+                row.scene,
+                width,
+                height,
+                row.trace_ms_median,
+                row.trace_ms_p99,
+                row.primary_rays_per_s / 1e6,
+                row.all_rays_per_s / 1e6,
+                row.bvh_build_and_upload_ms,
+                row.gpu_memory_geometry_bvh_mib
             );
             rows.push(row);
         }
@@ -125,22 +164,53 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         backend: format!("{:?}", ctx.info.backend),
         device_type: format!("{:?}", ctx.info.device_type),
         driver: format!("{} {}", ctx.info.driver, ctx.info.driver_info),
-        commit: std::env::var("RAYKIN_COMMIT").ok().or_else(git_commit).unwrap_or_else(|| "unknown".into()),
-        date_unix_s: std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_secs()),
+        commit: std::env::var("RAYKIN_COMMIT")
+            .ok()
+            .or_else(git_commit)
+            .unwrap_or_else(|| "unknown".into()),
+        date_unix_s: std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(0, |d| d.as_secs()),
         rows,
     };
-    std::fs::create_dir_all(&args.out).with_context(|| format!("{}: cannot create", args.out.display()))?;
-    std::fs::write(args.out.join("results.json"), serde_json::to_string_pretty(&results)?)?;
-    let mut csv = String::from("scene,width,height,triangles,trace_ms_median,trace_ms_p99,primary_rays_per_s,all_rays_per_s,bvh_build_and_upload_ms,gpu_memory_geometry_bvh_mib\n");
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("{}: cannot create", args.out.display()))?;
+    std::fs::write(
+        args.out.join("results.json"),
+        serde_json::to_string_pretty(&results)?,
+    )?;
+    let mut csv = String::from(
+        "scene,width,height,triangles,trace_ms_median,trace_ms_p99,primary_rays_per_s,all_rays_per_s,bvh_build_and_upload_ms,gpu_memory_geometry_bvh_mib\n",
+    );
     for r in &results.rows {
-        csv += &format!("{},{},{},{},{:.4},{:.4},{:.0},{:.0},{:.1},{:.2}\n", r.scene, r.width, r.height, r.triangles, r.trace_ms_median, r.trace_ms_p99, r.primary_rays_per_s, r.all_rays_per_s, r.bvh_build_and_upload_ms, r.gpu_memory_geometry_bvh_mib);
+        csv += &format!(
+            "{},{},{},{},{:.4},{:.4},{:.0},{:.0},{:.1},{:.2}\n",
+            r.scene,
+            r.width,
+            r.height,
+            r.triangles,
+            r.trace_ms_median,
+            r.trace_ms_p99,
+            r.primary_rays_per_s,
+            r.all_rays_per_s,
+            r.bvh_build_and_upload_ms,
+            r.gpu_memory_geometry_bvh_mib
+        );
     }
     std::fs::write(args.out.join("results.csv"), csv)?;
-    eprintln!("raykin: wrote {}/results.json and results.csv", args.out.display());
+    eprintln!(
+        "raykin: wrote {}/results.json and results.csv",
+        args.out.display()
+    );
     Ok(())
 }
 
 fn git_commit() -> Option<String> {
-    let out = std::process::Command::new("git").args(["rev-parse", "--short", "HEAD"]).output().ok()?;
-    out.status.success().then(|| String::from_utf8_lossy(&out.stdout).trim().to_string())
+    let out = std::process::Command::new("git")
+        .args(["rev-parse", "--short", "HEAD"])
+        .output()
+        .ok()?;
+    out.status
+        .success()
+        .then(|| String::from_utf8_lossy(&out.stdout).trim().to_string())
 }

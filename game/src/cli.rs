@@ -4,7 +4,11 @@ use clap::{Args, Parser, Subcommand};
 use std::path::PathBuf;
 
 #[derive(Parser, Debug)]
-#[command(name = "raykin", version, about = "Path-trace animated glTF scenes on any GPU (wgpu compute, software BVH traversal)")]
+#[command(
+    name = "raykin",
+    version,
+    about = "Path-trace animated glTF scenes on any GPU (wgpu compute, software BVH traversal)"
+)]
 pub struct Cli {
     #[command(subcommand)]
     pub command: Option<Command>,
@@ -119,7 +123,9 @@ pub fn parse_vec3(s: &str) -> Result<glam::Vec3, String> {
         .map(|p| p.trim().parse::<f32>().map_err(|e| format!("`{p}`: {e}")))
         .collect::<Result<_, _>>()?;
     match parts[..] {
-        [x, y, z] if x.is_finite() && y.is_finite() && z.is_finite() => Ok(glam::Vec3::new(x, y, z)),
+        [x, y, z] if x.is_finite() && y.is_finite() && z.is_finite() => {
+            Ok(glam::Vec3::new(x, y, z))
+        }
         _ => Err(format!("expected three finite numbers X,Y,Z, got `{s}`")),
     }
 }

@@ -58,7 +58,10 @@ pub fn pose_from(scene: &SceneAsset, args: &SceneArgs) -> Result<Option<(usize, 
         return Ok(None);
     }
     if scene.animations.is_empty() {
-        anyhow::bail!("{}: the scene has no animations, so --time/--animation cannot pose it", scene.source);
+        anyhow::bail!(
+            "{}: the scene has no animations, so --time/--animation cannot pose it",
+            scene.source
+        );
     }
     let clip = match &args.animation {
         Some(a) => raykin::animation::find_clip(scene, a).map_err(anyhow::Error::msg)?,
@@ -73,7 +76,11 @@ pub fn pose_from(scene: &SceneAsset, args: &SceneArgs) -> Result<Option<(usize, 
 
 pub fn camera_from(args: &SceneArgs) -> CameraChoice {
     match (args.look_from, args.look_at, args.camera) {
-        (Some(eye), Some(target), _) => CameraChoice::LookAt { eye, target, yfov: args.fov.to_radians() },
+        (Some(eye), Some(target), _) => CameraChoice::LookAt {
+            eye,
+            target,
+            yfov: args.fov.to_radians(),
+        },
         (_, _, Some(i)) => CameraChoice::Index(i),
         _ => CameraChoice::Auto,
     }
@@ -82,9 +89,11 @@ pub fn camera_from(args: &SceneArgs) -> CameraChoice {
 fn progress_bar(total: u64, what: &str) -> ProgressBar {
     let bar = ProgressBar::new(total);
     bar.set_style(
-        ProgressStyle::with_template("{prefix} [{bar:40}] {pos}/{len} spp, {elapsed} elapsed, ETA {eta}")
-            .expect("static template")
-            .progress_chars("=> "),
+        ProgressStyle::with_template(
+            "{prefix} [{bar:40}] {pos}/{len} spp, {elapsed} elapsed, ETA {eta}",
+        )
+        .expect("static template")
+        .progress_chars("=> "),
     );
     bar.set_prefix(what.to_string());
     bar
@@ -113,23 +122,51 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     // Pose arguments are checked before the GPU opens: a typo fails at once.
     let pose = pose_from(&scene, &args.scene)?;
     let ctx = open_gpu()?;
-    render_to_file(ctx, scene, &args.scene, camera_from(&args.scene), pose, &args.out, args.aovs, args.report.as_deref())
+    render_to_file(
+        ctx,
+        scene,
+        &args.scene,
+        camera_from(&args.scene),
+        pose,
+        &args.out,
+        args.aovs,
+        args.report.as_deref(),
+    )
 }
 
 fn check_output(out: &Path) -> Result<()> {
-    let ext = out.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+    let ext = out
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
     if !matches!(ext.as_deref(), Some("exr") | Some("png")) {
-        anyhow::bail!("{}: the output must end in .exr (linear radiance) or .png (tone-mapped sRGB)", out.display());
+        anyhow::bail!(
+            "{}: the output must end in .exr (linear radiance) or .png (tone-mapped sRGB)",
+            out.display()
+        );
     }
     if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).with_context(|| format!("{}: cannot create the output folder", dir.display()))?;
+        std::fs::create_dir_all(dir)
+            .with_context(|| format!("{}: cannot create the output folder", dir.display()))?;
     }
     Ok(())
 }
 
 #[allow(clippy::too_many_arguments)]
-fn render_to_file(ctx: GpuContext, scene: Arc<SceneAsset>, args: &SceneArgs, camera: CameraChoice, pose: Option<(usize, f32)>, out: &Path, aovs: bool, report: Option<&Path>) -> Result<()> {
-    let ext = out.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+fn render_to_file(
+    ctx: GpuContext,
+    scene: Arc<SceneAsset>,
+    args: &SceneArgs,
+    camera: CameraChoice,
+    pose: Option<(usize, f32)>,
+    out: &Path,
+    aovs: bool,
+    report: Option<&Path>,
+) -> Result<()> {
+    let ext = out
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
     let settings = settings_from(args);
     let mut app = HeadlessApp::new(ctx, scene.clone(), settings.clone(), &camera)?;
     for n in &app.notes {
@@ -140,7 +177,9 @@ fn render_to_file(ctx: GpuContext, scene: Arc<SceneAsset>, args: &SceneArgs, cam
     }
     let start = Instant::now();
     let bar = progress_bar(args.spp as u64, "rendering");
-    app.accumulate(args.spp, args.spp_per_dispatch, |done| bar.set_position(done as u64));
+    app.accumulate(args.spp, args.spp_per_dispatch, |done| {
+        bar.set_position(done as u64)
+    });
     bar.finish_and_clear();
     let wall = start.elapsed().as_secs_f64();
     let (w, h) = (settings.width, settings.height);
@@ -149,7 +188,9 @@ fn render_to_file(ctx: GpuContext, scene: Arc<SceneAsset>, args: &SceneArgs, cam
         anyhow::bail!("internal error: the render has a non-finite pixel value ({bad})");
     }
     if ext.as_deref() == Some("exr") {
-        raykin::image_io::write_atomically(out, |p| raykin::image_io::write_exr(p, w, h, &radiance))?;
+        raykin::image_io::write_atomically(out, |p| {
+            raykin::image_io::write_exr(p, w, h, &radiance)
+        })?;
     } else {
         let rgba = app.display_rgba8();
         raykin::image_io::write_atomically(out, |p| raykin::image_io::write_png(p, w, h, &rgba))?;
@@ -158,9 +199,15 @@ fn render_to_file(ctx: GpuContext, scene: Arc<SceneAsset>, args: &SceneArgs, cam
         let a = app.aovs();
         let stem = out.with_extension("");
         let depth: Vec<[f32; 3]> = a.depth.iter().map(|d| [*d; 3]).collect();
-        for (name, data) in [("albedo", &a.albedo), ("normal", &a.normal), ("depth", &depth)] {
+        for (name, data) in [
+            ("albedo", &a.albedo),
+            ("normal", &a.normal),
+            ("depth", &depth),
+        ] {
             let path = PathBuf::from(format!("{}.{name}.exr", stem.display()));
-            raykin::image_io::write_atomically(&path, |p| raykin::image_io::write_exr(p, w, h, data))?;
+            raykin::image_io::write_atomically(&path, |p| {
+                raykin::image_io::write_exr(p, w, h, data)
+            })?;
         }
     }
     let renderer = app.renderer();
@@ -187,20 +234,28 @@ fn render_to_file(ctx: GpuContext, scene: Arc<SceneAsset>, args: &SceneArgs, cam
             render_wall_s: wall,
             samples_per_second: (w as f64 * h as f64 * args.spp as f64) / wall,
         };
-        std::fs::write(path, serde_json::to_string_pretty(&r)?).with_context(|| format!("{}: cannot write the report", path.display()))?;
+        std::fs::write(path, serde_json::to_string_pretty(&r)?)
+            .with_context(|| format!("{}: cannot write the report", path.display()))?;
     }
     Ok(())
 }
 
 /// `raykin` with no arguments: the embedded Cornell box, rendered to out/default.png.
 pub fn run_default() -> Result<()> {
-    let scene = raykin::scene::load_gltf_slice(DEFAULT_SCENE, Path::new("."), Path::new("<embedded default scene>"), &LoadOptions::default())?;
+    let scene = raykin::scene::load_gltf_slice(
+        DEFAULT_SCENE,
+        Path::new("."),
+        Path::new("<embedded default scene>"),
+        &LoadOptions::default(),
+    )?;
     report_warnings(&scene);
     let ctx = open_gpu()?;
     // A software rasteriser (lavapipe) traces a few hundred thousand paths a second: keep its job under a minute.
     let cpu = ctx.info.device_type == raykin::gpu::DeviceType::Cpu;
     let (size, spp) = if cpu { (256, 32) } else { (1024, 1024) };
-    eprintln!("raykin: rendering the embedded Cornell box, {size}x{size} at {spp} spp (`raykin render --help` for more)");
+    eprintln!(
+        "raykin: rendering the embedded Cornell box, {size}x{size} at {spp} spp (`raykin render --help` for more)"
+    );
     let args = SceneArgs {
         scene: PathBuf::from("<embedded>"),
         spp,

@@ -34,14 +34,22 @@ pub fn gpu() -> (GpuContext, std::sync::MutexGuard<'static, ()>) {
         }
         // SAFETY: set before any GPU thread starts, once per process.
         unsafe { std::env::set_var("XDG_RUNTIME_DIR", &dir) };
-        GpuContext::new_headless().expect("a GPU adapter (install mesa-vulkan-drivers for lavapipe)")
+        GpuContext::new_headless()
+            .expect("a GPU adapter (install mesa-vulkan-drivers for lavapipe)")
     });
     (ctx.clone(), guard)
 }
 
 /// Renders `spp` samples per pixel and returns mean linear radiance per pixel.
-pub fn render(ctx: &GpuContext, scene: &Arc<SceneAsset>, settings: RenderSettings, camera: &CameraChoice, spp: u32) -> Vec<[f32; 3]> {
-    let mut app = HeadlessApp::new(ctx.clone(), scene.clone(), settings, camera).expect("scene uploads");
+pub fn render(
+    ctx: &GpuContext,
+    scene: &Arc<SceneAsset>,
+    settings: RenderSettings,
+    camera: &CameraChoice,
+    spp: u32,
+) -> Vec<[f32; 3]> {
+    let mut app =
+        HeadlessApp::new(ctx.clone(), scene.clone(), settings, camera).expect("scene uploads");
     app.accumulate(spp, 64, |_| {});
     app.radiance()
 }

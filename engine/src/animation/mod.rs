@@ -6,7 +6,10 @@ mod deform;
 pub use deform::{DeformedMesh, DeformedMeshes, deform_mesh, deform_meshes, joint_matrices};
 
 use crate::FrameSet;
-use crate::scene::{AnimationChannel, ChannelValues, Interpolation, MorphWeights, SceneAssets, SceneNode, SceneNodes, Transform};
+use crate::scene::{
+    AnimationChannel, ChannelValues, Interpolation, MorphWeights, SceneAssets, SceneNode,
+    SceneNodes, Transform,
+};
 use bevy_ecs::prelude::*;
 use glam::{Quat, Vec3};
 
@@ -31,20 +34,33 @@ pub fn validate_channel(c: &AnimationChannel) -> Result<(), String> {
     if c.times.windows(2).any(|w| w[1] <= w[0]) {
         return Err("keyframe times are not strictly increasing".into());
     }
-    let per_key = if c.interpolation == Interpolation::CubicSpline { 3 } else { 1 };
+    let per_key = if c.interpolation == Interpolation::CubicSpline {
+        3
+    } else {
+        1
+    };
     let keys = c.times.len() * per_key;
     let (len, finite) = match &c.values {
-        ChannelValues::Translation(v) | ChannelValues::Scale(v) => (v.len(), v.iter().all(|x| x.is_finite())),
+        ChannelValues::Translation(v) | ChannelValues::Scale(v) => {
+            (v.len(), v.iter().all(|x| x.is_finite()))
+        }
         ChannelValues::Rotation(v) => (v.len(), v.iter().all(|x| x.is_finite())),
         ChannelValues::Weights { values, count } => {
             if *count == 0 || values.len() != keys * count {
-                return Err(format!("{} weight values do not fill {} keyframes", values.len(), keys));
+                return Err(format!(
+                    "{} weight values do not fill {} keyframes",
+                    values.len(),
+                    keys
+                ));
             }
             (keys, values.iter().all(|x| x.is_finite()))
         }
     };
     if len != keys {
-        return Err(format!("{len} values for {} keyframes (sampler/accessor count mismatch)", c.times.len()));
+        return Err(format!(
+            "{len} values for {} keyframes (sampler/accessor count mismatch)",
+            c.times.len()
+        ));
     }
     if !finite {
         return Err("NaN or infinite keyframe value".into());
@@ -72,7 +88,10 @@ where
     T: std::ops::Mul<f32, Output = T> + std::ops::Add<Output = T>,
 {
     let (s2, s3) = (s * s, s * s * s);
-    p0 * (2.0 * s3 - 3.0 * s2 + 1.0) + m0 * ((s3 - 2.0 * s2 + s) * dt) + p1 * (-2.0 * s3 + 3.0 * s2) + m1 * ((s3 - s2) * dt)
+    p0 * (2.0 * s3 - 3.0 * s2 + 1.0)
+        + m0 * ((s3 - 2.0 * s2 + s) * dt)
+        + p1 * (-2.0 * s3 + 3.0 * s2)
+        + m1 * ((s3 - s2) * dt)
 }
 
 fn sample_vec3(interp: Interpolation, times: &[f32], v: &[Vec3], t: f32) -> Vec3 {
@@ -82,11 +101,22 @@ fn sample_vec3(interp: Interpolation, times: &[f32], v: &[Vec3], t: f32) -> Vec3
             if s == 0.0 {
                 return v[3 * i + 1];
             }
-            hermite(s, dt, v[3 * i + 1], v[3 * i + 2], v[3 * (i + 1) + 1], v[3 * (i + 1)])
+            hermite(
+                s,
+                dt,
+                v[3 * i + 1],
+                v[3 * i + 2],
+                v[3 * (i + 1) + 1],
+                v[3 * (i + 1)],
+            )
         }
         Interpolation::Step => v[i],
         Interpolation::Linear => {
-            if s == 0.0 { v[i] } else { v[i].lerp(v[i + 1], s) }
+            if s == 0.0 {
+                v[i]
+            } else {
+                v[i].lerp(v[i + 1], s)
+            }
         }
     }
 }
@@ -98,17 +128,31 @@ fn sample_quat(interp: Interpolation, times: &[f32], v: &[Quat], t: f32) -> Quat
             if s == 0.0 {
                 v[3 * i + 1]
             } else {
-                let [a, b, c, d] = [v[3 * i + 1], v[3 * i + 2], v[3 * (i + 1) + 1], v[3 * (i + 1)]].map(glam::Vec4::from);
+                let [a, b, c, d] = [
+                    v[3 * i + 1],
+                    v[3 * i + 2],
+                    v[3 * (i + 1) + 1],
+                    v[3 * (i + 1)],
+                ]
+                .map(glam::Vec4::from);
                 Quat::from_vec4(hermite(s, dt, a, b, c, d))
             }
         }
         Interpolation::Step => v[i],
         Interpolation::Linear => {
-            if s == 0.0 { v[i] } else { slerp_shortest(v[i], v[i + 1], s) }
+            if s == 0.0 {
+                v[i]
+            } else {
+                slerp_shortest(v[i], v[i + 1], s)
+            }
         }
     };
     let len = q.length();
-    if len > 0.0 && len.is_finite() { q / len } else { Quat::IDENTITY }
+    if len > 0.0 && len.is_finite() {
+        q / len
+    } else {
+        Quat::IDENTITY
+    }
 }
 
 /// Spherical interpolation along the shorter arc (glTF: "slerp"), exact for nearly parallel keys too.
@@ -127,10 +171,20 @@ pub fn slerp_shortest(a: Quat, b: Quat, s: f32) -> Quat {
     a * (((1.0 - s) * theta).sin() / sin) + b * ((s * theta).sin() / sin)
 }
 
-fn sample_weights(interp: Interpolation, times: &[f32], v: &[f32], count: usize, t: f32) -> Vec<f32> {
+fn sample_weights(
+    interp: Interpolation,
+    times: &[f32],
+    v: &[f32],
+    count: usize,
+    t: f32,
+) -> Vec<f32> {
     let (i, s, dt) = locate(times, t);
     let key = |k: usize, part: usize| -> &[f32] {
-        let stride = if interp == Interpolation::CubicSpline { 3 } else { 1 };
+        let stride = if interp == Interpolation::CubicSpline {
+            3
+        } else {
+            1
+        };
         let start = (k * stride + part) * count;
         &v[start..start + count]
     };
@@ -140,14 +194,27 @@ fn sample_weights(interp: Interpolation, times: &[f32], v: &[f32], count: usize,
             if s == 0.0 {
                 return key(i, 0).to_vec();
             }
-            key(i, 0).iter().zip(key(i + 1, 0)).map(|(a, b)| a + (b - a) * s).collect()
+            key(i, 0)
+                .iter()
+                .zip(key(i + 1, 0))
+                .map(|(a, b)| a + (b - a) * s)
+                .collect()
         }
         Interpolation::CubicSpline => {
             if s == 0.0 {
                 return key(i, 1).to_vec();
             }
             (0..count)
-                .map(|w| hermite(s, dt, key(i, 1)[w], key(i, 2)[w], key(i + 1, 1)[w], key(i + 1, 0)[w]))
+                .map(|w| {
+                    hermite(
+                        s,
+                        dt,
+                        key(i, 1)[w],
+                        key(i, 2)[w],
+                        key(i + 1, 1)[w],
+                        key(i + 1, 0)[w],
+                    )
+                })
                 .collect()
         }
     }
@@ -156,9 +223,13 @@ fn sample_weights(interp: Interpolation, times: &[f32], v: &[f32], count: usize,
 /// The channel's value at `t` seconds; `t` is clamped to the channel's keyframe range.
 pub fn sample_channel(c: &AnimationChannel, t: f32) -> Sampled {
     match &c.values {
-        ChannelValues::Translation(v) => Sampled::Translation(sample_vec3(c.interpolation, &c.times, v, t)),
+        ChannelValues::Translation(v) => {
+            Sampled::Translation(sample_vec3(c.interpolation, &c.times, v, t))
+        }
         ChannelValues::Scale(v) => Sampled::Scale(sample_vec3(c.interpolation, &c.times, v, t)),
-        ChannelValues::Rotation(v) => Sampled::Rotation(sample_quat(c.interpolation, &c.times, v, t)),
+        ChannelValues::Rotation(v) => {
+            Sampled::Rotation(sample_quat(c.interpolation, &c.times, v, t))
+        }
         ChannelValues::Weights { values, count } => {
             Sampled::Weights(sample_weights(c.interpolation, &c.times, values, *count, t))
         }
@@ -177,7 +248,10 @@ pub struct FrameClock {
 
 impl Default for FrameClock {
     fn default() -> Self {
-        Self { delta: 1.0 / 60.0, frame: 0 }
+        Self {
+            delta: 1.0 / 60.0,
+            frame: 0,
+        }
     }
 }
 
@@ -210,12 +284,24 @@ pub struct AnimationPlayer {
 impl AnimationPlayer {
     /// Plays `clip` in a loop from 0 at normal speed.
     pub fn new(clip: usize) -> Self {
-        Self { clip, time: 0.0, speed: 1.0, mode: PlayMode::Loop, playing: true }
+        Self {
+            clip,
+            time: 0.0,
+            speed: 1.0,
+            mode: PlayMode::Loop,
+            playing: true,
+        }
     }
 
     /// Holds `clip` at `time` seconds (times outside the clip clamp to its ends).
     pub fn paused_at(clip: usize, time: f32) -> Self {
-        Self { clip, time, speed: 1.0, mode: PlayMode::Once, playing: false }
+        Self {
+            clip,
+            time,
+            speed: 1.0,
+            mode: PlayMode::Once,
+            playing: false,
+        }
     }
 
     /// The clip-local sampling time for a clip of `duration` seconds.
@@ -248,7 +334,9 @@ impl AnimationPlayer {
             }
             // Keep the stored time small so f32 precision does not drift over long runs.
             PlayMode::Loop if duration > 0.0 => self.time = self.time.rem_euclid(duration),
-            PlayMode::PingPong if duration > 0.0 => self.time = self.time.rem_euclid(2.0 * duration),
+            PlayMode::PingPong if duration > 0.0 => {
+                self.time = self.time.rem_euclid(2.0 * duration)
+            }
             _ => {}
         }
     }
@@ -268,18 +356,28 @@ pub fn find_clip(scene: &crate::scene::SceneAsset, name_or_index: &str) -> Resul
     if scene.animations.is_empty() {
         return Err(format!("{} has no animations", scene.source));
     }
-    if let Some(i) = scene.animations.iter().position(|a| a.name == name_or_index) {
+    if let Some(i) = scene
+        .animations
+        .iter()
+        .position(|a| a.name == name_or_index)
+    {
         return Ok(i);
     }
     match name_or_index.parse::<usize>() {
         Ok(i) if i < scene.animations.len() => Ok(i),
-        _ => Err(format!("{}: no animation `{name_or_index}`; the clips are {}", scene.source, list())),
+        _ => Err(format!(
+            "{}: no animation `{name_or_index}`; the clips are {}",
+            scene.source,
+            list()
+        )),
     }
 }
 
 /// Adds `(node, player)` pairs to a spawned scene copy whose root is `root` (see [`crate::scene::crowd_scene`]).
 pub fn attach_players(world: &mut World, root: Entity, players: &[(usize, AnimationPlayer)]) {
-    let Some(nodes) = world.get::<SceneNodes>(root).map(|n| n.0.clone()) else { return };
+    let Some(nodes) = world.get::<SceneNodes>(root).map(|n| n.0.clone()) else {
+        return;
+    };
     for (node, player) in players {
         if let Some(&e) = nodes.get(*node) {
             world.entity_mut(e).insert(*player);
@@ -297,13 +395,19 @@ pub fn animate(
 ) {
     let scene = &assets.0;
     for (entity, mut player, node) in &mut players {
-        let Some(clip) = scene.animations.get(player.clip) else { continue };
+        let Some(clip) = scene.animations.get(player.clip) else {
+            continue;
+        };
         let root = node.map_or(entity, |n| n.root);
         let Ok(nodes) = roots.get(root) else { continue };
         let t = player.local_time(clip.duration);
         for channel in &clip.channels {
-            let Some(&target) = nodes.0.get(channel.node) else { continue };
-            let Ok((mut transform, weights)) = targets.get_mut(target) else { continue };
+            let Some(&target) = nodes.0.get(channel.node) else {
+                continue;
+            };
+            let Ok((mut transform, weights)) = targets.get_mut(target) else {
+                continue;
+            };
             match sample_channel(channel, t) {
                 Sampled::Translation(v) => transform.translation = v,
                 Sampled::Rotation(q) => transform.rotation = q,
@@ -311,7 +415,11 @@ pub fn animate(
                 Sampled::Weights(w) => {
                     if let Some(mut weights) = weights {
                         let n = weights.0.len();
-                        weights.0.iter_mut().zip(w.iter().chain(std::iter::repeat(&0.0)).take(n)).for_each(|(a, b)| *a = *b);
+                        weights
+                            .0
+                            .iter_mut()
+                            .zip(w.iter().chain(std::iter::repeat(&0.0)).take(n))
+                            .for_each(|(a, b)| *a = *b);
                     }
                 }
             }
@@ -329,7 +437,13 @@ impl bevy_app::Plugin for AnimationPlugin {
         use bevy_ecs::schedule::IntoScheduleConfigs;
         app.init_resource::<FrameClock>()
             .init_resource::<DeformedMeshes>()
-            .add_systems(bevy_app::Update, (animate.in_set(FrameSet::Animate), deform_meshes.in_set(FrameSet::Deform)));
+            .add_systems(
+                bevy_app::Update,
+                (
+                    animate.in_set(FrameSet::Animate),
+                    deform_meshes.in_set(FrameSet::Deform),
+                ),
+            );
     }
 }
 
@@ -338,6 +452,7 @@ impl bevy_app::Plugin for AnimationPlugin {
 pub fn cpu_app(scene: std::sync::Arc<crate::scene::SceneAsset>) -> bevy_app::App {
     let mut app = bevy_app::App::new();
     crate::configure_frame_schedule(&mut app);
-    app.add_plugins(crate::scene::ScenePlugin { scene }).add_plugins(AnimationPlugin);
+    app.add_plugins(crate::scene::ScenePlugin { scene })
+        .add_plugins(AnimationPlugin);
     app
 }

@@ -27,7 +27,12 @@ pub struct GpuBvhChild {
 
 impl GpuBvhChild {
     /// An inverted box no ray can hit: the second child of a single-leaf tree.
-    pub const EMPTY: Self = Self { min: [1.0; 3], index: u32::MAX, max: [-1.0; 3], count: 0 };
+    pub const EMPTY: Self = Self {
+        min: [1.0; 3],
+        index: u32::MAX,
+        max: [-1.0; 3],
+        count: 0,
+    };
 
     pub fn is_leaf(&self) -> bool {
         self.count > 0
@@ -87,7 +92,9 @@ impl BvhQuality {
 }
 
 #[derive(Debug, thiserror::Error)]
-#[error("BVH depth {depth} exceeds the GPU traversal stack ({MAX_TRAVERSAL_DEPTH}); the geometry is degenerate")]
+#[error(
+    "BVH depth {depth} exceeds the GPU traversal stack ({MAX_TRAVERSAL_DEPTH}); the geometry is degenerate"
+)]
 pub struct BvhTooDeep {
     pub depth: u32,
 }
@@ -105,23 +112,30 @@ impl FlatBvh {
     fn from_obvhs(bvh: &Bvh2) -> Result<Self, BvhTooDeep> {
         let mut flat = FlatBvh::default();
         if bvh.nodes.is_empty() {
-            flat.nodes.push(GpuBvhNode { children: [GpuBvhChild::EMPTY; 2] });
+            flat.nodes.push(GpuBvhNode {
+                children: [GpuBvhChild::EMPTY; 2],
+            });
             return Ok(flat);
         }
         let leaf = |flat: &mut FlatBvh, n: &obvhs::bvh2::node::Bvh2Node| {
             let start = flat.order.len() as u32;
             let first = n.first_index as usize;
-            flat.order.extend_from_slice(&bvh.primitive_indices[first..first + n.prim_count as usize]);
+            flat.order
+                .extend_from_slice(&bvh.primitive_indices[first..first + n.prim_count as usize]);
             child_from(n.aabb(), start, n.prim_count)
         };
         let root = &bvh.nodes[0];
         if root.is_leaf() {
             let c = leaf(&mut flat, root);
-            flat.nodes.push(GpuBvhNode { children: [c, GpuBvhChild::EMPTY] });
+            flat.nodes.push(GpuBvhNode {
+                children: [c, GpuBvhChild::EMPTY],
+            });
             flat.depth = 1;
             return Ok(flat);
         }
-        flat.nodes.push(GpuBvhNode { children: [GpuBvhChild::EMPTY; 2] });
+        flat.nodes.push(GpuBvhNode {
+            children: [GpuBvhChild::EMPTY; 2],
+        });
         let mut stack = vec![(0usize, 0usize, 1u32)];
         while let Some((src, slot, depth)) = stack.pop() {
             flat.depth = flat.depth.max(depth);
@@ -132,7 +146,9 @@ impl FlatBvh {
                     leaf(&mut flat, child)
                 } else {
                     let new_slot = flat.nodes.len();
-                    flat.nodes.push(GpuBvhNode { children: [GpuBvhChild::EMPTY; 2] });
+                    flat.nodes.push(GpuBvhNode {
+                        children: [GpuBvhChild::EMPTY; 2],
+                    });
                     stack.push((first + k, new_slot, depth + 1));
                     child_from(child.aabb(), new_slot as u32, 0)
                 };
@@ -172,7 +188,9 @@ impl FlatBvh {
                 let (lo, hi) = if c.is_leaf() {
                     (c.index as usize..(c.index + c.count) as usize)
                         .map(&prim_bounds)
-                        .fold((Vec3::MAX, Vec3::MIN), |(lo, hi), (a, b)| (lo.min(a), hi.max(b)))
+                        .fold((Vec3::MAX, Vec3::MIN), |(lo, hi), (a, b)| {
+                            (lo.min(a), hi.max(b))
+                        })
                 } else {
                     let [a, b] = self.nodes[c.index as usize].children;
                     let lo = Vec3::from(a.min).min(Vec3::from(b.min));
@@ -223,7 +241,11 @@ pub struct MeshBvh {
 }
 
 impl MeshBvh {
-    pub fn build(positions: &[Vec3], triangles: &[[u32; 3]], quality: BvhQuality) -> Result<Self, BvhTooDeep> {
+    pub fn build(
+        positions: &[Vec3],
+        triangles: &[[u32; 3]],
+        quality: BvhQuality,
+    ) -> Result<Self, BvhTooDeep> {
         let tris: Vec<Triangle> = triangles
             .iter()
             .map(|t| Triangle {

@@ -26,7 +26,13 @@ pub struct GpuInstance {
 
 impl GpuInstance {
     pub fn new(world: Mat4, mesh: u32) -> Self {
-        let rows = |m: Mat4| [m.row(0).to_array(), m.row(1).to_array(), m.row(2).to_array()];
+        let rows = |m: Mat4| {
+            [
+                m.row(0).to_array(),
+                m.row(1).to_array(),
+                m.row(2).to_array(),
+            ]
+        };
         Self {
             world_from_object: rows(world),
             object_from_world: rows(world.inverse()),
@@ -129,7 +135,10 @@ pub fn oct_encode(v: Vec3) -> u32 {
     let (x, y) = if n.z >= 0.0 {
         (n.x, n.y)
     } else {
-        ((1.0 - n.y.abs()) * n.x.signum(), (1.0 - n.x.abs()) * n.y.signum())
+        (
+            (1.0 - n.y.abs()) * n.x.signum(),
+            (1.0 - n.x.abs()) * n.y.signum(),
+        )
     };
     let q = |f: f32| ((f.clamp(-1.0, 1.0) * 32767.0).round() as i32 as i16 as u16) as u32;
     q(x) | (q(y) << 16)

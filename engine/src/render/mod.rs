@@ -11,10 +11,10 @@ pub use scene_buffers::{GpuMemory, GpuScene, InstanceInput, UploadError};
 pub use settings::{AovView, Environment, RenderSettings, Tonemapper};
 
 use crate::FrameSet;
-use crate::camera::CameraView;
-use crate::gpu::GpuContext;
 use crate::animation::DeformedMeshes;
 use crate::bvh::refit::BvhStats;
+use crate::camera::CameraView;
+use crate::gpu::GpuContext;
 use crate::scene::{GlobalTransform, MeshInstance, SceneAssets, SkinnedMesh};
 use bevy_app::{App, Plugin, Update};
 use bevy_ecs::prelude::*;
@@ -40,7 +40,12 @@ pub struct Renderer {
 
 impl Renderer {
     /// Builds BVHs and uploads the scene; errors when it exceeds the adapter's limits.
-    pub fn new(ctx: &GpuContext, scene: &crate::scene::SceneAsset, settings: &RenderSettings, binding_limit: Option<u64>) -> Result<(Self, Vec<String>), UploadError> {
+    pub fn new(
+        ctx: &GpuContext,
+        scene: &crate::scene::SceneAsset,
+        settings: &RenderSettings,
+        binding_limit: Option<u64>,
+    ) -> Result<(Self, Vec<String>), UploadError> {
         let (gpu_scene, notes) = GpuScene::new(ctx, scene, settings.bvh_quality, binding_limit)?;
         let tracer = PathTracer::new(ctx, settings.width, settings.height);
         Ok((
@@ -71,10 +76,24 @@ pub fn update_instances(
     // Skinned vertices are already in world space (the joint matrices place them).
     let mut inputs: Vec<InstanceInput> = instances
         .iter()
-        .map(|(g, m, skinned)| InstanceInput { world: if skinned.is_some() { glam::Mat4::IDENTITY } else { g.0 }, mesh: m.mesh as u32 })
+        .map(|(g, m, skinned)| InstanceInput {
+            world: if skinned.is_some() {
+                glam::Mat4::IDENTITY
+            } else {
+                g.0
+            },
+            mesh: m.mesh as u32,
+        })
         .collect();
     // Query order is not stable across archetype changes; sort for a deterministic TLAS.
-    inputs.sort_by(|a, b| a.mesh.cmp(&b.mesh).then_with(|| a.world.to_cols_array().partial_cmp(&b.world.to_cols_array()).unwrap_or(std::cmp::Ordering::Equal)));
+    inputs.sort_by(|a, b| {
+        a.mesh.cmp(&b.mesh).then_with(|| {
+            a.world
+                .to_cols_array()
+                .partial_cmp(&b.world.to_cols_array())
+                .unwrap_or(std::cmp::Ordering::Equal)
+        })
+    });
     if inputs == renderer.last_instances && !renderer.geometry_changed {
         return;
     }
@@ -102,7 +121,9 @@ pub fn refit_deformed(
     stats.ensure_len(scene.meshes.len());
     let start = std::time::Instant::now();
     for &m in &deformed.changed {
-        let Some(d) = deformed.meshes.get(m).and_then(Option::as_ref) else { continue };
+        let Some(d) = deformed.meshes.get(m).and_then(Option::as_ref) else {
+            continue;
+        };
         renderer.scene.write_deformed_vertices(&ctx, m, d);
         stats.sah_ratio[m] = renderer.scene.refit_mesh(&ctx, scene, m);
         stats.refits += 1;
@@ -111,7 +132,10 @@ pub fn refit_deformed(
     stats.last_refit_seconds = start.elapsed().as_secs_f64();
     let start = std::time::Instant::now();
     for m in stats.due() {
-        match renderer.scene.rebuild_mesh(&ctx, scene, m, settings.bvh_quality) {
+        match renderer
+            .scene
+            .rebuild_mesh(&ctx, scene, m, settings.bvh_quality)
+        {
             Ok(()) => {
                 stats.sah_ratio[m] = renderer.scene.mesh_slots[m].bvh.sah_ratio();
                 stats.mesh_rebuilds[m] += 1;
@@ -119,7 +143,10 @@ pub fn refit_deformed(
                 renderer.geometry_changed = true;
             }
             Err(e) => {
-                tracing::error!("mesh `{}`: BVH rebuild: {e}; keeping the refit tree", scene.meshes[m].name);
+                tracing::error!(
+                    "mesh `{}`: BVH rebuild: {e}; keeping the refit tree",
+                    scene.meshes[m].name
+                );
                 stats.sah_ratio[m] = 1.0;
             }
         }
@@ -128,17 +155,34 @@ pub fn refit_deformed(
 }
 
 /// Traces this frame's samples, restarting accumulation when the camera or settings changed.
-pub fn render_frame(ctx: Res<GpuContext>, settings: Res<RenderSettings>, camera: Res<CameraView>, mut renderer: ResMut<Renderer>) {
+pub fn render_frame(
+    ctx: Res<GpuContext>,
+    settings: Res<RenderSettings>,
+    camera: Res<CameraView>,
+    mut renderer: ResMut<Renderer>,
+) {
     let renderer = &mut *renderer;
-    renderer.tracer.resize(&ctx, settings.width, settings.height);
-    let settings_changed = renderer.last_settings.as_ref().is_none_or(|s| s.changes_image(&settings));
+    renderer
+        .tracer
+        .resize(&ctx, settings.width, settings.height);
+    let settings_changed = renderer
+        .last_settings
+        .as_ref()
+        .is_none_or(|s| s.changes_image(&settings));
     if settings_changed || renderer.last_camera != Some(*camera) || renderer.geometry_changed {
         renderer.tracer.reset(&ctx);
     }
     renderer.last_settings = Some(settings.clone());
     renderer.last_camera = Some(*camera);
     renderer.geometry_changed = false;
-    renderer.tracer.dispatch(&ctx, &renderer.scene, &settings, &camera, settings.spp_per_frame, renderer.tonemap_each_frame);
+    renderer.tracer.dispatch(
+        &ctx,
+        &renderer.scene,
+        &settings,
+        &camera,
+        settings.spp_per_frame,
+        renderer.tonemap_each_frame,
+    );
     renderer.frames += 1;
     if renderer.time_passes {
         renderer.last_pass_times = renderer.tracer.read_pass_times(&ctx);
@@ -150,12 +194,16 @@ pub struct RenderPlugin;
 
 impl Plugin for RenderPlugin {
     fn build(&self, app: &mut App) {
-        app.init_resource::<BvhStats>().init_resource::<DeformedMeshes>().add_systems(
-            Update,
-            (
-                (refit_deformed, update_instances).chain().in_set(FrameSet::Bvh),
-                render_frame.in_set(FrameSet::Render),
-            ),
-        );
+        app.init_resource::<BvhStats>()
+            .init_resource::<DeformedMeshes>()
+            .add_systems(
+                Update,
+                (
+                    (refit_deformed, update_instances)
+                        .chain()
+                        .in_set(FrameSet::Bvh),
+                    render_frame.in_set(FrameSet::Render),
+                ),
+            );
     }
 }

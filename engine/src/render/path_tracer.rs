@@ -84,13 +84,24 @@ fn uniform_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
     }
 }
 
-fn bind_group(ctx: &GpuContext, layout: &wgpu::BindGroupLayout, buffers: &[&wgpu::Buffer]) -> wgpu::BindGroup {
+fn bind_group(
+    ctx: &GpuContext,
+    layout: &wgpu::BindGroupLayout,
+    buffers: &[&wgpu::Buffer],
+) -> wgpu::BindGroup {
     let entries: Vec<wgpu::BindGroupEntry> = buffers
         .iter()
         .enumerate()
-        .map(|(i, b)| wgpu::BindGroupEntry { binding: i as u32, resource: b.as_entire_binding() })
+        .map(|(i, b)| wgpu::BindGroupEntry {
+            binding: i as u32,
+            resource: b.as_entire_binding(),
+        })
         .collect();
-    ctx.device.create_bind_group(&wgpu::BindGroupDescriptor { label: None, layout, entries: &entries })
+    ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: None,
+        layout,
+        entries: &entries,
+    })
 }
 
 struct ViewBuffers {
@@ -106,32 +117,63 @@ fn view_buffers(ctx: &GpuContext, width: u32, height: u32) -> ViewBuffers {
         ctx.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some(label),
             size: pixels * bytes_per_pixel,
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+            usage: wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_SRC
+                | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         })
     };
-    ViewBuffers { accum: make("accum", 16), albedo: make("aov albedo", 16), normal: make("aov normal", 16), rgba8: make("rgba8", 4) }
+    ViewBuffers {
+        accum: make("accum", 16),
+        albedo: make("aov albedo", 16),
+        normal: make("aov normal", 16),
+        rgba8: make("rgba8", 4),
+    }
 }
 
 impl PathTracer {
     pub fn new(ctx: &GpuContext, width: u32, height: u32) -> Self {
         let device = &ctx.device;
-        let scene_entries: Vec<_> = (0..10).map(|b| layout_entry(b, true)).chain([uniform_entry(10)]).collect();
-        let scene_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some("scene"), entries: &scene_entries });
+        let scene_entries: Vec<_> = (0..10)
+            .map(|b| layout_entry(b, true))
+            .chain([uniform_entry(10)])
+            .collect();
+        let scene_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("scene"),
+            entries: &scene_entries,
+        });
         let accum_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("accumulation"),
-            entries: &[layout_entry(0, false), layout_entry(1, false), layout_entry(2, false), layout_entry(3, false)],
+            entries: &[
+                layout_entry(0, false),
+                layout_entry(1, false),
+                layout_entry(2, false),
+                layout_entry(3, false),
+            ],
         });
         let tonemap_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("tonemap"),
-            entries: &[layout_entry(0, true), layout_entry(1, true), layout_entry(2, true), layout_entry(3, false), uniform_entry(4)],
+            entries: &[
+                layout_entry(0, true),
+                layout_entry(1, true),
+                layout_entry(2, true),
+                layout_entry(3, false),
+                uniform_entry(4),
+            ],
         });
-        let pipeline = |label: &str, source: String, layouts: &[Option<&wgpu::BindGroupLayout>], entry: &str| {
+        let pipeline = |label: &str,
+                        source: String,
+                        layouts: &[Option<&wgpu::BindGroupLayout>],
+                        entry: &str| {
             let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
                 label: Some(label),
                 source: wgpu::ShaderSource::Wgsl(source.into()),
             });
-            let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor { label: Some(label), bind_group_layouts: layouts, immediate_size: 0 });
+            let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some(label),
+                bind_group_layouts: layouts,
+                immediate_size: 0,
+            });
             device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
                 label: Some(label),
                 layout: Some(&layout),
@@ -141,24 +183,56 @@ impl PathTracer {
                 cache: None,
             })
         };
-        let trace_pipeline = pipeline("path trace", super::shaders::path_trace_source(), &[Some(&scene_layout), Some(&accum_layout)], "trace_pixels");
-        let tonemap_pipeline = pipeline("tonemap", super::shaders::tonemap_source(), &[Some(&tonemap_layout)], "tonemap");
+        let trace_pipeline = pipeline(
+            "path trace",
+            super::shaders::path_trace_source(),
+            &[Some(&scene_layout), Some(&accum_layout)],
+            "trace_pixels",
+        );
+        let tonemap_pipeline = pipeline(
+            "tonemap",
+            super::shaders::tonemap_source(),
+            &[Some(&tonemap_layout)],
+            "tonemap",
+        );
         let uniform = |label, size| {
-            device.create_buffer(&wgpu::BufferDescriptor { label: Some(label), size, usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST, mapped_at_creation: false })
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            })
         };
         let frame_uniform = uniform("frame", std::mem::size_of::<GpuFrame>() as u64);
-        let tonemap_uniform = uniform("tonemap params", std::mem::size_of::<TonemapParams>() as u64);
+        let tonemap_uniform = uniform(
+            "tonemap params",
+            std::mem::size_of::<TonemapParams>() as u64,
+        );
         let v = view_buffers(ctx, width, height);
         let ray_counter = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("ray counter"),
             size: 16,
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+            usage: wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_SRC
+                | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let accum_bind_group = bind_group(ctx, &accum_layout, &[&v.accum, &v.albedo, &v.normal, &ray_counter]);
-        let tonemap_bind_group = bind_group(ctx, &tonemap_layout, &[&v.accum, &v.albedo, &v.normal, &v.rgba8, &tonemap_uniform]);
+        let accum_bind_group = bind_group(
+            ctx,
+            &accum_layout,
+            &[&v.accum, &v.albedo, &v.normal, &ray_counter],
+        );
+        let tonemap_bind_group = bind_group(
+            ctx,
+            &tonemap_layout,
+            &[&v.accum, &v.albedo, &v.normal, &v.rgba8, &tonemap_uniform],
+        );
         let timestamps = ctx.supports_timestamps().then(|| Timestamps {
-            set: device.create_query_set(&wgpu::QuerySetDescriptor { label: Some("pass timestamps"), ty: wgpu::QueryType::Timestamp, count: 4 }),
+            set: device.create_query_set(&wgpu::QuerySetDescriptor {
+                label: Some("pass timestamps"),
+                ty: wgpu::QueryType::Timestamp,
+                count: 4,
+            }),
             resolve: device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("timestamp resolve"),
                 size: 32,
@@ -197,9 +271,28 @@ impl PathTracer {
             return;
         }
         let v = view_buffers(ctx, width, height);
-        self.accum_bind_group = bind_group(ctx, &self.accum_layout, &[&v.accum, &v.albedo, &v.normal, &self.ray_counter]);
-        self.tonemap_bind_group = bind_group(ctx, &self.tonemap_layout, &[&v.accum, &v.albedo, &v.normal, &v.rgba8, &self.tonemap_uniform]);
-        (self.accum, self.aov_albedo_depth, self.aov_normal, self.output_rgba8) = (v.accum, v.albedo, v.normal, v.rgba8);
+        self.accum_bind_group = bind_group(
+            ctx,
+            &self.accum_layout,
+            &[&v.accum, &v.albedo, &v.normal, &self.ray_counter],
+        );
+        self.tonemap_bind_group = bind_group(
+            ctx,
+            &self.tonemap_layout,
+            &[
+                &v.accum,
+                &v.albedo,
+                &v.normal,
+                &v.rgba8,
+                &self.tonemap_uniform,
+            ],
+        );
+        (
+            self.accum,
+            self.aov_albedo_depth,
+            self.aov_normal,
+            self.output_rgba8,
+        ) = (v.accum, v.albedo, v.normal, v.rgba8);
         (self.width, self.height) = (width, height);
         self.reset(ctx);
     }
@@ -242,7 +335,15 @@ impl PathTracer {
     }
 
     /// Traces `spp` more samples per pixel into the accumulation buffers (and tone-maps if asked).
-    pub fn dispatch(&mut self, ctx: &GpuContext, scene: &GpuScene, settings: &RenderSettings, camera: &CameraView, spp: u32, tonemap: bool) {
+    pub fn dispatch(
+        &mut self,
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        settings: &RenderSettings,
+        camera: &CameraView,
+        spp: u32,
+        tonemap: bool,
+    ) {
         let (env_mode, env_color) = match settings.environment {
             Environment::Constant(c) => (0, c),
             Environment::Sky => (1, [0.0; 3]),
@@ -258,23 +359,30 @@ impl PathTracer {
             max_depth: settings.max_depth,
             seed: settings.seed,
             env_mode,
-            rr_depth: if settings.russian_roulette { settings.rr_depth } else { u32::MAX },
+            rr_depth: if settings.russian_roulette {
+                settings.rr_depth
+            } else {
+                u32::MAX
+            },
             emitter_count: scene.emitter_count,
             flags: if settings.nee { FRAME_NEE } else { 0 },
             emitter_total_power: scene.emitter_total_power,
             _pad: 0,
         };
-        ctx.queue.write_buffer(&self.frame_uniform, 0, bytemuck::bytes_of(&frame));
+        ctx.queue
+            .write_buffer(&self.frame_uniform, 0, bytemuck::bytes_of(&frame));
         let scene_group = self.scene_bind_group(ctx, scene);
         let mut encoder = ctx.device.create_command_encoder(&Default::default());
         encoder.clear_buffer(&self.ray_counter, 0, None);
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("path trace"),
-                timestamp_writes: self.timestamps.as_ref().map(|t| wgpu::ComputePassTimestampWrites {
-                    query_set: &t.set,
-                    beginning_of_pass_write_index: Some(0),
-                    end_of_pass_write_index: Some(1),
+                timestamp_writes: self.timestamps.as_ref().map(|t| {
+                    wgpu::ComputePassTimestampWrites {
+                        query_set: &t.set,
+                        beginning_of_pass_write_index: Some(0),
+                        end_of_pass_write_index: Some(1),
+                    }
                 }),
             });
             pass.set_pipeline(&self.trace_pipeline);
@@ -292,7 +400,12 @@ impl PathTracer {
         ctx.queue.submit([encoder.finish()]);
     }
 
-    fn encode_tonemap(&self, ctx: &GpuContext, encoder: &mut wgpu::CommandEncoder, settings: &RenderSettings) {
+    fn encode_tonemap(
+        &self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        settings: &RenderSettings,
+    ) {
         let params = TonemapParams {
             width: self.width,
             height: self.height,
@@ -302,14 +415,18 @@ impl PathTracer {
             depth_scale: settings.depth_view_scale,
             _pad: [0; 2],
         };
-        ctx.queue.write_buffer(&self.tonemap_uniform, 0, bytemuck::bytes_of(&params));
+        ctx.queue
+            .write_buffer(&self.tonemap_uniform, 0, bytemuck::bytes_of(&params));
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("tonemap"),
-            timestamp_writes: self.timestamps.as_ref().map(|t| wgpu::ComputePassTimestampWrites {
-                query_set: &t.set,
-                beginning_of_pass_write_index: Some(2),
-                end_of_pass_write_index: Some(3),
-            }),
+            timestamp_writes: self
+                .timestamps
+                .as_ref()
+                .map(|t| wgpu::ComputePassTimestampWrites {
+                    query_set: &t.set,
+                    beginning_of_pass_write_index: Some(2),
+                    end_of_pass_write_index: Some(3),
+                }),
         });
         pass.set_pipeline(&self.tonemap_pipeline);
         pass.set_bind_group(0, &self.tonemap_bind_group, &[]);
@@ -329,7 +446,10 @@ impl PathTracer {
         let bytes = ctx.read_buffer(&t.resolve, 32);
         let ticks: &[u64] = bytemuck::cast_slice(&bytes);
         let ms = |a: u64, b: u64| b.saturating_sub(a) as f64 * t.period_ns as f64 * 1e-6;
-        Some(PassTimes { trace_ms: ms(ticks[0], ticks[1]), tonemap_ms: ms(ticks[2], ticks[3]) })
+        Some(PassTimes {
+            trace_ms: ms(ticks[0], ticks[1]),
+            tonemap_ms: ms(ticks[2], ticks[3]),
+        })
     }
 
     /// Rays (camera, bounce, shadow) traced by the last dispatch (blocks until it finished).
@@ -360,10 +480,15 @@ impl PathTracer {
         let nh: &[[f32; 4]] = bytemuck::cast_slice(&nh);
         let mut aovs = Aovs::default();
         for (a, n) in ad.iter().zip(nh) {
-            aovs.albedo.push([a[0] / samples, a[1] / samples, a[2] / samples]);
+            aovs.albedo
+                .push([a[0] / samples, a[1] / samples, a[2] / samples]);
             let v = glam::Vec3::new(n[0], n[1], n[2]).normalize_or_zero();
             aovs.normal.push(v.to_array());
-            aovs.depth.push(if n[3] > 0.0 { a[3] / n[3] } else { f32::INFINITY });
+            aovs.depth.push(if n[3] > 0.0 {
+                a[3] / n[3]
+            } else {
+                f32::INFINITY
+            });
         }
         aovs
     }

@@ -11,7 +11,9 @@ use wgpu::util::DeviceExt;
 
 #[derive(Debug, thiserror::Error)]
 pub enum UploadError {
-    #[error("{scene}: the scene is over this GPU's limits: the {what} buffer needs {needed_mib:.1} MiB, but `{adapter}` binds at most {limit_mib:.1} MiB per buffer")]
+    #[error(
+        "{scene}: the scene is over this GPU's limits: the {what} buffer needs {needed_mib:.1} MiB, but `{adapter}` binds at most {limit_mib:.1} MiB per buffer"
+    )]
     OverLimit {
         scene: String,
         what: &'static str,
@@ -105,11 +107,14 @@ fn storage(ctx: &GpuContext, label: &str, bytes: &[u8]) -> wgpu::Buffer {
     } else {
         bytes
     };
-    ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-        label: Some(label),
-        contents,
-        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
-    })
+    ctx.device
+        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some(label),
+            contents,
+            usage: wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_DST
+                | wgpu::BufferUsages::COPY_SRC,
+        })
 }
 
 fn texture_slot(t: Option<crate::scene::TextureRef>) -> u32 {
@@ -129,7 +134,12 @@ pub fn gpu_material(m: &crate::scene::Material) -> GpuMaterial {
         roughness: m.roughness,
         alpha_cutoff: cutoff,
         normal_scale: m.normal_scale,
-        flags: alpha_flags | if m.double_sided { MATERIAL_DOUBLE_SIDED } else { 0 },
+        flags: alpha_flags
+            | if m.double_sided {
+                MATERIAL_DOUBLE_SIDED
+            } else {
+                0
+            },
         base_color_texture: texture_slot(m.base_color_texture),
         metallic_roughness_texture: texture_slot(m.metallic_roughness_texture),
         normal_texture: texture_slot(m.normal_texture),
@@ -153,16 +163,28 @@ fn pack_vertices(mesh: &MeshData, pool: &mut Vec<u32>) -> GpuMesh {
         uv1_offset: NONE,
         color_offset: NONE,
     };
-    pool.extend(mesh.positions.iter().flat_map(|p| p.to_array().map(f32::to_bits)));
+    pool.extend(
+        mesh.positions
+            .iter()
+            .flat_map(|p| p.to_array().map(f32::to_bits)),
+    );
     if let Some(n) = &mesh.normals {
         gpu.normal_offset = pool.len() as u32;
         pool.extend(n.iter().map(|n| oct_encode(*n)));
     }
     if let Some(t) = &mesh.tangents {
         gpu.tangent_offset = pool.len() as u32;
-        pool.extend(t.iter().flat_map(|t| [oct_encode(t.truncate()), if t.w < 0.0 { -1f32 } else { 1f32 }.to_bits()]));
+        pool.extend(t.iter().flat_map(|t| {
+            [
+                oct_encode(t.truncate()),
+                if t.w < 0.0 { -1f32 } else { 1f32 }.to_bits(),
+            ]
+        }));
     }
-    for (uv, offset) in [(&mesh.uv0, &mut gpu.uv0_offset), (&mesh.uv1, &mut gpu.uv1_offset)] {
+    for (uv, offset) in [
+        (&mesh.uv0, &mut gpu.uv0_offset),
+        (&mesh.uv1, &mut gpu.uv1_offset),
+    ] {
         if let Some(uv) = uv {
             *offset = pool.len() as u32;
             pool.extend(uv.iter().flat_map(|v| v.to_array().map(f32::to_bits)));
@@ -179,12 +201,18 @@ fn pack_vertices(mesh: &MeshData, pool: &mut Vec<u32>) -> GpuMesh {
 type FittedImage = (u32, u32, Vec<u8>);
 
 fn fit_images(scene: &SceneAsset, budget: u64) -> (Vec<FittedImage>, Option<String>) {
-    let mut images: Vec<(u32, u32, Vec<u8>)> = scene.images.iter().map(|i| (i.width, i.height, i.rgba8.clone())).collect();
+    let mut images: Vec<(u32, u32, Vec<u8>)> = scene
+        .images
+        .iter()
+        .map(|i| (i.width, i.height, i.rgba8.clone()))
+        .collect();
     let total = |imgs: &[(u32, u32, Vec<u8>)]| imgs.iter().map(|i| i.2.len() as u64).sum::<u64>();
     let before = total(&images);
     let mut halvings = 0;
     while total(&images) > budget {
-        let Some(largest) = (0..images.len()).max_by_key(|&i| images[i].2.len()) else { break };
+        let Some(largest) = (0..images.len()).max_by_key(|&i| images[i].2.len()) else {
+            break;
+        };
         let (w, h, px) = &images[largest];
         if *w <= 1 && *h <= 1 {
             break;
@@ -220,7 +248,12 @@ fn fit_images(scene: &SceneAsset, budget: u64) -> (Vec<FittedImage>, Option<Stri
 impl GpuScene {
     /// Builds every mesh's BVH and uploads the static data. `binding_limit` overrides the adapter's storage
     /// binding limit (tests use it to exercise the over-limit path).
-    pub fn new(ctx: &GpuContext, scene: &SceneAsset, quality: crate::bvh::BvhQuality, binding_limit: Option<u64>) -> Result<(Self, Vec<String>), UploadError> {
+    pub fn new(
+        ctx: &GpuContext,
+        scene: &SceneAsset,
+        quality: crate::bvh::BvhQuality,
+        binding_limit: Option<u64>,
+    ) -> Result<(Self, Vec<String>), UploadError> {
         let start = std::time::Instant::now();
         let mut notes = Vec::new();
         let limit = binding_limit
@@ -251,15 +284,23 @@ impl GpuScene {
             .map(gpu_material)
             .collect();
         for mesh in &scene.meshes {
-            let bvh = MeshBvh::build(&mesh.positions, &mesh.triangles, quality).map_err(|source| UploadError::Bvh {
-                scene: scene.source.clone(),
-                mesh: mesh.name.clone(),
-                source,
-            })?;
+            let bvh =
+                MeshBvh::build(&mesh.positions, &mesh.triangles, quality).map_err(|source| {
+                    UploadError::Bvh {
+                        scene: scene.source.clone(),
+                        mesh: mesh.name.clone(),
+                        source,
+                    }
+                })?;
             let mut gpu = pack_vertices(mesh, &mut pool);
             gpu.blas_root = blas_nodes.len() as u32;
             gpu.triangle_offset = triangles.len() as u32;
-            let gpu_triangles: Vec<[u32; 3]> = bvh.flat.order.iter().map(|&t| mesh.triangles[t as usize]).collect();
+            let gpu_triangles: Vec<[u32; 3]> = bvh
+                .flat
+                .order
+                .iter()
+                .map(|&t| mesh.triangles[t as usize])
+                .collect();
             let mut emissive = Vec::new();
             for (slot, &t) in bvh.flat.order.iter().enumerate() {
                 let material = mesh.triangle_materials[t as usize];
@@ -273,11 +314,24 @@ impl GpuScene {
             blas_nodes.extend_from_slice(&bvh.flat.nodes);
             // Deformable meshes reserve the largest tree a rebuild can produce, so it rewrites in place.
             if mesh.is_deformable() {
-                let capacity = crate::bvh::refit::node_capacity(mesh.triangles.len()).max(bvh.flat.nodes.len());
-                blas_nodes.resize(gpu.blas_root as usize + capacity, crate::bvh::GpuBvhNode { children: [crate::bvh::GpuBvhChild::EMPTY; 2] });
+                let capacity = crate::bvh::refit::node_capacity(mesh.triangles.len())
+                    .max(bvh.flat.nodes.len());
+                blas_nodes.resize(
+                    gpu.blas_root as usize + capacity,
+                    crate::bvh::GpuBvhNode {
+                        children: [crate::bvh::GpuBvhChild::EMPTY; 2],
+                    },
+                );
             }
             let blas_capacity = (blas_nodes.len() - gpu.blas_root as usize) as u32;
-            slots.push(MeshSlot { gpu, gpu_triangles, blas_node_offset: gpu.blas_root, bvh, positions: None, blas_capacity });
+            slots.push(MeshSlot {
+                gpu,
+                gpu_triangles,
+                blas_node_offset: gpu.blas_root,
+                bvh,
+                positions: None,
+                blas_capacity,
+            });
         }
 
         let texel_budget = limit.min(ctx.limits.max_buffer_size);
@@ -287,7 +341,10 @@ impl GpuScene {
         let mut image_offsets = Vec::new();
         for (_, _, px) in &images {
             image_offsets.push(texels.len() as u32);
-            texels.extend(px.chunks_exact(4).map(|p| u32::from_le_bytes([p[0], p[1], p[2], p[3]])));
+            texels.extend(
+                px.chunks_exact(4)
+                    .map(|p| u32::from_le_bytes([p[0], p[1], p[2], p[3]])),
+            );
         }
         let wrap_bits = |w: Wrap| match w {
             Wrap::Repeat => 0,
@@ -304,7 +361,9 @@ impl GpuScene {
                     offset: image_offsets.get(i).copied().unwrap_or(0),
                     width: w,
                     height: h,
-                    flags: wrap_bits(t.wrap_s) | (wrap_bits(t.wrap_t) << 2) | if t.nearest { TEXTURE_NEAREST } else { 0 },
+                    flags: wrap_bits(t.wrap_s)
+                        | (wrap_bits(t.wrap_t) << 2)
+                        | if t.nearest { TEXTURE_NEAREST } else { 0 },
                 }
             })
             .collect();
@@ -348,21 +407,47 @@ impl GpuScene {
 
     /// Writes a deformed mesh's positions, normals and tangents over its own ranges of the vertex pool
     /// (same encodings as the initial upload) and keeps the positions for refits and emitters.
-    pub fn write_deformed_vertices(&mut self, ctx: &GpuContext, mesh: usize, d: &crate::animation::DeformedMesh) {
+    pub fn write_deformed_vertices(
+        &mut self,
+        ctx: &GpuContext,
+        mesh: usize,
+        d: &crate::animation::DeformedMesh,
+    ) {
         let slot = &mut self.mesh_slots[mesh];
         let gpu = slot.gpu;
-        let words: Vec<u32> = d.positions.iter().flat_map(|p| p.to_array().map(f32::to_bits)).collect();
-        ctx.queue.write_buffer(&self.vertex_pool, gpu.position_offset as u64 * 4, bytemuck::cast_slice(&words));
+        let words: Vec<u32> = d
+            .positions
+            .iter()
+            .flat_map(|p| p.to_array().map(f32::to_bits))
+            .collect();
+        ctx.queue.write_buffer(
+            &self.vertex_pool,
+            gpu.position_offset as u64 * 4,
+            bytemuck::cast_slice(&words),
+        );
         if let (Some(n), true) = (&d.normals, gpu.normal_offset != NONE) {
             let words: Vec<u32> = n.iter().map(|n| oct_encode(*n)).collect();
-            ctx.queue.write_buffer(&self.vertex_pool, gpu.normal_offset as u64 * 4, bytemuck::cast_slice(&words));
+            ctx.queue.write_buffer(
+                &self.vertex_pool,
+                gpu.normal_offset as u64 * 4,
+                bytemuck::cast_slice(&words),
+            );
         }
         if let (Some(t), true) = (&d.tangents, gpu.tangent_offset != NONE) {
             let words: Vec<u32> = t
                 .iter()
-                .flat_map(|t| [oct_encode(t.truncate()), if t.w < 0.0 { -1f32 } else { 1f32 }.to_bits()])
+                .flat_map(|t| {
+                    [
+                        oct_encode(t.truncate()),
+                        if t.w < 0.0 { -1f32 } else { 1f32 }.to_bits(),
+                    ]
+                })
                 .collect();
-            ctx.queue.write_buffer(&self.vertex_pool, gpu.tangent_offset as u64 * 4, bytemuck::cast_slice(&words));
+            ctx.queue.write_buffer(
+                &self.vertex_pool,
+                gpu.tangent_offset as u64 * 4,
+                bytemuck::cast_slice(&words),
+            );
         }
         slot.positions = Some(d.positions.clone());
     }
@@ -370,27 +455,56 @@ impl GpuScene {
     /// Refits a deformed mesh's BLAS to its current positions, uploads its nodes, returns the SAH ratio.
     pub fn refit_mesh(&mut self, ctx: &GpuContext, scene: &SceneAsset, mesh: usize) -> f32 {
         let slot = &mut self.mesh_slots[mesh];
-        let positions = slot.positions.as_deref().unwrap_or(&scene.meshes[mesh].positions);
-        let ratio = crate::bvh::refit::refit_and_measure(&mut slot.bvh, positions, &slot.gpu_triangles);
-        ctx.queue.write_buffer(&self.blas_nodes, slot.gpu.blas_root as u64 * 64, bytemuck::cast_slice(&slot.bvh.flat.nodes));
+        let positions = slot
+            .positions
+            .as_deref()
+            .unwrap_or(&scene.meshes[mesh].positions);
+        let ratio =
+            crate::bvh::refit::refit_and_measure(&mut slot.bvh, positions, &slot.gpu_triangles);
+        ctx.queue.write_buffer(
+            &self.blas_nodes,
+            slot.gpu.blas_root as u64 * 64,
+            bytemuck::cast_slice(&slot.bvh.flat.nodes),
+        );
         ratio
     }
 
     /// Rebuilds a mesh's BLAS from its current positions inside its reserved node range, and rewrites its
     /// triangle range in the new BVH order (same triangles, same count).
-    pub fn rebuild_mesh(&mut self, ctx: &GpuContext, scene: &SceneAsset, mesh: usize, quality: crate::bvh::BvhQuality) -> Result<(), crate::bvh::BvhTooDeep> {
+    pub fn rebuild_mesh(
+        &mut self,
+        ctx: &GpuContext,
+        scene: &SceneAsset,
+        mesh: usize,
+        quality: crate::bvh::BvhQuality,
+    ) -> Result<(), crate::bvh::BvhTooDeep> {
         let data = &scene.meshes[mesh];
         let slot = &self.mesh_slots[mesh];
         let positions = slot.positions.as_deref().unwrap_or(&data.positions);
         let bvh = MeshBvh::build(positions, &data.triangles, quality)?;
         if bvh.flat.nodes.len() > slot.blas_capacity as usize {
             // Cannot happen for a tree with >= 1 triangle per leaf; keep the refit tree rather than overrun.
-            tracing::warn!("mesh `{}`: rebuilt BVH needs {} nodes, {} reserved; kept the refit tree", data.name, bvh.flat.nodes.len(), slot.blas_capacity);
+            tracing::warn!(
+                "mesh `{}`: rebuilt BVH needs {} nodes, {} reserved; kept the refit tree",
+                data.name,
+                bvh.flat.nodes.len(),
+                slot.blas_capacity
+            );
             return Ok(());
         }
         let mut nodes = bvh.flat.nodes.clone();
-        nodes.resize(slot.blas_capacity as usize, crate::bvh::GpuBvhNode { children: [crate::bvh::GpuBvhChild::EMPTY; 2] });
-        let gpu_triangles: Vec<[u32; 3]> = bvh.flat.order.iter().map(|&t| data.triangles[t as usize]).collect();
+        nodes.resize(
+            slot.blas_capacity as usize,
+            crate::bvh::GpuBvhNode {
+                children: [crate::bvh::GpuBvhChild::EMPTY; 2],
+            },
+        );
+        let gpu_triangles: Vec<[u32; 3]> = bvh
+            .flat
+            .order
+            .iter()
+            .map(|&t| data.triangles[t as usize])
+            .collect();
         let mut packed: Vec<[u32; 4]> = Vec::with_capacity(gpu_triangles.len());
         let mut emissive = Vec::new();
         for (i, &t) in bvh.flat.order.iter().enumerate() {
@@ -401,8 +515,16 @@ impl GpuScene {
                 emissive.push((slot.gpu.triangle_offset + i as u32, material));
             }
         }
-        ctx.queue.write_buffer(&self.blas_nodes, slot.gpu.blas_root as u64 * 64, bytemuck::cast_slice(&nodes));
-        ctx.queue.write_buffer(&self.triangles, slot.gpu.triangle_offset as u64 * 16, bytemuck::cast_slice(&packed));
+        ctx.queue.write_buffer(
+            &self.blas_nodes,
+            slot.gpu.blas_root as u64 * 64,
+            bytemuck::cast_slice(&nodes),
+        );
+        ctx.queue.write_buffer(
+            &self.triangles,
+            slot.gpu.triangle_offset as u64 * 16,
+            bytemuck::cast_slice(&packed),
+        );
         self.emissive_triangles[mesh] = emissive;
         let slot = &mut self.mesh_slots[mesh];
         slot.gpu_triangles = gpu_triangles;
@@ -411,7 +533,12 @@ impl GpuScene {
     }
 
     /// Uploads instances (in TLAS leaf order), the TLAS and the emitter list for this frame's placements.
-    pub fn update_instances(&mut self, ctx: &GpuContext, scene: &SceneAsset, inputs: &[InstanceInput]) -> Result<(), crate::bvh::BvhTooDeep> {
+    pub fn update_instances(
+        &mut self,
+        ctx: &GpuContext,
+        scene: &SceneAsset,
+        inputs: &[InstanceInput],
+    ) -> Result<(), crate::bvh::BvhTooDeep> {
         let boxes: Vec<(Vec3, Vec3)> = inputs
             .iter()
             .map(|i| {
@@ -449,7 +576,8 @@ impl GpuScene {
             self.generation += 1;
         }
         self.emitter_count = emitters.len() as u32;
-        self.memory.instances_and_tlas = (instance_bytes.len() + tlas_bytes.len() + emitter_bytes.len()) as u64;
+        self.memory.instances_and_tlas =
+            (instance_bytes.len() + tlas_bytes.len() + emitter_bytes.len()) as u64;
         Ok(())
     }
 
@@ -464,17 +592,32 @@ impl GpuScene {
                 continue;
             }
             let r = &inst.world_from_object;
-            let world = Mat4::from_cols_array_2d(&[r[0], r[1], r[2], [0.0, 0.0, 0.0, 1.0]]).transpose();
+            let world =
+                Mat4::from_cols_array_2d(&[r[0], r[1], r[2], [0.0, 0.0, 0.0, 1.0]]).transpose();
             let slot = &self.mesh_slots[mesh];
-            let positions = slot.positions.as_deref().unwrap_or(&scene.meshes[mesh].positions);
+            let positions = slot
+                .positions
+                .as_deref()
+                .unwrap_or(&scene.meshes[mesh].positions);
             for &(t, material) in &self.emissive_triangles[mesh] {
                 let local = (t - slot.gpu.triangle_offset) as usize;
-                let [a, b, c] = slot.gpu_triangles[local].map(|v| world.transform_point3(positions[v as usize]));
+                let [a, b, c] = slot.gpu_triangles[local]
+                    .map(|v| world.transform_point3(positions[v as usize]));
                 let area = 0.5 * (b - a).cross(c - a).length() as f64;
-                let power = luminance(Vec3::from(self.material_data[material as usize].emissive)) as f64 * area;
+                let power = luminance(Vec3::from(self.material_data[material as usize].emissive))
+                    as f64
+                    * area;
                 if power > 0.0 {
                     total += power;
-                    weighted.push((GpuEmitter { instance: i as u32, triangle: t, cdf: 0.0, pmf: 0.0 }, power));
+                    weighted.push((
+                        GpuEmitter {
+                            instance: i as u32,
+                            triangle: t,
+                            cdf: 0.0,
+                            pmf: 0.0,
+                        },
+                        power,
+                    ));
                 }
             }
         }

@@ -18,5 +18,8 @@ pub fn tonemap_source() -> String {
 
 /// Every compute module the renderer builds, by name, for validation.
 pub fn all_modules() -> Vec<(&'static str, String)> {
-    vec![("path_trace", path_trace_source()), ("tonemap", tonemap_source())]
+    vec![
+        ("path_trace", path_trace_source()),
+        ("tonemap", tonemap_source()),
+    ]
 }

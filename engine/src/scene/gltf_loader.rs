@@ -63,7 +63,12 @@ struct Loader<'a> {
 }
 
 impl<'a> Loader<'a> {
-    fn new(bytes: &[u8], base_dir: &'a Path, name: &Path, options: &'a LoadOptions) -> Result<Self, SceneError> {
+    fn new(
+        bytes: &[u8],
+        base_dir: &'a Path,
+        name: &Path,
+        options: &'a LoadOptions,
+    ) -> Result<Self, SceneError> {
         let path = name.to_path_buf();
         let gltf = gltf::Gltf::from_slice(bytes).map_err(|e| {
             // The crate's validation rejects unknown required extensions; name the extension plainly.
@@ -73,9 +78,15 @@ impl<'a> Loader<'a> {
                     .extensions_required()
                     .find(|ext| !SUPPORTED_REQUIRED_EXTENSIONS.contains(ext))
             {
-                return SceneError::UnsupportedExtension { path: path.clone(), extension: ext.to_string() };
+                return SceneError::UnsupportedExtension {
+                    path: path.clone(),
+                    extension: ext.to_string(),
+                };
             }
-            SceneError::Invalid { path: path.clone(), reason: describe_gltf_error(&e) }
+            SceneError::Invalid {
+                path: path.clone(),
+                reason: describe_gltf_error(&e),
+            }
         })?;
         for ext in gltf.document.extensions_required() {
             if !SUPPORTED_REQUIRED_EXTENSIONS.contains(&ext) {
@@ -169,7 +180,10 @@ impl<'a> Loader<'a> {
             source: self.path.display().to_string(),
             meshes,
             materials,
-            images: images.into_iter().map(|i| i.unwrap_or_else(placeholder_image)).collect(),
+            images: images
+                .into_iter()
+                .map(|i| i.unwrap_or_else(placeholder_image))
+                .collect(),
             textures,
             cameras,
             skins,
@@ -249,7 +263,11 @@ impl<'a> Loader<'a> {
                 let sampler = t.sampler();
                 let image = t.source().index();
                 Texture {
-                    image: if images[image].is_some() { image as u32 } else { u32::MAX },
+                    image: if images[image].is_some() {
+                        image as u32
+                    } else {
+                        u32::MAX
+                    },
                     wrap_s: wrap(sampler.wrap_s()),
                     wrap_t: wrap(sampler.wrap_t()),
                     nearest: sampler.mag_filter() == Some(MagFilter::Nearest),
@@ -263,7 +281,9 @@ impl<'a> Loader<'a> {
         let materials: Vec<_> = self.document.materials().collect();
         for m in materials {
             let name = m.name().unwrap_or("").to_string();
-            let texture = |info: Option<(gltf::Texture, u32)>, slot: &str, warnings: &mut Vec<String>| {
+            let texture = |info: Option<(gltf::Texture, u32)>,
+                           slot: &str,
+                           warnings: &mut Vec<String>| {
                 let (tex, tex_coord) = info?;
                 if textures[tex.index()].image == u32::MAX {
                     return None;
@@ -282,12 +302,14 @@ impl<'a> Loader<'a> {
             let pbr = m.pbr_metallic_roughness();
             let mut warnings = Vec::new();
             let base_color_texture = texture(
-                pbr.base_color_texture().map(|i| (i.texture(), i.tex_coord())),
+                pbr.base_color_texture()
+                    .map(|i| (i.texture(), i.tex_coord())),
                 "baseColor",
                 &mut warnings,
             );
             let metallic_roughness_texture = texture(
-                pbr.metallic_roughness_texture().map(|i| (i.texture(), i.tex_coord())),
+                pbr.metallic_roughness_texture()
+                    .map(|i| (i.texture(), i.tex_coord())),
                 "metallicRoughness",
                 &mut warnings,
             );
@@ -315,11 +337,14 @@ impl<'a> Loader<'a> {
                 metallic_roughness_texture,
                 normal_texture,
                 normal_scale: normal.as_ref().map_or(1.0, |n| finite_or(n.scale(), 1.0)),
-                emissive: finite_or(Vec3::from(m.emissive_factor()) * strength, Vec3::ZERO).max(Vec3::ZERO),
+                emissive: finite_or(Vec3::from(m.emissive_factor()) * strength, Vec3::ZERO)
+                    .max(Vec3::ZERO),
                 emissive_texture,
                 alpha_mode: match m.alpha_mode() {
                     gltf::material::AlphaMode::Opaque => AlphaMode::Opaque,
-                    gltf::material::AlphaMode::Mask => AlphaMode::Mask(finite_or(m.alpha_cutoff().unwrap_or(0.5), 0.5)),
+                    gltf::material::AlphaMode::Mask => {
+                        AlphaMode::Mask(finite_or(m.alpha_cutoff().unwrap_or(0.5), 0.5))
+                    }
                     gltf::material::AlphaMode::Blend => AlphaMode::Blend,
                 },
                 double_sided: m.double_sided(),
@@ -342,13 +367,24 @@ impl<'a> Loader<'a> {
             };
             let mut parts = Vec::new();
             for primitive in mesh.primitives() {
-                let label = format!("mesh {} `{}` primitive {}", mesh.index(), data.name, primitive.index());
+                let label = format!(
+                    "mesh {} `{}` primitive {}",
+                    mesh.index(),
+                    data.name,
+                    primitive.index()
+                );
                 match self.read_primitive(&primitive) {
                     Ok((part, note)) => {
                         if let Some(note) = note {
                             self.warn(format!("{label}: {note}"));
                         }
-                        parts.push((part, primitive.material().index().map_or(default_material, |i| i as u32)));
+                        parts.push((
+                            part,
+                            primitive
+                                .material()
+                                .index()
+                                .map_or(default_material, |i| i as u32),
+                        ));
                     }
                     Err(reason) => self.warn(format!("{label} skipped: {reason}")),
                 }
@@ -368,7 +404,10 @@ impl<'a> Loader<'a> {
     }
 
     /// Reads one primitive; returns its data and an optional note about dropped triangles.
-    fn read_primitive(&self, primitive: &gltf::Primitive) -> Result<(PrimitiveData, Option<String>), String> {
+    fn read_primitive(
+        &self,
+        primitive: &gltf::Primitive,
+    ) -> Result<(PrimitiveData, Option<String>), String> {
         let buffers = &self.buffers;
         let reader = primitive.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
         let position_accessor = primitive
@@ -407,20 +446,29 @@ impl<'a> Loader<'a> {
         }
         for set in 0..2 {
             if let Some(uv) = reader.read_tex_coords(set) {
-                let uv: Vec<Vec2> = uv.into_f32().map(|v| finite_or(Vec2::from(v), Vec2::ZERO)).collect();
+                let uv: Vec<Vec2> = uv
+                    .into_f32()
+                    .map(|v| finite_or(Vec2::from(v), Vec2::ZERO))
+                    .collect();
                 expect(uv.len(), "TEXCOORD")?;
                 part.uv[set as usize] = Some(uv);
             }
         }
         if let Some(c) = reader.read_colors(0) {
-            let colors: Vec<Vec4> = c.into_rgba_f32().map(|v| finite_or(Vec4::from(v), Vec4::ONE)).collect();
+            let colors: Vec<Vec4> = c
+                .into_rgba_f32()
+                .map(|v| finite_or(Vec4::from(v), Vec4::ONE))
+                .collect();
             expect(colors.len(), "COLOR_0")?;
             part.colors = Some(colors);
         }
         let mut sets = 0;
         while let (Some(j), Some(w)) = (reader.read_joints(sets), reader.read_weights(sets)) {
             let joints: Vec<[u16; 4]> = j.into_u16().collect();
-            let weights: Vec<[f32; 4]> = w.into_f32().map(|w| w.map(|x| if x.is_finite() { x.max(0.0) } else { 0.0 })).collect();
+            let weights: Vec<[f32; 4]> = w
+                .into_f32()
+                .map(|w| w.map(|x| if x.is_finite() { x.max(0.0) } else { 0.0 }))
+                .collect();
             expect(joints.len(), "JOINTS")?;
             expect(weights.len(), "WEIGHTS")?;
             part.joints.push(joints);
@@ -428,13 +476,25 @@ impl<'a> Loader<'a> {
             sets += 1;
         }
         for (i, (p, n, t)) in reader.read_morph_targets().enumerate() {
-            let positions: Vec<Vec3> = p.map(|p| p.map(|v| finite_or(Vec3::from(v), Vec3::ZERO)).collect()).unwrap_or_else(|| vec![Vec3::ZERO; count]);
+            let positions: Vec<Vec3> = p
+                .map(|p| p.map(|v| finite_or(Vec3::from(v), Vec3::ZERO)).collect())
+                .unwrap_or_else(|| vec![Vec3::ZERO; count]);
             expect(positions.len(), &format!("morph target {i} POSITION"))?;
-            let normals: Option<Vec<Vec3>> = n.map(|n| n.map(|v| finite_or(Vec3::from(v), Vec3::ZERO)).collect());
-            let tangents: Option<Vec<Vec3>> = t.map(|t| t.map(|v| finite_or(Vec3::from(v), Vec3::ZERO)).collect());
-            if let Some(n) = &normals { expect(n.len(), "morph target NORMAL")?; }
-            if let Some(t) = &tangents { expect(t.len(), "morph target TANGENT")?; }
-            part.morph_targets.push(MorphTarget { positions, normals, tangents });
+            let normals: Option<Vec<Vec3>> =
+                n.map(|n| n.map(|v| finite_or(Vec3::from(v), Vec3::ZERO)).collect());
+            let tangents: Option<Vec<Vec3>> =
+                t.map(|t| t.map(|v| finite_or(Vec3::from(v), Vec3::ZERO)).collect());
+            if let Some(n) = &normals {
+                expect(n.len(), "morph target NORMAL")?;
+            }
+            if let Some(t) = &tangents {
+                expect(t.len(), "morph target TANGENT")?;
+            }
+            part.morph_targets.push(MorphTarget {
+                positions,
+                normals,
+                tangents,
+            });
         }
 
         let indices: Vec<u32> = match reader.read_indices() {
@@ -450,7 +510,9 @@ impl<'a> Loader<'a> {
             return Err("its index accessor lies outside its buffer".into());
         }
         if let Some(&bad) = indices.iter().find(|&&i| i as usize >= count) {
-            return Err(format!("index {bad} is out of range: the primitive has {count} vertices"));
+            return Err(format!(
+                "index {bad} is out of range: the primitive has {count} vertices"
+            ));
         }
         let triangles = assemble_triangles(primitive.mode(), &indices)?;
 
@@ -479,13 +541,19 @@ impl<'a> Loader<'a> {
         }
         let mut notes = Vec::new();
         if non_finite > 0 {
-            notes.push(format!("{non_finite} triangles with NaN or infinite vertex positions dropped"));
+            notes.push(format!(
+                "{non_finite} triangles with NaN or infinite vertex positions dropped"
+            ));
         }
         if degenerate > 0 {
             notes.push(format!("{degenerate} zero-area triangles dropped"));
         }
         if part.triangles.is_empty() {
-            return Err(if notes.is_empty() { "it has no triangles".into() } else { notes.join(", ") });
+            return Err(if notes.is_empty() {
+                "it has no triangles".into()
+            } else {
+                notes.join(", ")
+            });
         }
         Ok((part, (!notes.is_empty()).then(|| notes.join(", "))))
     }
@@ -529,7 +597,11 @@ impl<'a> Loader<'a> {
                     children: n.children().map(|c| c.index()).collect(),
                     transform: NodeTransform {
                         translation: finite_or(Vec3::from(t), Vec3::ZERO),
-                        rotation: if rotation.is_finite() && rotation.length() > 0.0 { rotation.normalize() } else { Quat::IDENTITY },
+                        rotation: if rotation.is_finite() && rotation.length() > 0.0 {
+                            rotation.normalize()
+                        } else {
+                            Quat::IDENTITY
+                        },
                         scale: finite_or(Vec3::from(s), Vec3::ONE),
                     },
                     mesh: n.mesh().map(|m| m.index()),
@@ -547,16 +619,24 @@ impl<'a> Loader<'a> {
                 nodes[c].parent = Some(i);
             }
         }
-        let roots: Vec<usize> = match self.document.default_scene().or_else(|| self.document.scenes().next()) {
+        let roots: Vec<usize> = match self
+            .document
+            .default_scene()
+            .or_else(|| self.document.scenes().next())
+        {
             Some(scene) => scene.nodes().map(|n| n.index()).collect(),
-            None => (0..nodes.len()).filter(|&i| nodes[i].parent.is_none()).collect(),
+            None => (0..nodes.len())
+                .filter(|&i| nodes[i].parent.is_none())
+                .collect(),
         };
         // Walk from the roots: a cycle would revisit a node.
         let mut seen = HashSet::new();
         let mut stack = roots.clone();
         while let Some(n) = stack.pop() {
             if !seen.insert(n) {
-                return Err(self.invalid(format!("the node hierarchy has a cycle through node {n}")));
+                return Err(
+                    self.invalid(format!("the node hierarchy has a cycle through node {n}"))
+                );
             }
             stack.extend(&nodes[n].children);
         }
@@ -565,10 +645,14 @@ impl<'a> Loader<'a> {
         }
         // Nodes outside the displayed scene: every node must be reachable from a parentless node, else it
         // sits on a cycle (each node has at most one parent, so an unreachable node loops back to itself).
-        stack = (0..nodes.len()).filter(|&i| nodes[i].parent.is_none() && !seen.contains(&i)).collect();
+        stack = (0..nodes.len())
+            .filter(|&i| nodes[i].parent.is_none() && !seen.contains(&i))
+            .collect();
         while let Some(n) = stack.pop() {
             if !seen.insert(n) {
-                return Err(self.invalid(format!("the node hierarchy has a cycle through node {n}")));
+                return Err(
+                    self.invalid(format!("the node hierarchy has a cycle through node {n}"))
+                );
             }
             stack.extend(&nodes[n].children);
         }
@@ -618,7 +702,10 @@ impl<'a> Loader<'a> {
         let mut warnings = Vec::new();
         let mut clips = Vec::new();
         for anim in self.document.animations() {
-            let name = anim.name().map(str::to_string).unwrap_or_else(|| format!("animation {}", anim.index()));
+            let name = anim
+                .name()
+                .map(str::to_string)
+                .unwrap_or_else(|| format!("animation {}", anim.index()));
             let mut channels = Vec::new();
             for channel in anim.channels() {
                 let reader = channel.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
@@ -629,20 +716,38 @@ impl<'a> Loader<'a> {
                     gltf::animation::Interpolation::CubicSpline => Interpolation::CubicSpline,
                 };
                 let Some(times) = reader.read_inputs().map(|t| t.collect::<Vec<f32>>()) else {
-                    warnings.push(format!("{label}: keyframe times unreadable; channel skipped"));
+                    warnings.push(format!(
+                        "{label}: keyframe times unreadable; channel skipped"
+                    ));
                     continue;
                 };
                 let values = match reader.read_outputs() {
-                    Some(ReadOutputs::Translations(v)) => ChannelValues::Translation(v.map(Vec3::from).collect()),
-                    Some(ReadOutputs::Rotations(v)) => ChannelValues::Rotation(v.into_f32().map(Quat::from_array).collect()),
-                    Some(ReadOutputs::Scales(v)) => ChannelValues::Scale(v.map(Vec3::from).collect()),
+                    Some(ReadOutputs::Translations(v)) => {
+                        ChannelValues::Translation(v.map(Vec3::from).collect())
+                    }
+                    Some(ReadOutputs::Rotations(v)) => {
+                        ChannelValues::Rotation(v.into_f32().map(Quat::from_array).collect())
+                    }
+                    Some(ReadOutputs::Scales(v)) => {
+                        ChannelValues::Scale(v.map(Vec3::from).collect())
+                    }
                     Some(ReadOutputs::MorphTargetWeights(v)) => {
                         let values: Vec<f32> = v.into_f32().collect();
-                        let keys = times.len() * if interpolation == Interpolation::CubicSpline { 3 } else { 1 };
-                        ChannelValues::Weights { count: values.len().checked_div(keys).unwrap_or(0), values }
+                        let keys = times.len()
+                            * if interpolation == Interpolation::CubicSpline {
+                                3
+                            } else {
+                                1
+                            };
+                        ChannelValues::Weights {
+                            count: values.len().checked_div(keys).unwrap_or(0),
+                            values,
+                        }
                     }
                     None => {
-                        warnings.push(format!("{label}: keyframe values unreadable; channel skipped"));
+                        warnings.push(format!(
+                            "{label}: keyframe values unreadable; channel skipped"
+                        ));
                         continue;
                     }
                 };
@@ -661,7 +766,11 @@ impl<'a> Loader<'a> {
                 .iter()
                 .filter_map(|c| c.times.last().copied())
                 .fold(0.0f32, f32::max);
-            clips.push(AnimationClip { name, channels, duration });
+            clips.push(AnimationClip {
+                name,
+                channels,
+                duration,
+            });
         }
         for w in warnings {
             self.warn(w);
@@ -686,7 +795,11 @@ struct PrimitiveData {
 
 /// Concatenates primitives; an attribute some primitives lack is filled with a neutral value for them.
 fn merge_primitives(mesh: &mut MeshData, parts: Vec<(PrimitiveData, u32)>) {
-    fn merge<T: Clone>(parts: &[(PrimitiveData, u32)], get: impl Fn(&PrimitiveData) -> Option<&Vec<T>>, fill: T) -> Option<Vec<T>> {
+    fn merge<T: Clone>(
+        parts: &[(PrimitiveData, u32)],
+        get: impl Fn(&PrimitiveData) -> Option<&Vec<T>>,
+        fill: T,
+    ) -> Option<Vec<T>> {
         if !parts.iter().any(|(p, _)| get(p).is_some()) {
             return None;
         }
@@ -707,21 +820,33 @@ fn merge_primitives(mesh: &mut MeshData, parts: Vec<(PrimitiveData, u32)>) {
 
     let sets = parts.iter().map(|(p, _)| p.joints.len()).max().unwrap_or(0);
     if sets > 0 {
-        let mut skin = SkinWeights { sets: sets as u32, ..Default::default() };
+        let mut skin = SkinWeights {
+            sets: sets as u32,
+            ..Default::default()
+        };
         for (p, _) in &parts {
             for v in 0..p.positions.len() {
                 for s in 0..sets {
                     skin.joints.push(p.joints.get(s).map_or([0; 4], |j| j[v]));
-                    skin.weights.push(p.weights.get(s).map_or([0.0; 4], |w| w[v]));
+                    skin.weights
+                        .push(p.weights.get(s).map_or([0.0; 4], |w| w[v]));
                 }
             }
         }
         mesh.skin_weights = Some(skin);
     }
-    let targets = parts.iter().map(|(p, _)| p.morph_targets.len()).max().unwrap_or(0);
+    let targets = parts
+        .iter()
+        .map(|(p, _)| p.morph_targets.len())
+        .max()
+        .unwrap_or(0);
     for t in 0..targets {
-        let has_normals = parts.iter().any(|(p, _)| p.morph_targets.get(t).is_some_and(|m| m.normals.is_some()));
-        let has_tangents = parts.iter().any(|(p, _)| p.morph_targets.get(t).is_some_and(|m| m.tangents.is_some()));
+        let has_normals = parts
+            .iter()
+            .any(|(p, _)| p.morph_targets.get(t).is_some_and(|m| m.normals.is_some()));
+        let has_tangents = parts
+            .iter()
+            .any(|(p, _)| p.morph_targets.get(t).is_some_and(|m| m.tangents.is_some()));
         let mut target = MorphTarget {
             normals: has_normals.then(Vec::new),
             tangents: has_tangents.then(Vec::new),
@@ -730,12 +855,20 @@ fn merge_primitives(mesh: &mut MeshData, parts: Vec<(PrimitiveData, u32)>) {
         for (p, _) in &parts {
             let n = p.positions.len();
             let m = p.morph_targets.get(t);
-            target.positions.extend(m.map_or(vec![Vec3::ZERO; n], |m| m.positions.clone()));
+            target
+                .positions
+                .extend(m.map_or(vec![Vec3::ZERO; n], |m| m.positions.clone()));
             if let Some(out) = &mut target.normals {
-                out.extend(m.and_then(|m| m.normals.clone()).unwrap_or_else(|| vec![Vec3::ZERO; n]));
+                out.extend(
+                    m.and_then(|m| m.normals.clone())
+                        .unwrap_or_else(|| vec![Vec3::ZERO; n]),
+                );
             }
             if let Some(out) = &mut target.tangents {
-                out.extend(m.and_then(|m| m.tangents.clone()).unwrap_or_else(|| vec![Vec3::ZERO; n]));
+                out.extend(
+                    m.and_then(|m| m.tangents.clone())
+                        .unwrap_or_else(|| vec![Vec3::ZERO; n]),
+                );
             }
         }
         mesh.morph_targets.push(target);
@@ -748,15 +881,20 @@ fn merge_primitives(mesh: &mut MeshData, parts: Vec<(PrimitiveData, u32)>) {
             vertex_count: p.positions.len() as u32,
             material,
         });
-        mesh.triangles.extend(p.triangles.iter().map(|t| t.map(|i| i + offset)));
-        mesh.triangle_materials.extend(std::iter::repeat_n(material, p.triangles.len()));
+        mesh.triangles
+            .extend(p.triangles.iter().map(|t| t.map(|i| i + offset)));
+        mesh.triangle_materials
+            .extend(std::iter::repeat_n(material, p.triangles.len()));
         mesh.positions.extend(p.positions);
     }
 }
 
 fn assemble_triangles(mode: Mode, indices: &[u32]) -> Result<Vec<[u32; 3]>, String> {
     Ok(match mode {
-        Mode::Triangles => indices.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect(),
+        Mode::Triangles => indices
+            .chunks_exact(3)
+            .map(|c| [c[0], c[1], c[2]])
+            .collect(),
         Mode::TriangleStrip => (2..indices.len())
             .map(|i| {
                 if i % 2 == 0 {
@@ -766,8 +904,14 @@ fn assemble_triangles(mode: Mode, indices: &[u32]) -> Result<Vec<[u32; 3]>, Stri
                 }
             })
             .collect(),
-        Mode::TriangleFan => (2..indices.len()).map(|i| [indices[0], indices[i - 1], indices[i]]).collect(),
-        other => return Err(format!("mode {other:?} has no triangles (points and lines are not path-traced)")),
+        Mode::TriangleFan => (2..indices.len())
+            .map(|i| [indices[0], indices[i - 1], indices[i]])
+            .collect(),
+        other => {
+            return Err(format!(
+                "mode {other:?} has no triangles (points and lines are not path-traced)"
+            ));
+        }
     })
 }
 
@@ -815,7 +959,10 @@ fn percent_decode(uri: &str) -> String {
     while i < bytes.len() {
         if bytes[i] == b'%'
             && i + 2 < bytes.len()
-            && let Ok(v) = u8::from_str_radix(std::str::from_utf8(&bytes[i + 1..i + 3]).unwrap_or("zz"), 16)
+            && let Ok(v) = u8::from_str_radix(
+                std::str::from_utf8(&bytes[i + 1..i + 3]).unwrap_or("zz"),
+                16,
+            )
         {
             out.push(v);
             i += 3;
@@ -830,7 +977,11 @@ fn percent_decode(uri: &str) -> String {
 fn describe_gltf_error(e: &gltf::Error) -> String {
     match e {
         gltf::Error::Validation(errors) => {
-            let list: Vec<String> = errors.iter().take(5).map(|(path, err)| format!("{path}: {err}")).collect();
+            let list: Vec<String> = errors
+                .iter()
+                .take(5)
+                .map(|(path, err)| format!("{path}: {err}"))
+                .collect();
             format!("validation failed: {}", list.join("; "))
         }
         other => other.to_string(),

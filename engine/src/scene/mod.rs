@@ -10,8 +10,8 @@ mod tangents;
 pub use compose::{CrowdScene, compose, crowd_scene, unshare_deformable_meshes};
 pub use gltf_loader::{LoadOptions, load_gltf, load_gltf_slice};
 pub use spawn::{
-    CameraComponent, GlobalTransform, MeshInstance, MorphWeights, SceneNode, SceneNodes, ScenePlugin,
-    SceneRoot, SkinnedMesh, Transform, propagate_transforms, spawn_scene,
+    CameraComponent, GlobalTransform, MeshInstance, MorphWeights, SceneNode, SceneNodes,
+    ScenePlugin, SceneRoot, SkinnedMesh, Transform, propagate_transforms, spawn_scene,
 };
 
 use bevy_ecs::prelude::Resource;
@@ -24,11 +24,19 @@ use std::sync::Arc;
 #[derive(Debug, thiserror::Error)]
 pub enum SceneError {
     #[error("{path}: cannot read the file: {source}")]
-    Io { path: PathBuf, source: std::io::Error },
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
     #[error("{path}: not a valid glTF 2.0 file: {reason}")]
     Invalid { path: PathBuf, reason: String },
     #[error("{path}: buffer {index} ({uri}) cannot be loaded: {reason}")]
-    Buffer { path: PathBuf, index: usize, uri: String, reason: String },
+    Buffer {
+        path: PathBuf,
+        index: usize,
+        uri: String,
+        reason: String,
+    },
     #[error("{path}: requires the glTF extension `{extension}`, which raykin does not support")]
     UnsupportedExtension { path: PathBuf, extension: String },
     #[error("{path}: the scene has no renderable triangles ({reason})")]
@@ -174,11 +182,10 @@ impl MeshData {
     }
 
     pub fn bounds(&self) -> (Vec3, Vec3) {
-        self.positions
-            .iter()
-            .fold((Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)), |(lo, hi), p| {
-                (lo.min(*p), hi.max(*p))
-            })
+        self.positions.iter().fold(
+            (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
+            |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+        )
     }
 
     /// True when the mesh deforms (skin or morph targets): its BVH is refit instead of built once.
@@ -254,7 +261,10 @@ pub enum ChannelValues {
     Rotation(Vec<Quat>),
     Scale(Vec<Vec3>),
     /// Morph weights: `count` values per keyframe (x3 for cubic splines).
-    Weights { values: Vec<f32>, count: usize },
+    Weights {
+        values: Vec<f32>,
+        count: usize,
+    },
 }
 
 #[derive(Clone, Debug)]
@@ -297,7 +307,8 @@ impl SceneAsset {
     /// Node world matrices in the file's rest pose.
     pub fn rest_world_matrices(&self) -> Vec<Mat4> {
         let mut world = vec![Mat4::IDENTITY; self.nodes.len()];
-        let mut stack: Vec<(usize, Mat4)> = self.roots.iter().map(|&r| (r, Mat4::IDENTITY)).collect();
+        let mut stack: Vec<(usize, Mat4)> =
+            self.roots.iter().map(|&r| (r, Mat4::IDENTITY)).collect();
         while let Some((node, parent)) = stack.pop() {
             let m = parent * self.nodes[node].transform.matrix();
             world[node] = m;

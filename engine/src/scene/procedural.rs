@@ -15,7 +15,11 @@ pub fn uv_sphere(radius: f32, segments: u32, rings: u32, material: u32) -> MeshD
         for s in 0..=segments {
             let u = s as f32 / segments as f32;
             let phi = u * std::f32::consts::TAU;
-            let n = Vec3::new(theta.sin() * phi.cos(), theta.cos(), -theta.sin() * phi.sin());
+            let n = Vec3::new(
+                theta.sin() * phi.cos(),
+                theta.cos(),
+                -theta.sin() * phi.sin(),
+            );
             mesh.positions.push(n * radius);
             normals.push(n);
             uvs.push(Vec2::new(u, v));
@@ -24,7 +28,12 @@ pub fn uv_sphere(radius: f32, segments: u32, rings: u32, material: u32) -> MeshD
     let row = segments + 1;
     for r in 0..rings {
         for s in 0..segments {
-            let (a, b, c, d) = (r * row + s, r * row + s + 1, (r + 1) * row + s, (r + 1) * row + s + 1);
+            let (a, b, c, d) = (
+                r * row + s,
+                r * row + s + 1,
+                (r + 1) * row + s,
+                (r + 1) * row + s + 1,
+            );
             // Skip the triangles that collapse at the poles.
             if r != 0 {
                 mesh.triangles.push([a, c, b]);
@@ -50,18 +59,31 @@ pub fn ground_quad(size: f32, material: u32) -> MeshData {
     let h = size * 0.5;
     MeshData {
         name: "ground".into(),
-        positions: vec![Vec3::new(-h, 0.0, -h), Vec3::new(h, 0.0, -h), Vec3::new(h, 0.0, h), Vec3::new(-h, 0.0, h)],
+        positions: vec![
+            Vec3::new(-h, 0.0, -h),
+            Vec3::new(h, 0.0, -h),
+            Vec3::new(h, 0.0, h),
+            Vec3::new(-h, 0.0, h),
+        ],
         normals: Some(vec![Vec3::Y; 4]),
         uv0: Some(vec![Vec2::ZERO, Vec2::X, Vec2::ONE, Vec2::Y]),
         triangles: vec![[0, 2, 1], [0, 3, 2]],
         triangle_materials: vec![material; 2],
-        primitives: vec![PrimitiveRange { vertex_offset: 0, vertex_count: 4, material }],
+        primitives: vec![PrimitiveRange {
+            vertex_offset: 0,
+            vertex_count: 4,
+            material,
+        }],
         ..Default::default()
     }
 }
 
 /// A scene of one node per mesh, each placed by its transform, no camera.
-pub fn scene_from_meshes(name: &str, meshes: Vec<(MeshData, NodeTransform)>, materials: Vec<Material>) -> SceneAsset {
+pub fn scene_from_meshes(
+    name: &str,
+    meshes: Vec<(MeshData, NodeTransform)>,
+    materials: Vec<Material>,
+) -> SceneAsset {
     let mut scene = SceneAsset {
         source: name.into(),
         materials,

@@ -16,7 +16,11 @@ pub struct Transform {
 
 impl Default for Transform {
     fn default() -> Self {
-        Self { translation: Vec3::ZERO, rotation: Quat::IDENTITY, scale: Vec3::ONE }
+        Self {
+            translation: Vec3::ZERO,
+            rotation: Quat::IDENTITY,
+            scale: Vec3::ONE,
+        }
     }
 }
 
@@ -28,7 +32,11 @@ impl Transform {
 
 impl From<super::NodeTransform> for Transform {
     fn from(t: super::NodeTransform) -> Self {
-        Self { translation: t.translation, rotation: t.rotation, scale: t.scale }
+        Self {
+            translation: t.translation,
+            rotation: t.rotation,
+            scale: t.scale,
+        }
     }
 }
 
@@ -77,7 +85,11 @@ pub struct CameraComponent {
 
 /// Spawns one copy of `scene` under a new root entity placed at `root_transform`.
 /// Returns the root and, per glTF node, its entity.
-pub fn spawn_scene(world: &mut World, scene: &SceneAsset, root_transform: Transform) -> (Entity, Vec<Entity>) {
+pub fn spawn_scene(
+    world: &mut World,
+    scene: &SceneAsset,
+    root_transform: Transform,
+) -> (Entity, Vec<Entity>) {
     let root = world
         .spawn((SceneRoot, root_transform, GlobalTransform::default()))
         .id();
@@ -94,17 +106,26 @@ pub fn spawn_scene(world: &mut World, scene: &SceneAsset, root_transform: Transf
             if let Some(mesh) = node.mesh {
                 e.insert(MeshInstance { mesh });
                 let data = &scene.meshes[mesh];
-                if let Some(skin) = node.skin.filter(|&s| s < scene.skins.len() && data.skin_weights.is_some()) {
+                if let Some(skin) = node
+                    .skin
+                    .filter(|&s| s < scene.skins.len() && data.skin_weights.is_some())
+                {
                     e.insert(SkinnedMesh { skin });
                 }
                 if !data.morph_targets.is_empty() {
-                    let mut w = node.morph_weights.clone().unwrap_or_else(|| data.default_morph_weights.clone());
+                    let mut w = node
+                        .morph_weights
+                        .clone()
+                        .unwrap_or_else(|| data.default_morph_weights.clone());
                     w.resize(data.morph_targets.len(), 0.0);
                     e.insert(MorphWeights(w));
                 }
             }
             if let Some(camera) = node.camera {
-                e.insert(CameraComponent { camera, yfov: scene.cameras[camera].yfov });
+                e.insert(CameraComponent {
+                    camera,
+                    yfov: scene.cameras[camera].yfov,
+                });
             }
             e.id()
         })
@@ -127,7 +148,9 @@ pub fn propagate_transforms(
 ) {
     let mut stack: Vec<(Entity, Mat4)> = roots.iter().map(|e| (e, Mat4::IDENTITY)).collect();
     while let Some((entity, parent)) = stack.pop() {
-        let Ok((transform, mut global, children)) = nodes.get_mut(entity) else { continue };
+        let Ok((transform, mut global, children)) = nodes.get_mut(entity) else {
+            continue;
+        };
         let world = parent * transform.matrix();
         if global.0 != world {
             global.0 = world;

@@ -13,7 +13,10 @@ pub fn generate(mesh: &MeshData) -> Option<Vec<Vec4>> {
     let mut bitan = vec![Vec3::ZERO; n];
     for t in &mesh.triangles {
         let [a, b, c] = t.map(|i| i as usize);
-        let (e1, e2) = (mesh.positions[b] - mesh.positions[a], mesh.positions[c] - mesh.positions[a]);
+        let (e1, e2) = (
+            mesh.positions[b] - mesh.positions[a],
+            mesh.positions[c] - mesh.positions[a],
+        );
         let (d1, d2) = (uv[b] - uv[a], uv[c] - uv[a]);
         let det = d1.x * d2.y - d2.x * d1.y;
         if det.abs() < 1e-12 {
@@ -35,7 +38,11 @@ pub fn generate(mesh: &MeshData) -> Option<Vec<Vec4>> {
                 if t == Vec3::ZERO {
                     return Vec4::ZERO;
                 }
-                let w = if normal.cross(t).dot(bitan[v]) < 0.0 { -1.0 } else { 1.0 };
+                let w = if normal.cross(t).dot(bitan[v]) < 0.0 {
+                    -1.0
+                } else {
+                    1.0
+                };
                 t.extend(w)
             })
             .collect(),
