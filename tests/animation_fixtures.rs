@@ -253,19 +253,7 @@ fn interpolation_cases() {
                 .iter()
                 .map(|v| v.as_f64().unwrap() as f32)
                 .collect();
-            let got: Vec<f32> = match sample_channel(&channel, t) {
-                Sampled::Translation(v) | Sampled::Scale(v) => v.to_array().to_vec(),
-                Sampled::Rotation(r) => {
-                    // q and -q are the same rotation.
-                    let r = if r.dot(Quat::from_slice(&e)) < 0.0 {
-                        -r
-                    } else {
-                        r
-                    };
-                    r.to_array().to_vec()
-                }
-                Sampled::Weights(w) => w,
-            };
+            let got = sampled_as_expected(sample_channel(&channel, t), &e);
             assert_eq!(got.len(), e.len(), "{name} t={t}");
             for (g, x) in got.iter().zip(&e) {
                 assert!(
@@ -285,18 +273,7 @@ fn interpolation_cases() {
             .iter()
             .map(|v| v.as_f64().unwrap() as f32)
             .collect();
-        let got: Vec<f32> = match sample_channel(channel, t) {
-            Sampled::Translation(v) | Sampled::Scale(v) => v.to_array().to_vec(),
-            Sampled::Rotation(r) => {
-                let r = if r.dot(Quat::from_slice(&e)) < 0.0 {
-                    -r
-                } else {
-                    r
-                };
-                r.to_array().to_vec()
-            }
-            Sampled::Weights(w) => w,
-        };
+        let got = sampled_as_expected(sample_channel(channel, t), &e);
         for (g, x) in got.iter().zip(&e) {
             assert!(
                 (g - x).abs() <= 1e-5 * x.abs().max(1.0),
@@ -664,4 +641,21 @@ fn crowd_scene_skins_every_instance() {
             .any(|(p, q)| (*q - *p - offset).length() > 1e-3)
     );
     assert!(a.iter().chain(b).all(|p| p.is_finite()));
+}
+
+/// A sampled value as a flat list, with a rotation's sign matched to the expected one (q and -q are the same
+/// rotation).
+fn sampled_as_expected(sampled: Sampled, expected: &[f32]) -> Vec<f32> {
+    match sampled {
+        Sampled::Translation(v) | Sampled::Scale(v) => v.to_array().to_vec(),
+        Sampled::Rotation(r) => {
+            let r = if r.dot(Quat::from_slice(expected)) < 0.0 {
+                -r
+            } else {
+                r
+            };
+            r.to_array().to_vec()
+        }
+        Sampled::Weights(w) => w,
+    }
 }

@@ -2,11 +2,13 @@
 //! its refit BVH past the threshold, the rebuild fires, and the traced image equals a render of the same
 //! geometry with a freshly built BVH (for both the refit-only and the rebuilt tree).
 
+mod common;
+use common::gpu_context as gpu;
+
 use glam::{Quat, Vec2, Vec3};
 use raykin::bvh::refit::DEFAULT_REBUILD_THRESHOLD;
 use raykin::bvh::{BvhQuality, MeshBvh};
 use raykin::camera::CameraChoice;
-use raykin::gpu::GpuContext;
 use raykin::headless::HeadlessApp;
 use raykin::render::{Environment, RenderSettings};
 use raykin::scene::{
@@ -157,21 +159,6 @@ fn regimes_degrade_refit_past_threshold() {
             "{name}: {ratios:?}"
         );
     }
-}
-
-fn gpu() -> GpuContext {
-    let dir = std::env::temp_dir().join("raykin-xdg");
-    let _ = std::fs::create_dir_all(&dir);
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::PermissionsExt;
-        let _ = std::fs::set_permissions(&dir, std::fs::Permissions::from_mode(0o700));
-    }
-    if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
-        // SAFETY: set before any GPU thread starts in this test process.
-        unsafe { std::env::set_var("XDG_RUNTIME_DIR", &dir) };
-    }
-    GpuContext::new_headless().expect("a GPU adapter (lavapipe is fine)")
 }
 
 fn settings() -> RenderSettings {

@@ -1,37 +1,20 @@
 //! GPU (tiny images): a skinned CesiumMan posed at T renders like a static mesh built from the reference's
 //! skinned positions, `--time` is deterministic, and accumulation does not ghost after a pose change.
 
+mod common;
+use common::gpu_context as gpu;
+use common::repo_root;
+
 use glam::Vec3;
 use raykin::camera::CameraChoice;
-use raykin::gpu::GpuContext;
 use raykin::headless::HeadlessApp;
 use raykin::render::{Environment, RenderSettings};
 use raykin::scene::{LoadOptions, NodeTransform, SceneAsset, load_gltf, procedural};
 use serde_json::Value;
-use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 const SIZE: u32 = 40;
 const SPP: u32 = 8;
-
-fn repo_root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
-}
-
-fn gpu() -> GpuContext {
-    let dir = std::env::temp_dir().join("raykin-xdg");
-    let _ = std::fs::create_dir_all(&dir);
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::PermissionsExt;
-        let _ = std::fs::set_permissions(&dir, std::fs::Permissions::from_mode(0o700));
-    }
-    if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
-        // SAFETY: set before any thread of this test reads the environment (GPU init is below).
-        unsafe { std::env::set_var("XDG_RUNTIME_DIR", &dir) };
-    }
-    GpuContext::new_headless().expect("a GPU adapter (lavapipe is fine)")
-}
 
 fn settings() -> RenderSettings {
     RenderSettings {

@@ -21,10 +21,15 @@ pub fn shared_assets() -> PathBuf {
 
 /// One device per test binary; a lock serialises GPU tests (lavapipe has 2 cores to share).
 pub fn gpu() -> (GpuContext, std::sync::MutexGuard<'static, ()>) {
-    static CTX: OnceLock<GpuContext> = OnceLock::new();
     static LOCK: Mutex<()> = Mutex::new(());
     let guard = LOCK.lock().unwrap_or_else(|p| p.into_inner());
-    let ctx = CTX.get_or_init(|| {
+    (gpu_context(), guard)
+}
+
+/// The test binary's device, without serialising (for tests that run one at a time anyway).
+pub fn gpu_context() -> GpuContext {
+    static CTX: OnceLock<GpuContext> = OnceLock::new();
+    CTX.get_or_init(|| {
         let dir = std::env::temp_dir().join("raykin-xdg");
         let _ = std::fs::create_dir_all(&dir);
         #[cfg(unix)]
@@ -36,8 +41,8 @@ pub fn gpu() -> (GpuContext, std::sync::MutexGuard<'static, ()>) {
         unsafe { std::env::set_var("XDG_RUNTIME_DIR", &dir) };
         GpuContext::new_headless()
             .expect("a GPU adapter (install mesa-vulkan-drivers for lavapipe)")
-    });
-    (ctx.clone(), guard)
+    })
+    .clone()
 }
 
 /// Renders `spp` samples per pixel and returns mean linear radiance per pixel.
