@@ -49,7 +49,8 @@ impl HeadlessApp {
                 scene: scene.clone(),
             })
             .add_plugins(crate::animation::AnimationPlugin)
-            .add_plugins(RenderPlugin);
+            .add_plugins(RenderPlugin)
+            .add_plugins(crate::frame_timing::FrameTimingPlugin);
         // Transforms must be current before a camera node can be resolved.
         use bevy_ecs::system::RunSystemOnce;
         let _ = app

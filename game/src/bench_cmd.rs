@@ -214,3 +214,100 @@ fn git_commit() -> Option<String> {
         .success()
         .then(|| String::from_utf8_lossy(&out.stdout).trim().to_string())
 }
+
+#[derive(serde::Serialize)]
+struct CrowdRow {
+    width: u32,
+    height: u32,
+    frames: usize,
+    triangles: usize,
+    skinned_instances: usize,
+    /// Per phase: (median, p99) in ms over the measured frames.
+    animate_ms: (f64, f64),
+    transform_ms: (f64, f64),
+    deform_ms: (f64, f64),
+    bvh_ms: (f64, f64),
+    refit_ms: (f64, f64),
+    rebuild_ms: (f64, f64),
+    render_submit_ms: (f64, f64),
+    trace_gpu_ms: (f64, f64),
+    rebuilds: u64,
+    max_sah_ratio_last_frame: f32,
+}
+
+/// The crowd scene (64 CesiumMan + 32 Fox) through the frame loop: per-phase CPU times and GPU trace time.
+pub fn run_crowd(args: &BenchArgs) -> Result<()> {
+    let ctx = open_gpu()?;
+    let crowd = raykin::scene::crowd_scene(&args.assets)?;
+    let skinned = crowd.scene.meshes.iter().filter(|m| m.skin_weights.is_some()).count();
+    let triangles = crowd.scene.triangle_count();
+    let scene = std::sync::Arc::new(crowd.scene);
+    let (sizes, frames, warmup): (Vec<(u32, u32)>, usize, usize) = match args.suite.as_str() {
+        "quick" => (vec![(64, 36)], 10, 2),
+        _ => (vec![(1920, 1080), (2560, 1440)], 300, 10),
+    };
+    let frames = args.frames.unwrap_or(frames);
+    let mut rows = Vec::new();
+    for (width, height) in sizes {
+        let settings = RenderSettings { width, height, spp_per_frame: 1, max_depth: args.max_depth, environment: Environment::Sky, ..Default::default() };
+        let mut app = HeadlessApp::new(ctx.clone(), scene.clone(), settings, &CameraChoice::Auto)?;
+        {
+            let world = app.app.world_mut();
+            let root = world
+                .query_filtered::<bevy_ecs::entity::Entity, bevy_ecs::query::With<raykin::scene::SceneRoot>>()
+                .single(world)
+                .map_err(|e| anyhow::anyhow!("crowd scene root: {e}"))?;
+            raykin::animation::attach_players(world, root, &crowd.players);
+            world.resource_mut::<raykin::render::Renderer>().time_passes = true;
+        }
+        let mut phases: Vec<[f64; 8]> = Vec::new();
+        for f in 0..warmup + frames {
+            app.step();
+            if f < warmup {
+                continue;
+            }
+            let world = app.app.world();
+            let t = world.resource::<raykin::frame_timing::FrameTimings>().last;
+            let stats = world.resource::<raykin::bvh::refit::BvhStats>();
+            let trace = app.renderer().last_pass_times.map_or(f64::NAN, |p| p.trace_ms);
+            phases.push([t.animate_ms, t.transform_ms, t.deform_ms, t.bvh_ms, stats.last_refit_seconds * 1e3, stats.last_rebuild_seconds * 1e3, t.render_ms, trace]);
+        }
+        let stat = |i: usize| {
+            let mut v: Vec<f64> = phases.iter().map(|p| p[i]).collect();
+            v.sort_by(f64::total_cmp);
+            (percentile(&v, 0.5), percentile(&v, 0.99))
+        };
+        let stats = app.app.world().resource::<raykin::bvh::refit::BvhStats>();
+        let row = CrowdRow {
+            width,
+            height,
+            frames,
+            triangles,
+            skinned_instances: skinned,
+            animate_ms: stat(0),
+            transform_ms: stat(1),
+            deform_ms: stat(2),
+            bvh_ms: stat(3),
+            refit_ms: stat(4),
+            rebuild_ms: stat(5),
+            render_submit_ms: stat(6),
+            trace_gpu_ms: stat(7),
+            rebuilds: stats.rebuilds,
+            max_sah_ratio_last_frame: stats.sah_ratio.iter().copied().fold(0.0, f32::max),
+        };
+        eprintln!(
+            "crowd {width}x{height} ({triangles} tris, {skinned} skinned): median ms animate {:.2} transform {:.2} deform {:.2} bvh {:.2} (refit {:.2}, rebuild {:.2}) render-submit {:.2} GPU trace {:.2} (p99 {:.2}); {} rebuilds",
+            row.animate_ms.0, row.transform_ms.0, row.deform_ms.0, row.bvh_ms.0, row.refit_ms.0, row.rebuild_ms.0, row.render_submit_ms.0, row.trace_gpu_ms.0, row.trace_gpu_ms.1, row.rebuilds
+        );
+        rows.push(row);
+    }
+    std::fs::create_dir_all(&args.out)?;
+    let json = serde_json::json!({
+        "adapter": ctx.info.name, "driver": format!("{} {}", ctx.info.driver, ctx.info.driver_info),
+        "commit": std::env::var("RAYKIN_COMMIT").ok().or_else(git_commit).unwrap_or_else(|| "unknown".into()),
+        "rows": rows,
+    });
+    std::fs::write(args.out.join("crowd.json"), serde_json::to_string_pretty(&json)?)?;
+    eprintln!("raykin: wrote {}/crowd.json", args.out.display());
+    Ok(())
+}

@@ -40,6 +40,9 @@ pub struct BenchArgs {
     pub frames: Option<usize>,
     #[arg(long, default_value_t = 6)]
     pub max_depth: u32,
+    /// Run the crowd scene (64 CesiumMan + 32 Fox, animated) through the frame loop instead of the static scenes.
+    #[arg(long)]
+    pub crowd: bool,
     /// Override the suite's sizes with one size.
     #[arg(long)]
     pub width: Option<u32>,
