@@ -125,7 +125,7 @@ fn cpu_skinning_time() {
         let t0 = std::time::Instant::now();
         let mut b = MeshBvh::build(&d.positions, tris, BvhQuality::Medium).unwrap();
         let build = t0.elapsed().as_secs_f64();
-        let order: Vec<[u32; 3]> = b.flat.order.iter().map(|&t| tris[t as usize]).collect();
+        let order = b.ordered_triangles(tris);
         let t0 = std::time::Instant::now();
         for _ in 0..100 {
             b.refit(&d.positions, &order);

@@ -133,12 +133,7 @@ fn regimes_degrade_refit_past_threshold() {
     let mesh = sheet();
     for (r, name) in REGIMES.iter().enumerate() {
         let mut bvh = MeshBvh::build(&mesh.positions, &mesh.triangles, BvhQuality::Medium).unwrap();
-        let tris: Vec<[u32; 3]> = bvh
-            .flat
-            .order
-            .iter()
-            .map(|&t| mesh.triangles[t as usize])
-            .collect();
+        let tris = bvh.ordered_triangles(&mesh.triangles);
         let mut ratios = Vec::new();
         for step in 1..=8 {
             let s = step as f32 / 8.0;

@@ -239,7 +239,12 @@ struct CrowdRow {
 pub fn run_crowd(args: &BenchArgs) -> Result<()> {
     let ctx = open_gpu()?;
     let crowd = raykin::scene::crowd_scene(&args.assets)?;
-    let skinned = crowd.scene.meshes.iter().filter(|m| m.skin_weights.is_some()).count();
+    let skinned = crowd
+        .scene
+        .meshes
+        .iter()
+        .filter(|m| m.skin_weights.is_some())
+        .count();
     let triangles = crowd.scene.triangle_count();
     let scene = std::sync::Arc::new(crowd.scene);
     let (sizes, frames, warmup): (Vec<(u32, u32)>, usize, usize) = match args.suite.as_str() {
@@ -249,7 +254,14 @@ pub fn run_crowd(args: &BenchArgs) -> Result<()> {
     let frames = args.frames.unwrap_or(frames);
     let mut rows = Vec::new();
     for (width, height) in sizes {
-        let settings = RenderSettings { width, height, spp_per_frame: 1, max_depth: args.max_depth, environment: Environment::Sky, ..Default::default() };
+        let settings = RenderSettings {
+            width,
+            height,
+            spp_per_frame: 1,
+            max_depth: args.max_depth,
+            environment: Environment::Sky,
+            ..Default::default()
+        };
         let mut app = HeadlessApp::new(ctx.clone(), scene.clone(), settings, &CameraChoice::Auto)?;
         {
             let world = app.app.world_mut();
@@ -269,8 +281,20 @@ pub fn run_crowd(args: &BenchArgs) -> Result<()> {
             let world = app.app.world();
             let t = world.resource::<raykin::frame_timing::FrameTimings>().last;
             let stats = world.resource::<raykin::bvh::refit::BvhStats>();
-            let trace = app.renderer().last_pass_times.map_or(f64::NAN, |p| p.trace_ms);
-            phases.push([t.animate_ms, t.transform_ms, t.deform_ms, t.bvh_ms, stats.last_refit_seconds * 1e3, stats.last_rebuild_seconds * 1e3, t.render_ms, trace]);
+            let trace = app
+                .renderer()
+                .last_pass_times
+                .map_or(f64::NAN, |p| p.trace_ms);
+            phases.push([
+                t.animate_ms,
+                t.transform_ms,
+                t.deform_ms,
+                t.bvh_ms,
+                stats.last_refit_seconds * 1e3,
+                stats.last_rebuild_seconds * 1e3,
+                t.render_ms,
+                trace,
+            ]);
         }
         let stat = |i: usize| {
             let mut v: Vec<f64> = phases.iter().map(|p| p[i]).collect();
@@ -297,7 +321,16 @@ pub fn run_crowd(args: &BenchArgs) -> Result<()> {
         };
         eprintln!(
             "crowd {width}x{height} ({triangles} tris, {skinned} skinned): median ms animate {:.2} transform {:.2} deform {:.2} bvh {:.2} (refit {:.2}, rebuild {:.2}) render-submit {:.2} GPU trace {:.2} (p99 {:.2}); {} rebuilds",
-            row.animate_ms.0, row.transform_ms.0, row.deform_ms.0, row.bvh_ms.0, row.refit_ms.0, row.rebuild_ms.0, row.render_submit_ms.0, row.trace_gpu_ms.0, row.trace_gpu_ms.1, row.rebuilds
+            row.animate_ms.0,
+            row.transform_ms.0,
+            row.deform_ms.0,
+            row.bvh_ms.0,
+            row.refit_ms.0,
+            row.rebuild_ms.0,
+            row.render_submit_ms.0,
+            row.trace_gpu_ms.0,
+            row.trace_gpu_ms.1,
+            row.rebuilds
         );
         rows.push(row);
     }
@@ -307,7 +340,10 @@ pub fn run_crowd(args: &BenchArgs) -> Result<()> {
         "commit": std::env::var("RAYKIN_COMMIT").ok().or_else(git_commit).unwrap_or_else(|| "unknown".into()),
         "rows": rows,
     });
-    std::fs::write(args.out.join("crowd.json"), serde_json::to_string_pretty(&json)?)?;
+    std::fs::write(
+        args.out.join("crowd.json"),
+        serde_json::to_string_pretty(&json)?,
+    )?;
     eprintln!("raykin: wrote {}/crowd.json", args.out.display());
     Ok(())
 }

@@ -63,6 +63,13 @@ pub struct GpuBvhNode {
     pub children: [GpuBvhChild; 2],
 }
 
+impl GpuBvhNode {
+    /// A node no ray enters: padding of reserved node ranges, and the root of an empty tree.
+    pub const EMPTY: Self = Self {
+        children: [GpuBvhChild::EMPTY; 2],
+    };
+}
+
 /// Build effort, from obvhs's presets.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum BvhQuality {
@@ -112,9 +119,7 @@ impl FlatBvh {
     fn from_obvhs(bvh: &Bvh2) -> Result<Self, BvhTooDeep> {
         let mut flat = FlatBvh::default();
         if bvh.nodes.is_empty() {
-            flat.nodes.push(GpuBvhNode {
-                children: [GpuBvhChild::EMPTY; 2],
-            });
+            flat.nodes.push(GpuBvhNode::EMPTY);
             return Ok(flat);
         }
         let leaf = |flat: &mut FlatBvh, n: &obvhs::bvh2::node::Bvh2Node| {
@@ -133,9 +138,7 @@ impl FlatBvh {
             flat.depth = 1;
             return Ok(flat);
         }
-        flat.nodes.push(GpuBvhNode {
-            children: [GpuBvhChild::EMPTY; 2],
-        });
+        flat.nodes.push(GpuBvhNode::EMPTY);
         let mut stack = vec![(0usize, 0usize, 1u32)];
         while let Some((src, slot, depth)) = stack.pop() {
             flat.depth = flat.depth.max(depth);
@@ -146,9 +149,7 @@ impl FlatBvh {
                     leaf(&mut flat, child)
                 } else {
                     let new_slot = flat.nodes.len();
-                    flat.nodes.push(GpuBvhNode {
-                        children: [GpuBvhChild::EMPTY; 2],
-                    });
+                    flat.nodes.push(GpuBvhNode::EMPTY);
                     stack.push((first + k, new_slot, depth + 1));
                     child_from(child.aabb(), new_slot as u32, 0)
                 };
@@ -267,6 +268,15 @@ impl MeshBvh {
             let [a, b, c] = gpu_triangles[i].map(|v| positions[v as usize]);
             (a.min(b).min(c), a.max(b).max(c))
         });
+    }
+
+    /// `triangles` (a mesh's, in file order) rearranged into this BVH's leaf order.
+    pub fn ordered_triangles(&self, triangles: &[[u32; 3]]) -> Vec<[u32; 3]> {
+        self.flat
+            .order
+            .iter()
+            .map(|&t| triangles[t as usize])
+            .collect()
     }
 
     /// Current SAH cost over the cost at build: 1 after a build, rising as a refit degrades the tree.

@@ -295,21 +295,9 @@ impl GpuScene {
             let mut gpu = pack_vertices(mesh, &mut pool);
             gpu.blas_root = blas_nodes.len() as u32;
             gpu.triangle_offset = triangles.len() as u32;
-            let gpu_triangles: Vec<[u32; 3]> = bvh
-                .flat
-                .order
-                .iter()
-                .map(|&t| mesh.triangles[t as usize])
-                .collect();
-            let mut emissive = Vec::new();
-            for (slot, &t) in bvh.flat.order.iter().enumerate() {
-                let material = mesh.triangle_materials[t as usize];
-                let [a, b, c] = mesh.triangles[t as usize];
-                triangles.push([a, b, c, material]);
-                if luminance(Vec3::from(materials[material as usize].emissive)) > 0.0 {
-                    emissive.push((gpu.triangle_offset + slot as u32, material));
-                }
-            }
+            let ordered = order_triangles(mesh, &bvh, gpu.triangle_offset, &materials);
+            triangles.extend_from_slice(&ordered.packed);
+            let (gpu_triangles, emissive) = (ordered.indices, ordered.emissive);
             emissive_triangles.push(emissive);
             blas_nodes.extend_from_slice(&bvh.flat.nodes);
             // Deformable meshes reserve the largest tree a rebuild can produce, so it rewrites in place.
@@ -318,9 +306,7 @@ impl GpuScene {
                     .max(bvh.flat.nodes.len());
                 blas_nodes.resize(
                     gpu.blas_root as usize + capacity,
-                    crate::bvh::GpuBvhNode {
-                        children: [crate::bvh::GpuBvhChild::EMPTY; 2],
-                    },
+                    crate::bvh::GpuBvhNode::EMPTY,
                 );
             }
             let blas_capacity = (blas_nodes.len() - gpu.blas_root as usize) as u32;
@@ -493,28 +479,8 @@ impl GpuScene {
             return Ok(());
         }
         let mut nodes = bvh.flat.nodes.clone();
-        nodes.resize(
-            slot.blas_capacity as usize,
-            crate::bvh::GpuBvhNode {
-                children: [crate::bvh::GpuBvhChild::EMPTY; 2],
-            },
-        );
-        let gpu_triangles: Vec<[u32; 3]> = bvh
-            .flat
-            .order
-            .iter()
-            .map(|&t| data.triangles[t as usize])
-            .collect();
-        let mut packed: Vec<[u32; 4]> = Vec::with_capacity(gpu_triangles.len());
-        let mut emissive = Vec::new();
-        for (i, &t) in bvh.flat.order.iter().enumerate() {
-            let material = data.triangle_materials[t as usize];
-            let [a, b, c] = data.triangles[t as usize];
-            packed.push([a, b, c, material]);
-            if luminance(Vec3::from(self.material_data[material as usize].emissive)) > 0.0 {
-                emissive.push((slot.gpu.triangle_offset + i as u32, material));
-            }
-        }
+        nodes.resize(slot.blas_capacity as usize, crate::bvh::GpuBvhNode::EMPTY);
+        let ordered = order_triangles(data, &bvh, slot.gpu.triangle_offset, &self.material_data);
         ctx.queue.write_buffer(
             &self.blas_nodes,
             slot.gpu.blas_root as u64 * 64,
@@ -523,11 +489,11 @@ impl GpuScene {
         ctx.queue.write_buffer(
             &self.triangles,
             slot.gpu.triangle_offset as u64 * 16,
-            bytemuck::cast_slice(&packed),
+            bytemuck::cast_slice(&ordered.packed),
         );
-        self.emissive_triangles[mesh] = emissive;
+        self.emissive_triangles[mesh] = ordered.emissive;
         let slot = &mut self.mesh_slots[mesh];
-        slot.gpu_triangles = gpu_triangles;
+        slot.gpu_triangles = ordered.indices;
         slot.bvh = bvh;
         Ok(())
     }
@@ -632,6 +598,39 @@ impl GpuScene {
                 e
             })
             .collect()
+    }
+}
+
+/// A mesh's triangles in its BVH's leaf order, as the upload and an in-place rebuild both need them.
+struct OrderedTriangles {
+    /// Vertex indices per triangle (kept on the CPU for refits).
+    indices: Vec<[u32; 3]>,
+    /// The GPU form: vertex indices + material.
+    packed: Vec<[u32; 4]>,
+    /// Emissive triangles: (slot in the triangle buffer, material).
+    emissive: Vec<(u32, u32)>,
+}
+
+fn order_triangles(
+    mesh: &MeshData,
+    bvh: &MeshBvh,
+    triangle_offset: u32,
+    materials: &[GpuMaterial],
+) -> OrderedTriangles {
+    let indices = bvh.ordered_triangles(&mesh.triangles);
+    let mut packed = Vec::with_capacity(indices.len());
+    let mut emissive = Vec::new();
+    for (slot, (&t, [a, b, c])) in bvh.flat.order.iter().zip(&indices).enumerate() {
+        let material = mesh.triangle_materials[t as usize];
+        packed.push([*a, *b, *c, material]);
+        if luminance(Vec3::from(materials[material as usize].emissive)) > 0.0 {
+            emissive.push((triangle_offset + slot as u32, material));
+        }
+    }
+    OrderedTriangles {
+        indices,
+        packed,
+        emissive,
     }
 }
 
