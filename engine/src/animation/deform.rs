@@ -15,6 +15,7 @@ use crate::scene::{
 };
 use bevy_ecs::prelude::*;
 use glam::{Mat3, Mat4, Vec3, Vec4};
+use rayon::prelude::*;
 
 /// Deformed vertex attributes of one mesh (world space when skinned, object space otherwise).
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -52,10 +53,17 @@ pub fn joint_matrices(
         .collect()
 }
 
+/// Maps normals through `m`: its inverse transpose up to a positive scale (the result is normalised), which
+/// is the cofactor matrix times the determinant's sign; no division, so it is cheap per vertex.
 fn normal_matrix(m: &Mat3) -> Mat3 {
     let det = m.determinant();
     if det.abs() > 1e-20 && det.is_finite() {
-        m.inverse().transpose()
+        let cofactor = Mat3::from_cols(
+            m.y_axis.cross(m.z_axis),
+            m.z_axis.cross(m.x_axis),
+            m.x_axis.cross(m.y_axis),
+        );
+        cofactor * det.signum()
     } else {
         *m
     }
@@ -90,7 +98,6 @@ pub fn deform_mesh(
     }
     if let (Some((joints, node_world)), Some(sw)) = (skin, &mesh.skin_weights) {
         let sets = sw.sets.max(1) as usize;
-        let rest = positions.clone();
         for v in 0..positions.len() {
             let mut m = Mat4::ZERO;
             let mut sum = 0.0f32;
@@ -109,10 +116,11 @@ pub fn deform_mesh(
             } else {
                 node_world
             };
-            let mut p = m.transform_point3(rest[v]);
+            let rest = positions[v];
+            let mut p = m.transform_point3(rest);
             let mut m3 = Mat3::from_mat4(m);
             if !p.is_finite() {
-                p = node_world.transform_point3(rest[v]);
+                p = node_world.transform_point3(rest);
                 m3 = Mat3::from_mat4(node_world);
             }
             positions[v] = p;
@@ -175,7 +183,16 @@ pub fn deform_meshes(
     if out.meshes.len() < scene.meshes.len() {
         out.meshes.resize(scene.meshes.len(), None);
     }
-    let mut vertices = 0;
+    // Gather each changed mesh's inputs serially (cheap, borrows the ECS), then deform them in parallel:
+    // every deformable mesh belongs to one instance, so the jobs are independent.
+    struct Job<'a> {
+        mesh: usize,
+        data: &'a MeshData,
+        skin: Option<(Vec<Mat4>, Mat4)>,
+        weights: &'a [f32],
+        key: Vec<f32>,
+    }
+    let mut jobs: Vec<Job> = Vec::new();
     for (instance, node, world, skinned, weights) in &meshes {
         let Some(mesh) = scene.meshes.get(instance.mesh) else {
             continue;
@@ -207,11 +224,28 @@ pub fn deform_meshes(
         {
             continue;
         }
-        let mut d = deform_mesh(mesh, joints.as_deref().map(|j| (j, world.0)), weights);
-        d.pose_key = key;
+        jobs.push(Job {
+            mesh: instance.mesh,
+            data: mesh,
+            skin: joints.map(|j| (j, world.0)),
+            weights,
+            key,
+        });
+    }
+    let results: Vec<(usize, DeformedMesh)> = jobs
+        .into_par_iter()
+        .map(|job| {
+            let skin = job.skin.as_ref().map(|(j, w)| (j.as_slice(), *w));
+            let mut d = deform_mesh(job.data, skin, job.weights);
+            d.pose_key = job.key;
+            (job.mesh, d)
+        })
+        .collect();
+    let mut vertices = 0;
+    for (mesh, d) in results {
         vertices += d.positions.len();
-        out.meshes[instance.mesh] = Some(d);
-        out.changed.push(instance.mesh);
+        out.meshes[mesh] = Some(d);
+        out.changed.push(mesh);
     }
     out.last_seconds = start.elapsed().as_secs_f64();
     out.last_vertices = vertices;

@@ -120,12 +120,8 @@ pub fn refit_deformed(
     let renderer = &mut *renderer;
     stats.ensure_len(scene.meshes.len());
     let start = std::time::Instant::now();
-    for &m in &deformed.changed {
-        let Some(d) = deformed.meshes.get(m).and_then(Option::as_ref) else {
-            continue;
-        };
-        renderer.scene.write_deformed_vertices(&ctx, m, d);
-        stats.sah_ratio[m] = renderer.scene.refit_mesh(&ctx, scene, m);
+    for (m, ratio) in renderer.scene.apply_deformations(&ctx, &deformed) {
+        stats.sah_ratio[m] = ratio;
         stats.refits += 1;
         renderer.geometry_changed = true;
     }

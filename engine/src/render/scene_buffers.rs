@@ -7,6 +7,7 @@ use crate::bvh::{FlatBvh, MeshBvh};
 use crate::gpu::GpuContext;
 use crate::scene::{AlphaMode, MeshData, SceneAsset, Wrap};
 use glam::{Mat4, Vec3};
+use rayon::prelude::*;
 use wgpu::util::DeviceExt;
 
 #[derive(Debug, thiserror::Error)]
@@ -391,68 +392,92 @@ impl GpuScene {
         Ok((gpu_scene, notes))
     }
 
-    /// Writes a deformed mesh's positions, normals and tangents over its own ranges of the vertex pool
-    /// (same encodings as the initial upload) and keeps the positions for refits and emitters.
-    pub fn write_deformed_vertices(
+    /// Writes this frame's deformed meshes over their own vertex-pool ranges (same encodings as the initial
+    /// upload), refits their BLASes and uploads the nodes; returns each mesh's new SAH ratio. The CPU work
+    /// (encoding, refit, SAH) runs in parallel over meshes, the queue writes after it in mesh order.
+    pub fn apply_deformations(
         &mut self,
         ctx: &GpuContext,
-        mesh: usize,
-        d: &crate::animation::DeformedMesh,
-    ) {
-        let slot = &mut self.mesh_slots[mesh];
-        let gpu = slot.gpu;
-        let words: Vec<u32> = d
-            .positions
-            .iter()
-            .flat_map(|p| p.to_array().map(f32::to_bits))
+        deformed: &crate::animation::DeformedMeshes,
+    ) -> Vec<(usize, f32)> {
+        struct Update {
+            mesh: usize,
+            words: Vec<(u32, Vec<u32>)>,
+            sah_ratio: f32,
+        }
+        let mut changed = vec![false; self.mesh_slots.len()];
+        for &m in &deformed.changed {
+            if deformed.meshes.get(m).is_some_and(Option::is_some) && m < changed.len() {
+                changed[m] = true;
+            }
+        }
+        let updates: Vec<Update> = self
+            .mesh_slots
+            .par_iter_mut()
+            .enumerate()
+            .filter(|(m, _)| changed[*m])
+            .map(|(m, slot)| {
+                let Some(d) = deformed.meshes[m].as_ref() else {
+                    unreachable!("filtered to deformed meshes")
+                };
+                let gpu = slot.gpu;
+                let mut words = vec![(
+                    gpu.position_offset,
+                    d.positions
+                        .iter()
+                        .flat_map(|p| p.to_array().map(f32::to_bits))
+                        .collect(),
+                )];
+                if let (Some(n), true) = (&d.normals, gpu.normal_offset != NONE) {
+                    words.push((
+                        gpu.normal_offset,
+                        n.iter().map(|n| oct_encode(*n)).collect(),
+                    ));
+                }
+                if let (Some(t), true) = (&d.tangents, gpu.tangent_offset != NONE) {
+                    let tangent_words = t
+                        .iter()
+                        .flat_map(|t| {
+                            [
+                                oct_encode(t.truncate()),
+                                if t.w < 0.0 { -1f32 } else { 1f32 }.to_bits(),
+                            ]
+                        })
+                        .collect();
+                    words.push((gpu.tangent_offset, tangent_words));
+                }
+                let sah_ratio = crate::bvh::refit::refit_and_measure(
+                    &mut slot.bvh,
+                    &d.positions,
+                    &slot.gpu_triangles,
+                );
+                slot.positions = Some(d.positions.clone());
+                Update {
+                    mesh: m,
+                    words,
+                    sah_ratio,
+                }
+            })
             .collect();
-        ctx.queue.write_buffer(
-            &self.vertex_pool,
-            gpu.position_offset as u64 * 4,
-            bytemuck::cast_slice(&words),
-        );
-        if let (Some(n), true) = (&d.normals, gpu.normal_offset != NONE) {
-            let words: Vec<u32> = n.iter().map(|n| oct_encode(*n)).collect();
-            ctx.queue.write_buffer(
-                &self.vertex_pool,
-                gpu.normal_offset as u64 * 4,
-                bytemuck::cast_slice(&words),
-            );
-        }
-        if let (Some(t), true) = (&d.tangents, gpu.tangent_offset != NONE) {
-            let words: Vec<u32> = t
-                .iter()
-                .flat_map(|t| {
-                    [
-                        oct_encode(t.truncate()),
-                        if t.w < 0.0 { -1f32 } else { 1f32 }.to_bits(),
-                    ]
-                })
-                .collect();
-            ctx.queue.write_buffer(
-                &self.vertex_pool,
-                gpu.tangent_offset as u64 * 4,
-                bytemuck::cast_slice(&words),
-            );
-        }
-        slot.positions = Some(d.positions.clone());
-    }
-
-    /// Refits a deformed mesh's BLAS to its current positions, uploads its nodes, returns the SAH ratio.
-    pub fn refit_mesh(&mut self, ctx: &GpuContext, scene: &SceneAsset, mesh: usize) -> f32 {
-        let slot = &mut self.mesh_slots[mesh];
-        let positions = slot
-            .positions
-            .as_deref()
-            .unwrap_or(&scene.meshes[mesh].positions);
-        let ratio =
-            crate::bvh::refit::refit_and_measure(&mut slot.bvh, positions, &slot.gpu_triangles);
-        ctx.queue.write_buffer(
-            &self.blas_nodes,
-            slot.gpu.blas_root as u64 * 64,
-            bytemuck::cast_slice(&slot.bvh.flat.nodes),
-        );
-        ratio
+        updates
+            .into_iter()
+            .map(|u| {
+                for (offset, words) in &u.words {
+                    ctx.queue.write_buffer(
+                        &self.vertex_pool,
+                        *offset as u64 * 4,
+                        bytemuck::cast_slice(words),
+                    );
+                }
+                let slot = &self.mesh_slots[u.mesh];
+                ctx.queue.write_buffer(
+                    &self.blas_nodes,
+                    slot.gpu.blas_root as u64 * 64,
+                    bytemuck::cast_slice(&slot.bvh.flat.nodes),
+                );
+                (u.mesh, u.sah_ratio)
+            })
+            .collect()
     }
 
     /// Rebuilds a mesh's BLAS from its current positions inside its reserved node range, and rewrites its
