@@ -6,6 +6,7 @@
 pub mod animation;
 pub mod bvh;
 pub mod camera;
+pub mod editor;
 pub mod frame_timing;
 pub mod gpu;
 pub mod headless;

@@ -203,6 +203,55 @@ impl FlatBvh {
         }
     }
 
+    /// Closest-hit traversal on the CPU (picking): visits the leaves a ray enters, nearer boxes first.
+    /// `hit_leaf(first_slot, count, t_max)` tests a leaf's primitive slots and returns the nearest hit below
+    /// `t_max`, if any; the result is the nearest over all leaves (or `None`).
+    pub fn closest_hit(
+        &self,
+        origin: Vec3,
+        dir: Vec3,
+        mut t_max: f32,
+        mut hit_leaf: impl FnMut(u32, u32, f32) -> Option<f32>,
+    ) -> Option<f32> {
+        let inv = dir.recip();
+        let entry = |c: &GpuBvhChild| -> Option<f32> {
+            if c.is_empty() {
+                return None;
+            }
+            let t0 = (Vec3::from(c.min) - origin) * inv;
+            let t1 = (Vec3::from(c.max) - origin) * inv;
+            let near = t0.min(t1).max_element().max(0.0);
+            let far = t0.max(t1).min_element();
+            // NaN (a zero direction component on a box face) fails the comparison: treated as a miss.
+            (near <= far).then_some(near)
+        };
+        let mut best = None;
+        let mut stack = vec![0u32];
+        while let Some(node) = stack.pop() {
+            let Some(node) = self.nodes.get(node as usize) else {
+                continue;
+            };
+            let mut hits: Vec<(f32, &GpuBvhChild)> = node
+                .children
+                .iter()
+                .filter_map(|c| entry(c).filter(|&t| t < t_max).map(|t| (t, c)))
+                .collect();
+            // Far child pushed first so the near one is popped (and may shrink t_max) first.
+            hits.sort_by(|a, b| b.0.total_cmp(&a.0));
+            for (_, c) in hits {
+                if c.is_leaf() {
+                    if let Some(t) = hit_leaf(c.index, c.count, t_max) {
+                        t_max = t;
+                        best = Some(t);
+                    }
+                } else {
+                    stack.push(c.index);
+                }
+            }
+        }
+        best
+    }
+
     pub fn root_bounds(&self) -> (Vec3, Vec3) {
         let [a, b] = self.nodes[0].children;
         let mut lo = Vec3::from(a.min);

@@ -1,5 +1,7 @@
 //! The wgpu device: one adapter picked at start-up, shared by every plugin as a resource.
 
+pub mod readback;
+
 use bevy_ecs::prelude::Resource;
 use std::sync::Arc;
 pub use wgpu::DeviceType;

@@ -1,12 +1,14 @@
 //! The render plugin: GPU scene buffers, the top-level BVH each frame, and the path tracer.
 
+pub mod display;
 pub mod layout;
 pub mod path_tracer;
+pub mod pick;
 pub mod scene_buffers;
 pub mod settings;
 pub mod shaders;
 
-pub use path_tracer::{Aovs, PassTimes, PathTracer};
+pub use path_tracer::{Aovs, GpuFrameStats, PassTimes, PathTracer};
 pub use scene_buffers::{GpuMemory, GpuScene, InstanceInput, UploadError};
 pub use settings::{AovView, Environment, RenderSettings, Tonemapper};
 
@@ -15,7 +17,7 @@ use crate::animation::DeformedMeshes;
 use crate::bvh::refit::BvhStats;
 use crate::camera::CameraView;
 use crate::gpu::GpuContext;
-use crate::scene::{GlobalTransform, MeshInstance, SceneAssets, SkinnedMesh};
+use crate::scene::{GlobalTransform, Materials, MeshInstance, SceneAssets, SkinnedMesh};
 use bevy_app::{App, Plugin, Update};
 use bevy_ecs::prelude::*;
 
@@ -30,6 +32,11 @@ pub struct Renderer {
     last_camera: Option<CameraView>,
     /// Set by systems that changed geometry (deformation) this frame.
     pub geometry_changed: bool,
+    /// Set by systems that changed what the image shows without moving geometry (material edits).
+    pub restart_accumulation: bool,
+    /// Stop tracing once this many samples per pixel have accumulated (the viewer idles on a converged image);
+    /// the display transform still runs.
+    pub sample_limit: Option<u32>,
     /// Whether each frame also runs the display transform (the viewer); headless renders tone-map once.
     pub tonemap_each_frame: bool,
     /// GPU pass times of the last frame when `time_passes` is set (blocks the CPU each frame).
@@ -56,6 +63,8 @@ impl Renderer {
                 last_settings: None,
                 last_camera: None,
                 geometry_changed: false,
+                restart_accumulation: false,
+                sample_limit: None,
                 tonemap_each_frame: false,
                 time_passes: false,
                 last_pass_times: None,
@@ -150,7 +159,27 @@ pub fn refit_deformed(
     stats.last_rebuild_seconds = start.elapsed().as_secs_f64();
 }
 
-/// Traces this frame's samples, restarting accumulation when the camera or settings changed.
+/// Uploads edited materials (only those that differ from the GPU's copy) and restarts accumulation.
+pub fn upload_materials(
+    ctx: Res<GpuContext>,
+    assets: Res<SceneAssets>,
+    materials: Res<Materials>,
+    mut renderer: ResMut<Renderer>,
+) {
+    if !materials.is_changed() {
+        return;
+    }
+    if renderer
+        .scene
+        .update_materials(&ctx, &assets.0, &materials.0)
+        > 0
+    {
+        renderer.restart_accumulation = true;
+    }
+}
+
+/// Traces this frame's samples, restarting accumulation when the camera, settings, geometry or materials
+/// changed.
 pub fn render_frame(
     ctx: Res<GpuContext>,
     settings: Res<RenderSettings>,
@@ -165,12 +194,26 @@ pub fn render_frame(
         .last_settings
         .as_ref()
         .is_none_or(|s| s.changes_image(&settings));
-    if settings_changed || renderer.last_camera != Some(*camera) || renderer.geometry_changed {
+    if settings_changed
+        || renderer.last_camera != Some(*camera)
+        || renderer.geometry_changed
+        || renderer.restart_accumulation
+    {
         renderer.tracer.reset(&ctx);
     }
     renderer.last_settings = Some(settings.clone());
     renderer.last_camera = Some(*camera);
     renderer.geometry_changed = false;
+    renderer.restart_accumulation = false;
+    if renderer
+        .sample_limit
+        .is_some_and(|limit| renderer.tracer.samples >= limit)
+    {
+        if renderer.tonemap_each_frame {
+            renderer.tracer.tonemap(&ctx, &settings);
+        }
+        return;
+    }
     renderer.tracer.dispatch(
         &ctx,
         &renderer.scene,
@@ -198,6 +241,7 @@ impl Plugin for RenderPlugin {
                     (refit_deformed, update_instances)
                         .chain()
                         .in_set(FrameSet::Bvh),
+                    upload_materials.in_set(FrameSet::Upload),
                     render_frame.in_set(FrameSet::Render),
                 ),
             );

@@ -34,6 +34,20 @@ pub struct PassTimes {
     pub tonemap_ms: f64,
 }
 
+/// What one dispatch cost on the GPU, read back without blocking (see [`PathTracer::enable_async_stats`]).
+#[derive(Clone, Copy, Debug, Default, serde::Serialize)]
+pub struct GpuFrameStats {
+    /// Index of the dispatch (counts every [`PathTracer::dispatch`]).
+    pub dispatch: u64,
+    /// `None` without timestamp support.
+    pub passes: Option<PassTimes>,
+    /// Camera, bounce and shadow rays traced.
+    pub rays: u64,
+}
+
+/// Bytes of one statistics readback: 4 resolved timestamps, then the ray counter.
+const STATS_BYTES: u64 = 48;
+
 pub struct PathTracer {
     trace_pipeline: wgpu::ComputePipeline,
     tonemap_pipeline: wgpu::ComputePipeline,
@@ -56,6 +70,15 @@ pub struct PathTracer {
     /// Samples per pixel accumulated since the last reset.
     pub samples: u32,
     timestamps: Option<Timestamps>,
+    /// Identifies the per-view buffers (unique across tracers; changes on resize), so displays rebind them.
+    pub view_generation: u64,
+    dispatches: u64,
+    async_stats: Option<crate::gpu::readback::AsyncReadback>,
+}
+
+fn next_view_id() -> u64 {
+    static NEXT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
+    NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
 }
 
 fn layout_entry(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
@@ -261,6 +284,9 @@ impl PathTracer {
             height,
             samples: 0,
             timestamps,
+            view_generation: next_view_id(),
+            dispatches: 0,
+            async_stats: None,
         };
         tracer.reset(ctx);
         tracer
@@ -294,6 +320,7 @@ impl PathTracer {
             self.output_rgba8,
         ) = (v.accum, v.albedo, v.normal, v.rgba8);
         (self.width, self.height) = (width, height);
+        self.view_generation = next_view_id();
         self.reset(ctx);
     }
 
@@ -397,7 +424,68 @@ impl PathTracer {
         if let Some(t) = &self.timestamps {
             encoder.resolve_query_set(&t.set, 0..if tonemap { 4 } else { 2 }, &t.resolve, 0);
         }
+        self.dispatches += 1;
+        if let Some(stats) = &mut self.async_stats {
+            let mut sources = vec![(&self.ray_counter, 4)];
+            if let Some(t) = &self.timestamps {
+                sources.insert(0, (&t.resolve, 32));
+            }
+            stats.encode(&mut encoder, &sources, self.dispatches);
+        }
         ctx.queue.submit([encoder.finish()]);
+        if let Some(stats) = &mut self.async_stats {
+            stats.after_submit();
+        }
+    }
+
+    /// From now on every dispatch also copies its pass times and ray count into a small ring of staging
+    /// buffers, read by [`Self::poll_stats`] without stalling (the viewer's frame loop).
+    pub fn enable_async_stats(&mut self, ctx: &GpuContext) {
+        if self.async_stats.is_none() {
+            self.async_stats = Some(crate::gpu::readback::AsyncReadback::new(
+                ctx,
+                "frame stats readback",
+                STATS_BYTES,
+                3,
+            ));
+        }
+    }
+
+    /// Statistics of finished dispatches since the last call, oldest first.
+    pub fn poll_stats(&mut self, ctx: &GpuContext) -> Vec<GpuFrameStats> {
+        let Some(stats) = &mut self.async_stats else {
+            return Vec::new();
+        };
+        let period_ns = self.timestamps.as_ref().map(|t| t.period_ns as f64);
+        stats
+            .poll(ctx)
+            .into_iter()
+            .map(|(dispatch, bytes)| {
+                let word = |i: usize| {
+                    u64::from_le_bytes(bytes[i * 8..i * 8 + 8].try_into().unwrap_or_default())
+                };
+                let (passes, rays_at) = match period_ns {
+                    Some(period) => {
+                        let ms = |a: u64, b: u64| b.saturating_sub(a) as f64 * period * 1e-6;
+                        (
+                            Some(PassTimes {
+                                trace_ms: ms(word(0), word(1)),
+                                tonemap_ms: ms(word(2), word(3)),
+                            }),
+                            32,
+                        )
+                    }
+                    None => (None, 0),
+                };
+                let rays =
+                    u32::from_le_bytes(bytes[rays_at..rays_at + 4].try_into().unwrap_or_default());
+                GpuFrameStats {
+                    dispatch,
+                    passes,
+                    rays: rays as u64,
+                }
+            })
+            .collect()
     }
 
     fn encode_tonemap(

@@ -83,6 +83,8 @@ pub struct GpuScene {
     pub emitter_total_power: f32,
     /// Emissive triangles per mesh (triangle slot, material), for building the emitter list.
     emissive_triangles: Vec<Vec<(u32, u32)>>,
+    /// Instances as last uploaded (TLAS leaf order): material edits rebuild the emitter list from them.
+    uploaded_instances: Vec<GpuInstance>,
     /// Bumped whenever buffers are recreated, so bind groups are rebuilt.
     pub generation: u64,
     pub build_seconds: f64,
@@ -130,7 +132,7 @@ pub fn gpu_material(m: &crate::scene::Material) -> GpuMaterial {
     };
     GpuMaterial {
         base_color: m.base_color.to_array(),
-        emissive: m.emissive.to_array(),
+        emissive: m.emitted_radiance().to_array(),
         metallic: m.metallic,
         roughness: m.roughness,
         alpha_cutoff: cutoff,
@@ -386,6 +388,7 @@ impl GpuScene {
             emitter_count: 0,
             emitter_total_power: 0.0,
             emissive_triangles,
+            uploaded_instances: Vec::new(),
             generation: 1,
             build_seconds: start.elapsed().as_secs_f64(),
         };
@@ -553,15 +556,7 @@ impl GpuScene {
             (&mut self.tlas_nodes, tlas_bytes, "tlas nodes"),
             (&mut self.emitters, emitter_bytes, "emitters"),
         ] {
-            if bytes.is_empty() {
-                continue;
-            }
-            if (buffer.size() as usize) < bytes.len() {
-                *buffer = storage(ctx, label, bytes);
-                recreated = true;
-            } else {
-                ctx.queue.write_buffer(buffer, 0, bytes);
-            }
+            recreated |= write_or_grow(ctx, buffer, bytes, label);
         }
         if recreated {
             self.generation += 1;
@@ -569,7 +564,58 @@ impl GpuScene {
         self.emitter_count = emitters.len() as u32;
         self.memory.instances_and_tlas =
             (instance_bytes.len() + tlas_bytes.len() + emitter_bytes.len()) as u64;
+        self.uploaded_instances = ordered;
         Ok(())
+    }
+
+    /// Uploads the materials that differ from what the GPU holds; returns how many changed. When the set of
+    /// emissive triangles or their power changes, the emitter list is rebuilt for the current instances.
+    pub fn update_materials(
+        &mut self,
+        ctx: &GpuContext,
+        scene: &SceneAsset,
+        materials: &[crate::scene::Material],
+    ) -> usize {
+        let mut changed = 0;
+        let mut emission_changed = false;
+        for (i, m) in materials.iter().enumerate().take(self.material_data.len()) {
+            let gpu = gpu_material(m);
+            if gpu == self.material_data[i] {
+                continue;
+            }
+            emission_changed |= gpu.emissive != self.material_data[i].emissive;
+            self.material_data[i] = gpu;
+            ctx.queue.write_buffer(
+                &self.materials,
+                (i * std::mem::size_of::<GpuMaterial>()) as u64,
+                bytemuck::bytes_of(&gpu),
+            );
+            changed += 1;
+        }
+        if emission_changed {
+            for (m, mesh) in scene.meshes.iter().enumerate() {
+                let slot = &self.mesh_slots[m];
+                self.emissive_triangles[m] = emissive_slots(
+                    mesh,
+                    &slot.bvh,
+                    slot.gpu.triangle_offset,
+                    &self.material_data,
+                );
+            }
+            let instances = std::mem::take(&mut self.uploaded_instances);
+            let emitters = self.build_emitters(scene, &instances);
+            if write_or_grow(
+                ctx,
+                &mut self.emitters,
+                bytemuck::cast_slice(&emitters),
+                "emitters",
+            ) {
+                self.generation += 1;
+            }
+            self.emitter_count = emitters.len() as u32;
+            self.uploaded_instances = instances;
+        }
+        changed
     }
 
     /// Emissive triangles of every instance, with a CDF proportional to luminance x world area (the shader
@@ -643,19 +689,51 @@ fn order_triangles(
     materials: &[GpuMaterial],
 ) -> OrderedTriangles {
     let indices = bvh.ordered_triangles(&mesh.triangles);
-    let mut packed = Vec::with_capacity(indices.len());
-    let mut emissive = Vec::new();
-    for (slot, (&t, [a, b, c])) in bvh.flat.order.iter().zip(&indices).enumerate() {
-        let material = mesh.triangle_materials[t as usize];
-        packed.push([*a, *b, *c, material]);
-        if luminance(Vec3::from(materials[material as usize].emissive)) > 0.0 {
-            emissive.push((triangle_offset + slot as u32, material));
-        }
-    }
+    let packed = bvh
+        .flat
+        .order
+        .iter()
+        .zip(&indices)
+        .map(|(&t, [a, b, c])| [*a, *b, *c, mesh.triangle_materials[t as usize]])
+        .collect();
     OrderedTriangles {
         indices,
         packed,
-        emissive,
+        emissive: emissive_slots(mesh, bvh, triangle_offset, materials),
+    }
+}
+
+/// A mesh's emissive triangles in BVH order: (slot in the triangle buffer, material).
+fn emissive_slots(
+    mesh: &MeshData,
+    bvh: &MeshBvh,
+    triangle_offset: u32,
+    materials: &[GpuMaterial],
+) -> Vec<(u32, u32)> {
+    bvh.flat
+        .order
+        .iter()
+        .enumerate()
+        .filter_map(|(slot, &t)| {
+            let material = mesh.triangle_materials[t as usize];
+            (luminance(Vec3::from(materials[material as usize].emissive)) > 0.0)
+                .then_some((triangle_offset + slot as u32, material))
+        })
+        .collect()
+}
+
+/// Writes `bytes` into `buffer`, replacing it with a larger one when it does not fit; true when replaced (bind
+/// groups must then be rebuilt). Empty data leaves the buffer as it is.
+fn write_or_grow(ctx: &GpuContext, buffer: &mut wgpu::Buffer, bytes: &[u8], label: &str) -> bool {
+    if bytes.is_empty() {
+        return false;
+    }
+    if (buffer.size() as usize) < bytes.len() {
+        *buffer = storage(ctx, label, bytes);
+        true
+    } else {
+        ctx.queue.write_buffer(buffer, 0, bytes);
+        false
     }
 }
 

@@ -6,6 +6,7 @@ pub const BVH: &str = include_str!("../../../shaders/bvh.wgsl");
 pub const BRDF: &str = include_str!("../../../shaders/brdf.wgsl");
 pub const PATH_TRACE: &str = include_str!("../../../shaders/path_trace.wgsl");
 pub const TONEMAP: &str = include_str!("../../../shaders/tonemap.wgsl");
+pub const DISPLAY: &str = include_str!("../../../shaders/display.wgsl");
 
 /// The path tracer module: shared declarations, traversal, BRDF, then the kernel.
 pub fn path_trace_source() -> String {
@@ -16,10 +17,16 @@ pub fn tonemap_source() -> String {
     TONEMAP.to_string()
 }
 
-/// Every compute module the renderer builds, by name, for validation.
+/// The viewer's display pass (a render pipeline: the tone-mapped image drawn into the window).
+pub fn display_source() -> String {
+    DISPLAY.to_string()
+}
+
+/// Every module the renderer builds, by name, for validation.
 pub fn all_modules() -> Vec<(&'static str, String)> {
     vec![
         ("path_trace", path_trace_source()),
         ("tonemap", tonemap_source()),
+        ("display", display_source()),
     ]
 }

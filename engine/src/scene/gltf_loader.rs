@@ -155,16 +155,7 @@ impl<'a> Loader<'a> {
     }
 
     fn read_uri(&self, uri: &str) -> Result<Vec<u8>, String> {
-        if let Some(rest) = uri.strip_prefix("data:") {
-            let (_, payload) = rest
-                .split_once(";base64,")
-                .ok_or("data URI is not base64")?;
-            return base64::engine::general_purpose::STANDARD
-                .decode(payload)
-                .map_err(|e| format!("bad base64 data URI: {e}"));
-        }
-        let file = self.base_dir.join(percent_decode(uri));
-        std::fs::read(&file).map_err(|e| format!("cannot read {}: {e}", file.display()))
+        read_uri(self.base_dir, uri)
     }
 
     fn load(self) -> Result<SceneAsset, SceneError> {
@@ -337,8 +328,8 @@ impl<'a> Loader<'a> {
                 metallic_roughness_texture,
                 normal_texture,
                 normal_scale: normal.as_ref().map_or(1.0, |n| finite_or(n.scale(), 1.0)),
-                emissive: finite_or(Vec3::from(m.emissive_factor()) * strength, Vec3::ZERO)
-                    .max(Vec3::ZERO),
+                emissive: finite_or(Vec3::from(m.emissive_factor()), Vec3::ZERO).max(Vec3::ZERO),
+                emissive_strength: finite_or(strength, 1.0).max(0.0),
                 emissive_texture,
                 alpha_mode: match m.alpha_mode() {
                     gltf::material::AlphaMode::Opaque => AlphaMode::Opaque,
@@ -952,7 +943,21 @@ fn finite_or<T: Finite>(v: T, fallback: T) -> T {
     if v.all_finite() { v } else { fallback }
 }
 
-fn percent_decode(uri: &str) -> String {
+/// The bytes behind a glTF URI: a base64 data URI, or a (percent-encoded) path relative to `base_dir`.
+pub(super) fn read_uri(base_dir: &Path, uri: &str) -> Result<Vec<u8>, String> {
+    if let Some(rest) = uri.strip_prefix("data:") {
+        let (_, payload) = rest
+            .split_once(";base64,")
+            .ok_or("data URI is not base64")?;
+        return base64::engine::general_purpose::STANDARD
+            .decode(payload)
+            .map_err(|e| format!("bad base64 data URI: {e}"));
+    }
+    let file = base_dir.join(percent_decode(uri));
+    std::fs::read(&file).map_err(|e| format!("cannot read {}: {e}", file.display()))
+}
+
+pub(super) fn percent_decode(uri: &str) -> String {
     let bytes = uri.as_bytes();
     let mut out = Vec::with_capacity(bytes.len());
     let mut i = 0;

@@ -3,12 +3,16 @@
 
 pub mod compose;
 mod gltf_loader;
+pub mod gltf_writer;
+mod materials;
 pub mod procedural;
 mod spawn;
 mod tangents;
 
 pub use compose::{CrowdScene, compose, crowd_scene, unshare_deformable_meshes};
 pub use gltf_loader::{LoadOptions, load_gltf, load_gltf_slice};
+pub use gltf_writer::{SaveError, save_with_materials};
+pub use materials::Materials;
 pub use spawn::{
     CameraComponent, GlobalTransform, MeshInstance, MorphWeights, SceneNode, SceneNodes,
     ScenePlugin, SceneRoot, SkinnedMesh, Transform, propagate_transforms, spawn_scene,
@@ -73,11 +77,20 @@ pub struct Material {
     pub metallic_roughness_texture: Option<TextureRef>,
     pub normal_texture: Option<TextureRef>,
     pub normal_scale: f32,
-    /// Linear radiance: emissiveFactor x KHR_materials_emissive_strength.
+    /// glTF `emissiveFactor` (linear).
     pub emissive: Vec3,
+    /// KHR_materials_emissive_strength (1 without the extension); emitted radiance = emissive x strength.
+    pub emissive_strength: f32,
     pub emissive_texture: Option<TextureRef>,
     pub alpha_mode: AlphaMode,
     pub double_sided: bool,
+}
+
+impl Material {
+    /// Emitted radiance (before the emissive texture): factor x strength.
+    pub fn emitted_radiance(&self) -> Vec3 {
+        self.emissive * self.emissive_strength
+    }
 }
 
 impl Default for Material {
@@ -93,6 +106,7 @@ impl Default for Material {
             normal_texture: None,
             normal_scale: 1.0,
             emissive: Vec3::ZERO,
+            emissive_strength: 1.0,
             emissive_texture: None,
             alpha_mode: AlphaMode::Opaque,
             double_sided: false,

@@ -1,5 +1,9 @@
 //! The view the path tracer renders from: a glTF camera node, a framing of the scene bounds, or an explicit
-//! look-at given on the command line.
+//! look-at given on the command line; [`controller`] moves it interactively (orbit, fly, scene cameras).
+
+pub mod controller;
+
+pub use controller::{CameraControllerPlugin, CameraInput, CameraMode, CameraRig};
 
 use crate::scene::{CameraComponent, GlobalTransform, SceneAsset};
 use bevy_ecs::prelude::*;
@@ -54,6 +58,26 @@ impl CameraView {
     pub fn position(&self) -> Vec3 {
         self.world_from_camera.w_axis.truncate()
     }
+
+    /// Unit direction the camera looks along (its -Z).
+    pub fn forward(&self) -> Vec3 {
+        (-self.world_from_camera.z_axis.truncate()).normalize_or(Vec3::NEG_Z)
+    }
+
+    /// The ray through image point (`x`, `y`) (pixels from the top-left; +0.5 is a pixel centre) of a
+    /// `width` x `height` image: the same mapping the path tracer's camera rays use. Unit direction.
+    pub fn ray_through(&self, x: f32, y: f32, width: u32, height: u32) -> (Vec3, Vec3) {
+        let (w, h) = (width.max(1) as f32, height.max(1) as f32);
+        let ndc_x = x / w * 2.0 - 1.0;
+        let ndc_y = 1.0 - y / h * 2.0;
+        let tan = (self.yfov * 0.5).tan();
+        let d = Vec3::new(ndc_x * tan * w / h, ndc_y * tan, -1.0);
+        let dir = self
+            .world_from_camera
+            .transform_vector3(d)
+            .normalize_or(Vec3::NEG_Z);
+        (self.position(), dir)
+    }
 }
 
 /// Which camera a render uses.
@@ -78,6 +102,23 @@ pub struct NoSuchCamera {
     pub available: usize,
 }
 
+/// The scene's glTF camera views in node order, from (node, world matrix, yfov) of each camera node.
+pub fn scene_camera_views(cameras: impl Iterator<Item = (usize, Mat4, f32)>) -> Vec<CameraView> {
+    let mut cameras: Vec<(usize, Mat4, f32)> = cameras.collect();
+    cameras.sort_by_key(|c| c.0);
+    cameras
+        .into_iter()
+        .map(|(_, m, yfov)| {
+            // Camera nodes may carry scale: keep only rotation and translation.
+            let (_, r, t) = m.to_scale_rotation_translation();
+            CameraView {
+                world_from_camera: Mat4::from_rotation_translation(r, t),
+                yfov,
+            }
+        })
+        .collect()
+}
+
 /// Resolves the choice against the ECS (camera node world transforms are current after propagation).
 pub fn resolve_camera(
     world: &mut World,
@@ -85,36 +126,22 @@ pub fn resolve_camera(
     choice: &CameraChoice,
     aspect: f32,
 ) -> Result<CameraView, NoSuchCamera> {
-    let mut cameras: Vec<(usize, Mat4, f32)> = world
-        .query::<(&crate::scene::SceneNode, &CameraComponent, &GlobalTransform)>()
-        .iter(world)
-        .map(|(n, c, g)| (n.node, g.0, c.yfov))
-        .collect();
-    cameras.sort_by_key(|c| c.0);
-    let rigid = |m: Mat4| {
-        // Camera nodes may carry scale: keep only rotation and translation.
-        let (_, r, t) = m.to_scale_rotation_translation();
-        Mat4::from_rotation_translation(r, t)
-    };
+    let cameras = scene_camera_views(
+        world
+            .query::<(&crate::scene::SceneNode, &CameraComponent, &GlobalTransform)>()
+            .iter(world)
+            .map(|(n, c, g)| (n.node, g.0, c.yfov)),
+    );
     Ok(match choice {
         CameraChoice::LookAt { eye, target, yfov } => {
             CameraView::look_at(*eye, *target, Vec3::Y, *yfov)
         }
-        CameraChoice::Index(i) => {
-            let (_, m, yfov) = *cameras.get(*i).ok_or(NoSuchCamera {
-                requested: *i,
-                available: cameras.len(),
-            })?;
-            CameraView {
-                world_from_camera: rigid(m),
-                yfov,
-            }
-        }
+        CameraChoice::Index(i) => *cameras.get(*i).ok_or(NoSuchCamera {
+            requested: *i,
+            available: cameras.len(),
+        })?,
         CameraChoice::Auto => match cameras.first() {
-            Some(&(_, m, yfov)) => CameraView {
-                world_from_camera: rigid(m),
-                yfov,
-            },
+            Some(view) => *view,
             None => {
                 let bounds = scene
                     .rest_bounds()

@@ -1,0 +1,164 @@
+//! The material inspector: every parameter the renderer reads (`gpu_material`), edited on the
+//! [`Materials`] resource; the render plugin re-uploads what changed and restarts accumulation.
+
+use super::EditorState;
+use crate::scene::{AlphaMode, Material, Materials, SceneAssets, TextureRef};
+use bevy_ecs::prelude::*;
+
+pub fn show(ui: &mut egui::Ui, world: &mut World, state: &mut EditorState) {
+    let scene = world.resource::<SceneAssets>().0.clone();
+    let materials = world.resource::<Materials>();
+    if materials.0.is_empty() {
+        ui.label("The scene has no materials (glTF's default material is used).");
+        return;
+    }
+    let edited = materials.edited(&scene);
+    let index = state
+        .selection
+        .material
+        .filter(|&i| i < materials.0.len())
+        .unwrap_or(0);
+    let label = |i: usize, m: &Material| {
+        let mark = if edited.contains(&i) { " *" } else { "" };
+        if m.name.is_empty() {
+            format!("{i}{mark}")
+        } else {
+            format!("{i}: {}{mark}", m.name)
+        }
+    };
+    let mut chosen = index;
+    egui::ComboBox::from_id_salt("material")
+        .selected_text(label(index, &materials.0[index]))
+        .width(220.0)
+        .show_ui(ui, |ui| {
+            for (i, m) in materials.0.iter().enumerate() {
+                ui.selectable_value(&mut chosen, i, label(i, m));
+            }
+        });
+    state.selection.material = Some(chosen);
+    let original = scene.materials.get(chosen).cloned().unwrap_or_default();
+    let mut m = materials.0[chosen].clone();
+    edit(ui, &mut m, &original);
+    ui.horizontal(|ui| {
+        if ui
+            .add_enabled(m != original, egui::Button::new("Revert to file"))
+            .clicked()
+        {
+            m = original.clone();
+        }
+        if !edited.is_empty() {
+            ui.label(format!("{} edited (*)", edited.len()));
+        }
+    });
+    if m != world.resource::<Materials>().0[chosen] {
+        world.resource_mut::<Materials>().0[chosen] = m;
+    }
+}
+
+/// Picks one texture reference out of a material.
+type TextureSlot = fn(&mut Material) -> &mut Option<TextureRef>;
+
+fn edit(ui: &mut egui::Ui, m: &mut Material, original: &Material) {
+    egui::Grid::new("material params")
+        .num_columns(2)
+        .show(ui, |ui| {
+            ui.label("base colour");
+            let mut c = m.base_color.to_array();
+            if ui.color_edit_button_rgba_unmultiplied(&mut c).changed() {
+                m.base_color = c.into();
+            }
+            ui.end_row();
+            ui.label("metallic");
+            ui.add(egui::Slider::new(&mut m.metallic, 0.0..=1.0));
+            ui.end_row();
+            ui.label("roughness");
+            ui.add(egui::Slider::new(&mut m.roughness, 0.0..=1.0));
+            ui.end_row();
+            ui.label("emissive colour");
+            let mut e = m.emissive.to_array();
+            if ui.color_edit_button_rgb(&mut e).changed() {
+                m.emissive = e.into();
+            }
+            ui.end_row();
+            ui.label("emissive strength");
+            ui.add(
+                egui::DragValue::new(&mut m.emissive_strength)
+                    .speed(0.05)
+                    .range(0.0..=1.0e4),
+            );
+            ui.end_row();
+            ui.label("alpha mode");
+            let mut mode = match m.alpha_mode {
+                AlphaMode::Opaque => 0,
+                AlphaMode::Mask(_) => 1,
+                AlphaMode::Blend => 2,
+            };
+            let mut cutoff = match (m.alpha_mode, original.alpha_mode) {
+                (AlphaMode::Mask(c), _) | (_, AlphaMode::Mask(c)) => c,
+                _ => 0.5,
+            };
+            egui::ComboBox::from_id_salt("alpha mode")
+                .selected_text(["opaque", "mask", "blend"][mode])
+                .show_ui(ui, |ui| {
+                    for (i, name) in ["opaque", "mask", "blend"].iter().enumerate() {
+                        ui.selectable_value(&mut mode, i, *name);
+                    }
+                });
+            ui.end_row();
+            if mode == 1 {
+                ui.label("alpha cutoff");
+                ui.add(egui::Slider::new(&mut cutoff, 0.0..=1.0));
+                ui.end_row();
+            }
+            m.alpha_mode = match mode {
+                0 => AlphaMode::Opaque,
+                1 => AlphaMode::Mask(cutoff),
+                _ => AlphaMode::Blend,
+            };
+            ui.label("double-sided");
+            ui.checkbox(&mut m.double_sided, "");
+            ui.end_row();
+            if original.normal_texture.is_some() {
+                ui.label("normal scale");
+                ui.add(
+                    egui::DragValue::new(&mut m.normal_scale)
+                        .speed(0.01)
+                        .range(-10.0..=10.0),
+                );
+                ui.end_row();
+            }
+        });
+    // Textures can be switched off (and back on) where the file has them.
+    let slots: [(&str, TextureSlot, Option<TextureRef>); 4] = [
+        (
+            "base colour texture",
+            |m| &mut m.base_color_texture,
+            original.base_color_texture,
+        ),
+        (
+            "metallic-roughness texture",
+            |m| &mut m.metallic_roughness_texture,
+            original.metallic_roughness_texture,
+        ),
+        (
+            "normal texture",
+            |m| &mut m.normal_texture,
+            original.normal_texture,
+        ),
+        (
+            "emissive texture",
+            |m| &mut m.emissive_texture,
+            original.emissive_texture,
+        ),
+    ];
+    for (name, slot, file_value) in slots {
+        let Some(file_value) = file_value else {
+            continue;
+        };
+        let field = slot(m);
+        let mut on = field.is_some();
+        if ui.checkbox(&mut on, name).changed() {
+            *field = on.then_some(file_value);
+        }
+    }
+}

@@ -1,0 +1,101 @@
+//! Frame statistics: rate, CPU phase and GPU pass times, rays per second, accumulation, BVH refit/rebuild
+//! counters and GPU memory.
+
+use super::ViewerStats;
+use crate::bvh::refit::BvhStats;
+use crate::frame_timing::FrameTimings;
+use crate::gpu::GpuContext;
+use crate::render::Renderer;
+use bevy_ecs::prelude::*;
+
+fn mib(bytes: u64) -> String {
+    format!("{:.1} MiB", bytes as f64 / 1048576.0)
+}
+
+pub fn show(ui: &mut egui::Ui, world: &mut World) {
+    let stats = world.resource::<ViewerStats>().clone();
+    let phases = world.resource::<FrameTimings>().last;
+    let ctx = world.resource::<GpuContext>();
+    let (adapter, timestamps) = (ctx.info.name.clone(), ctx.supports_timestamps());
+    let cpu_adapter = ctx.info.device_type == wgpu::DeviceType::Cpu;
+    let renderer = world.resource::<Renderer>();
+    let bvh = world.resource::<BvhStats>();
+    egui::Grid::new("stats").num_columns(2).show(ui, |ui| {
+        ui.label("frame");
+        ui.label(format!("{:.1} fps, {:.1} ms", stats.fps, stats.frame_ms));
+        ui.end_row();
+        ui.label("samples");
+        ui.label(format!(
+            "{} spp at {}x{}",
+            renderer.tracer.samples, renderer.tracer.width, renderer.tracer.height
+        ));
+        ui.end_row();
+        ui.label("CPU ms");
+        ui.add(
+            egui::Label::new(format!(
+                "animate {:.2}, transform {:.2}, deform {:.2}, BVH {:.2}, upload {:.2}, submit {:.2}, UI {:.2}",
+                phases.animate_ms,
+                phases.transform_ms,
+                phases.deform_ms,
+                phases.bvh_ms,
+                phases.upload_ms,
+                phases.render_ms,
+                stats.ui_ms
+            ))
+            .wrap(),
+        );
+        ui.end_row();
+        ui.label("GPU ms");
+        match stats.last_gpu.and_then(|g| g.passes) {
+            Some(p) => ui.add(
+                egui::Label::new(format!(
+                    "trace {:.2}, tonemap {:.3}{}{}",
+                    p.trace_ms,
+                    p.tonemap_ms,
+                    stats
+                        .ui_gpu_ms
+                        .map_or(String::new(), |u| format!(", UI {u:.3}")),
+                    if cpu_adapter {
+                        " (CPU adapter: its timestamps can miss compute work)"
+                    } else {
+                        ""
+                    }
+                ))
+                .wrap(),
+            ),
+            None if timestamps => ui.label("waiting for the first frame"),
+            None => ui.label("n/a: the adapter has no timestamp queries"),
+        };
+        ui.end_row();
+        ui.label("rays/s");
+        ui.label(stats.rays_per_second.map_or("-".into(), |r| {
+            format!("{:.2} M", r / 1e6)
+        }));
+        ui.end_row();
+        ui.label("BVH");
+        let worst = bvh.sah_ratio.iter().copied().fold(1.0f32, f32::max);
+        ui.add(
+            egui::Label::new(format!(
+                "{} refits, {} rebuilds, worst SAH ratio {:.2}",
+                bvh.refits, bvh.rebuilds, worst
+            ))
+            .wrap(),
+        );
+        ui.end_row();
+        let memory = renderer.scene.memory;
+        ui.label("GPU memory");
+        ui.add(
+            egui::Label::new(format!(
+                "{} geometry+BVH, {} textures, {} total",
+                mib(memory.geometry_and_bvh()),
+                mib(memory.texels),
+                mib(memory.total())
+            ))
+            .wrap(),
+        );
+        ui.end_row();
+        ui.label("adapter");
+        ui.add(egui::Label::new(adapter).wrap());
+        ui.end_row();
+    });
+}
