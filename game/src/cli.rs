@@ -20,6 +20,75 @@ pub enum Command {
     Render(RenderArgs),
     /// Measure frame times, rays per second, BVH build time and GPU memory.
     Bench(BenchArgs),
+    /// Open the interactive viewer and editor (or run its frame loop offscreen).
+    View(ViewArgs),
+}
+
+#[derive(Args, Debug, Clone)]
+pub struct ViewArgs {
+    /// A .gltf or .glb file, or `crowd` (the animated bench crowd from --assets); default: the embedded
+    /// Cornell box.
+    pub scene: Option<PathBuf>,
+    /// Run scripted steps (see docs/VIEWER.md): wait, edit materials, scrub, switch camera, screenshot, quit.
+    #[arg(long)]
+    pub script: Option<PathBuf>,
+    /// Run the frame loop without a window (for timing on machines without a display).
+    #[arg(long)]
+    pub offscreen: bool,
+    /// Frames to run offscreen.
+    #[arg(long, default_value_t = 300, requires = "offscreen")]
+    pub frames: u64,
+    /// Offscreen: write per-pass frame times (median, p99) as JSON here.
+    #[arg(long, requires = "offscreen")]
+    pub report: Option<PathBuf>,
+    /// Offscreen: also wait for the GPU after the frame schedule and after the UI pass and report those
+    /// wall times (a cross-check of the timestamps; serialises CPU and GPU).
+    #[arg(long, requires = "offscreen")]
+    pub sync_passes: bool,
+    /// Render at this fixed size WxH instead of the image area's size.
+    #[arg(long, value_parser = parse_size)]
+    pub image_size: Option<(u32, u32)>,
+    /// Window size WxH (default: the last size used, else 1280x800).
+    #[arg(long, value_parser = parse_size)]
+    pub window_size: Option<(u32, u32)>,
+    /// Present without waiting for vertical sync.
+    #[arg(long)]
+    pub no_vsync: bool,
+    /// Animation time step in seconds per frame (default: wall-clock time; 1/60 with --script or --offscreen).
+    #[arg(long)]
+    pub fixed_dt: Option<f32>,
+    /// Samples per pixel per frame.
+    #[arg(long)]
+    pub spp_per_frame: Option<u32>,
+    /// Surface interactions after the camera ray.
+    #[arg(long)]
+    pub max_depth: Option<u32>,
+    /// Start with the scene's camera I.
+    #[arg(long)]
+    pub camera: Option<usize>,
+    /// Play this animation clip (name or index).
+    #[arg(long)]
+    pub animation: Option<String>,
+    /// Folder of the shared glTF assets (for `crowd`).
+    #[arg(long, default_value = "../shared/assets")]
+    pub assets: PathBuf,
+    /// Neither read nor write the settings file.
+    #[arg(long)]
+    pub no_settings: bool,
+}
+
+pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .ok_or_else(|| format!("expected WIDTHxHEIGHT, got `{s}`"))?;
+    let parse = |v: &str| {
+        v.trim()
+            .parse::<u32>()
+            .ok()
+            .filter(|&n| (1..=16384).contains(&n))
+            .ok_or_else(|| format!("`{v}` in `{s}` is not a size between 1 and 16384"))
+    };
+    Ok((parse(w)?, parse(h)?))
 }
 
 #[derive(Args, Debug)]

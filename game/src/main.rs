@@ -1,8 +1,10 @@
-//! `raykin`: path-trace animated glTF scenes. With no arguments it renders the embedded default scene.
+//! `raykin`: path-trace animated glTF scenes. With no arguments it opens the viewer on the embedded default
+//! scene when a display is present, else renders that scene to out/default.png.
 
 mod bench_cmd;
 mod cli;
 mod render_cmd;
+mod view;
 
 use clap::Parser;
 
@@ -18,6 +20,8 @@ fn main() -> std::process::ExitCode {
         Some(cli::Command::Render(args)) => render_cmd::run(&args),
         Some(cli::Command::Bench(args)) if args.crowd => bench_cmd::run_crowd(&args),
         Some(cli::Command::Bench(args)) => bench_cmd::run(&args),
+        Some(cli::Command::View(args)) => view::run(&args),
+        None if view::display_present() => view::run_default(),
         None => render_cmd::run_default(),
     };
     match result {

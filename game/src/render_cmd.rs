@@ -13,7 +13,28 @@ use std::sync::Arc;
 use std::time::Instant;
 
 /// The scene shipped inside the binary (assets/default/).
-const DEFAULT_SCENE: &[u8] = include_bytes!("../../assets/default/CornellBox.glb");
+pub const DEFAULT_SCENE: &[u8] = include_bytes!("../../assets/default/CornellBox.glb");
+
+/// The embedded Cornell box, loaded.
+pub fn embedded_scene() -> Result<SceneAsset> {
+    let scene = raykin::scene::load_gltf_slice(
+        DEFAULT_SCENE,
+        Path::new("."),
+        Path::new("<embedded default scene>"),
+        &LoadOptions::default(),
+    )?;
+    report_warnings(&scene);
+    Ok(scene)
+}
+
+/// The classic Cornell box view of the embedded scene.
+pub fn embedded_camera() -> CameraChoice {
+    CameraChoice::LookAt {
+        eye: glam::Vec3::new(-278.0, 273.0, 800.0),
+        target: glam::Vec3::new(-278.0, 273.0, 0.0),
+        yfov: 39.3077f32.to_radians(),
+    }
+}
 
 pub fn load_scene(path: &Path) -> Result<Arc<SceneAsset>> {
     let scene = raykin::scene::load_gltf(path, &LoadOptions::default())?;
@@ -242,13 +263,7 @@ fn render_to_file(
 
 /// `raykin` with no arguments: the embedded Cornell box, rendered to out/default.png.
 pub fn run_default() -> Result<()> {
-    let scene = raykin::scene::load_gltf_slice(
-        DEFAULT_SCENE,
-        Path::new("."),
-        Path::new("<embedded default scene>"),
-        &LoadOptions::default(),
-    )?;
-    report_warnings(&scene);
+    let scene = embedded_scene()?;
     let ctx = open_gpu()?;
     // A software rasteriser (lavapipe) traces a few hundred thousand paths a second: keep its job under a minute.
     let cpu = ctx.info.device_type == raykin::gpu::DeviceType::Cpu;
@@ -276,11 +291,7 @@ pub fn run_default() -> Result<()> {
         animation: None,
         spp_per_dispatch: 16,
     };
-    let camera = CameraChoice::LookAt {
-        eye: glam::Vec3::new(-278.0, 273.0, 800.0),
-        target: glam::Vec3::new(-278.0, 273.0, 0.0),
-        yfov: 39.3077f32.to_radians(),
-    };
+    let camera = embedded_camera();
     let out = Path::new("out/default.png");
     check_output(out)?;
     render_to_file(ctx, Arc::new(scene), &args, camera, None, out, false, None)

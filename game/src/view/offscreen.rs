@@ -1,0 +1,310 @@
+//! `raykin view --offscreen --frames N --report out.json`: the viewer's frame loop without a window (the same
+//! editor UI pass, frame schedule and UI + display pass, into a texture instead of a surface), timed per pass:
+//! CPU phases from `frame_timing`, GPU passes from timestamp queries read back without stalling. For timing
+//! the interactive path on a GPU machine with no display.
+
+use super::script::{Flow, ScriptHost, ScriptRunner};
+use super::session::{SceneSource, Session, SessionOptions};
+use super::ui_render::UiRenderer;
+use crate::bench_cmd::{git_commit, percentile};
+use anyhow::{Context, Result};
+use raykin::frame_timing::FrameTimings;
+use raykin::gpu::GpuContext;
+use raykin::render::Renderer;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Width the editor panel takes beside the image.
+const PANEL_WIDTH: u32 = 340;
+
+#[derive(serde::Serialize)]
+struct Spread {
+    median: f64,
+    p99: f64,
+    mean: f64,
+    n: usize,
+}
+
+fn spread(values: &[f64]) -> Option<Spread> {
+    let mut v: Vec<f64> = values.iter().copied().filter(|x| x.is_finite()).collect();
+    if v.is_empty() {
+        return None;
+    }
+    v.sort_by(f64::total_cmp);
+    Some(Spread {
+        median: percentile(&v, 0.5),
+        p99: percentile(&v, 0.99),
+        mean: v.iter().sum::<f64>() / v.len() as f64,
+        n: v.len(),
+    })
+}
+
+/// Blocks until the GPU is idle; the milliseconds it took.
+fn wait_ms(ctx: &GpuContext) -> f64 {
+    let t = Instant::now();
+    ctx.wait_idle();
+    t.elapsed().as_secs_f64() * 1e3
+}
+
+fn rss_kib() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    status
+        .lines()
+        .find_map(|l| l.strip_prefix("VmRSS:"))
+        .and_then(|v| v.split_whitespace().next()?.parse().ok())
+}
+
+/// Per-frame CPU figures, in ms.
+#[derive(Default)]
+struct CpuSeries {
+    ui: Vec<f64>,
+    animate: Vec<f64>,
+    transform: Vec<f64>,
+    deform: Vec<f64>,
+    bvh: Vec<f64>,
+    upload: Vec<f64>,
+    render_submit: Vec<f64>,
+    ui_paint: Vec<f64>,
+    frame: Vec<f64>,
+}
+
+pub struct OffscreenSetup {
+    pub source: SceneSource,
+    pub options: SessionOptions,
+    pub frames: u64,
+    pub report: Option<PathBuf>,
+    /// Wait for the GPU after the schedule and after the UI pass, timing each wait.
+    pub sync_passes: bool,
+    pub script: Option<ScriptRunner>,
+}
+
+pub fn run(ctx: GpuContext, setup: OffscreenSetup) -> Result<()> {
+    let mut session = Session::new(ctx.clone(), setup.source, setup.options)?;
+    let (iw, ih) = session
+        .options
+        .fixed_render_size
+        .context("the offscreen loop needs a fixed image size")?;
+    let size = [iw + PANEL_WIDTH, ih + 48];
+    let format = wgpu::TextureFormat::Rgba8Unorm;
+    let target = ctx.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("offscreen ui"),
+        size: wgpu::Extent3d {
+            width: size[0],
+            height: size[1],
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+        view_formats: &[],
+    });
+    let view = target.create_view(&Default::default());
+    let mut ui = UiRenderer::new(&ctx, format);
+    let mut script = setup.script;
+    let warmup = (setup.frames / 10).min(10);
+    let mut cpu = CpuSeries::default();
+    let (mut trace, mut tonemap, mut rays_per_s, mut ui_gpu) =
+        (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    let (mut wait_schedule, mut wait_ui) = (Vec::new(), Vec::new());
+    let mut rss_after_warmup = None;
+    let start = Instant::now();
+    for frame in 0..setup.frames {
+        let t0 = Instant::now();
+        let raw = egui::RawInput {
+            screen_rect: Some(egui::Rect::from_min_size(
+                egui::Pos2::ZERO,
+                egui::vec2(size[0] as f32, size[1] as f32),
+            )),
+            ..Default::default()
+        };
+        let mut output = session.ui(raw);
+        let ui_ms = t0.elapsed().as_secs_f64() * 1e3;
+        let gpu = session.step();
+        let waited_schedule = setup.sync_passes.then(|| wait_ms(&ctx));
+        let t1 = Instant::now();
+        ui.render(
+            &ctx,
+            &session.egui,
+            &mut output,
+            &view,
+            size,
+            &session.engine.renderer().tracer,
+        );
+        let paint_ms = t1.elapsed().as_secs_f64() * 1e3;
+        let waited_ui = setup.sync_passes.then(|| wait_ms(&ctx));
+        let frame_ms = t0.elapsed().as_secs_f64() * 1e3;
+        let measured = frame >= warmup;
+        if measured {
+            let phases = session.engine.app.world().resource::<FrameTimings>().last;
+            cpu.ui.push(ui_ms);
+            cpu.animate.push(phases.animate_ms);
+            cpu.transform.push(phases.transform_ms);
+            cpu.deform.push(phases.deform_ms);
+            cpu.bvh.push(phases.bvh_ms);
+            cpu.upload.push(phases.upload_ms);
+            cpu.render_submit.push(phases.render_ms);
+            cpu.ui_paint.push(paint_ms);
+            cpu.frame.push(frame_ms);
+            wait_schedule.extend(waited_schedule);
+            wait_ui.extend(waited_ui);
+            for g in &gpu {
+                if let Some(p) = g.passes {
+                    trace.push(p.trace_ms);
+                    tonemap.push(p.tonemap_ms);
+                    if p.trace_ms > 0.0 {
+                        rays_per_s.push(g.rays as f64 / (p.trace_ms * 1e-3));
+                    }
+                }
+            }
+            ui_gpu.extend(ui.poll_gpu_ms(&ctx));
+        } else {
+            ui.poll_gpu_ms(&ctx);
+            if frame + 1 == warmup {
+                rss_after_warmup = rss_kib();
+            }
+        }
+        if let Some(s) = &mut script {
+            let mut host = OffscreenHost {
+                ctx: &ctx,
+                target: &target,
+                size,
+            };
+            if s.advance(&mut session, &mut host)? == Flow::Quit {
+                break;
+            }
+        }
+        if session.quit_requested {
+            break;
+        }
+    }
+    ctx.wait_idle();
+    let wall_s = start.elapsed().as_secs_f64();
+    let rss_end = rss_kib();
+    let world = session.engine.app.world();
+    let renderer = world.resource::<Renderer>();
+    let settings = world.resource::<raykin::render::RenderSettings>();
+    let report = serde_json::json!({
+        "scene": session.scene().source,
+        "adapter": ctx.info.name,
+        "backend": format!("{:?}", ctx.info.backend),
+        "device_type": format!("{:?}", ctx.info.device_type),
+        "driver": format!("{} {}", ctx.info.driver, ctx.info.driver_info),
+        "commit": std::env::var("RAYKIN_COMMIT").ok().or_else(git_commit).unwrap_or_else(|| "unknown".into()),
+        "image": [iw, ih],
+        "ui_target": size,
+        "frames": session.frames,
+        "warmup_frames": warmup,
+        "wall_s": wall_s,
+        "spp_per_frame": settings.spp_per_frame,
+        "max_depth": settings.max_depth,
+        "samples_at_end": renderer.tracer.samples,
+        "timing": "CPU: Instant around each frame-schedule phase and the UI passes; GPU: timestamp queries per pass, read back asynchronously (a few frames may go unreported); gpu_wait_ms (--sync-passes): wall time of waiting for the GPU after the schedule and after the UI pass",
+        "cpu_ms": {
+            "editor_ui": spread(&cpu.ui),
+            "animate": spread(&cpu.animate),
+            "transform": spread(&cpu.transform),
+            "deform": spread(&cpu.deform),
+            "bvh_refit_tlas": spread(&cpu.bvh),
+            "upload": spread(&cpu.upload),
+            "render_submit": spread(&cpu.render_submit),
+            "ui_paint_submit": spread(&cpu.ui_paint),
+            "frame": spread(&cpu.frame),
+        },
+        "gpu_ms": {
+            "trace": spread(&trace),
+            "tonemap": spread(&tonemap),
+            "ui_and_display": spread(&ui_gpu),
+        },
+        "gpu_wait_ms": setup.sync_passes.then(|| serde_json::json!({
+            "frame_schedule": spread(&wait_schedule),
+            "ui_and_display": spread(&wait_ui),
+        })),
+        "rays_per_second_of_trace": spread(&rays_per_s),
+        "memory": {
+            "rss_kib_after_warmup": rss_after_warmup,
+            "rss_kib_end": rss_end,
+            "gpu_scene_bytes": renderer.scene.memory.total(),
+        },
+    });
+    let frame = spread(&cpu.frame);
+    let trace_ms = spread(&trace);
+    eprintln!(
+        "raykin: offscreen {} frames at {iw}x{ih}: frame {} ms median, trace {} ms median (GPU), RSS {} -> {} KiB",
+        session.frames,
+        frame.map_or("-".into(), |s| format!("{:.2}", s.median)),
+        trace_ms.map_or("-".into(), |s| format!("{:.2}", s.median)),
+        rss_after_warmup.map_or("-".into(), |v| v.to_string()),
+        rss_end.map_or("-".into(), |v| v.to_string()),
+    );
+    if let Some(path) = &setup.report {
+        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir)
+                .with_context(|| format!("{}: cannot create", dir.display()))?;
+        }
+        std::fs::write(path, serde_json::to_string_pretty(&report)?)
+            .with_context(|| format!("{}: cannot write the report", path.display()))?;
+        eprintln!("raykin: wrote {}", path.display());
+    }
+    Ok(())
+}
+
+struct OffscreenHost<'a> {
+    ctx: &'a GpuContext,
+    target: &'a wgpu::Texture,
+    size: [u32; 2],
+}
+
+impl ScriptHost for OffscreenHost<'_> {
+    /// Offscreen, "the screen" is the UI texture the frame was painted into.
+    fn capture_screen(&mut self, path: &Path) -> Result<()> {
+        let [w, h] = self.size;
+        let row = (w * 4).div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT)
+            * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
+        let buffer = self.ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("ui capture"),
+            size: row as u64 * h as u64,
+            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
+        let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
+        encoder.copy_texture_to_buffer(
+            self.target.as_image_copy(),
+            wgpu::TexelCopyBufferInfo {
+                buffer: &buffer,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(row),
+                    rows_per_image: Some(h),
+                },
+            },
+            wgpu::Extent3d {
+                width: w,
+                height: h,
+                depth_or_array_layers: 1,
+            },
+        );
+        self.ctx.queue.submit([encoder.finish()]);
+        let bytes = self.ctx.read_buffer(&buffer, buffer.size());
+        let pixels: Vec<u8> = bytes
+            .chunks(row as usize)
+            .flat_map(|r| r[..(w * 4) as usize].to_vec())
+            .collect();
+        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir)?;
+        }
+        raykin::image_io::write_atomically(path, |p| {
+            raykin::image_io::write_png(p, w, h, &pixels)
+        })?;
+        Ok(())
+    }
+
+    fn resize(&mut self, _width: u32, _height: u32) -> Result<()> {
+        anyhow::bail!("resize needs a window (the offscreen target has a fixed size)")
+    }
+
+    fn window_origin(&self) -> Option<(i32, i32)> {
+        Some((0, 0))
+    }
+}
