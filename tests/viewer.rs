@@ -73,6 +73,18 @@ fn run_with_limit(mut command: Command, limit: Duration) -> (String, bool) {
     )
 }
 
+/// `raykin view FIXTURE --offscreen --no-settings --image-size SIZE --frames N`, plus `extra` arguments.
+fn offscreen(size: &str, frames: u64, extra: &[&std::ffi::OsStr]) -> Command {
+    let mut command = Command::new(env!("CARGO_BIN_EXE_raykin"));
+    command
+        .arg("view")
+        .arg(fixture())
+        .args(["--offscreen", "--no-settings", "--image-size", size])
+        .args(["--frames", &frames.to_string()])
+        .args(extra);
+    command
+}
+
 fn load_png(path: &Path) -> RgbaImage {
     image::open(path)
         .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
@@ -331,20 +343,7 @@ quit
 fn offscreen_loop_reports_per_pass_times() {
     let dir = temp_dir("offscreen");
     let report = dir.join("report.json");
-    let mut command = Command::new(env!("CARGO_BIN_EXE_raykin"));
-    command
-        .arg("view")
-        .arg(fixture())
-        .args([
-            "--offscreen",
-            "--frames",
-            "12",
-            "--image-size",
-            "48x30",
-            "--no-settings",
-        ])
-        .arg("--report")
-        .arg(&report);
+    let command = offscreen("48x30", 12, &["--report".as_ref(), report.as_os_str()]);
     let (log, ok) = run_with_limit(command, Duration::from_secs(300));
     assert!(ok, "{log}");
     let r = load_json(&report);
@@ -398,25 +397,17 @@ fn a_bad_file_reports_an_error_and_keeps_the_scene() {
     )
     .expect("write");
     let script = format!(
-        "wait_samples 2\nopen {bad}\nwait 1\nscreenshot {shot}\nquit\n",
+        "pause\nwait_samples 2\nopen {bad}\nwait 1\nscreenshot {shot}\nquit\n",
         bad = bad.display(),
         shot = dir.join("after.png").display()
     );
     std::fs::write(dir.join("s.script"), script).expect("script");
-    let mut command = Command::new(env!("CARGO_BIN_EXE_raykin"));
-    command
-        .arg("view")
-        .arg(fixture())
-        .args([
-            "--offscreen",
-            "--frames",
-            "100",
-            "--image-size",
-            "48x30",
-            "--no-settings",
-        ])
-        .arg("--script")
-        .arg(dir.join("s.script"));
+    let script_path = dir.join("s.script");
+    let command = offscreen(
+        "48x30",
+        100,
+        &["--script".as_ref(), script_path.as_os_str()],
+    );
     let (log, ok) = run_with_limit(command, Duration::from_secs(300));
     assert!(ok, "{log}");
     let record = load_json(&dir.join("after.json"));
@@ -436,5 +427,39 @@ fn a_bad_file_reports_an_error_and_keeps_the_scene() {
     assert!(
         !mask(&img, false).is_empty(),
         "the old scene is no longer shown"
+    );
+}
+
+/// A long offscreen run (animation playing: instances, TLAS and accumulation change every frame) must not grow
+/// its resident memory in the second half. Slow on lavapipe (a few minutes): set RAYKIN_SOAK=1 to run it.
+#[test]
+fn offscreen_memory_stays_flat() {
+    if std::env::var_os("RAYKIN_SOAK").is_none() {
+        eprintln!("skipped: set RAYKIN_SOAK=1 to run the soak test");
+        return;
+    }
+    let frames: u64 = std::env::var("RAYKIN_SOAK_FRAMES")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(3000);
+    let dir = temp_dir("soak");
+    let report = dir.join("report.json");
+    let command = offscreen("16x10", frames, &["--report".as_ref(), report.as_os_str()]);
+    let (log, ok) = run_with_limit(command, Duration::from_secs(3600));
+    assert!(ok, "{log}");
+    let r = load_json(&report);
+    let samples: Vec<(u64, u64)> = r["memory"]["rss_kib_by_frame"]
+        .as_array()
+        .expect("samples")
+        .iter()
+        .map(|s| (s[0].as_u64().unwrap(), s[1].as_u64().expect("RSS readable")))
+        .collect();
+    eprintln!("RSS (frame, KiB): {samples:?}");
+    let half = samples[samples.len() / 2 - 1].1;
+    let end = samples.last().expect("samples").1;
+    assert!(
+        end <= half + 4096,
+        "resident memory grew by {} KiB over the second half of {frames} frames: {samples:?}",
+        end as i64 - half as i64
     );
 }

@@ -108,7 +108,7 @@ pub fn run_default() -> Result<()> {
         no_settings: false,
     };
     match run(&args) {
-        Err(e) if format!("{e:#}").contains("cannot open a window") => {
+        Err(e) if e.downcast_ref::<window::WindowUnavailable>().is_some() => {
             eprintln!("raykin: {e:#}; rendering out/default.png instead");
             crate::render_cmd::run_default()
         }

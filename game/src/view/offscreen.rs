@@ -17,6 +17,10 @@ use std::time::Instant;
 /// Width the editor panel takes beside the image.
 const PANEL_WIDTH: u32 = 340;
 
+/// Frames the CPU may run ahead of the GPU, as a window's swapchain would allow; without a bound the queue
+/// (and its staging memory) would grow whenever the GPU is the slower side.
+const FRAMES_IN_FLIGHT: usize = 2;
+
 #[derive(serde::Serialize)]
 struct Spread {
     median: f64,
@@ -79,7 +83,8 @@ pub struct OffscreenSetup {
 }
 
 pub fn run(ctx: GpuContext, setup: OffscreenSetup) -> Result<()> {
-    let mut session = Session::new(ctx.clone(), setup.source, setup.options)?;
+    let stored = super::session::load_settings(&setup.options);
+    let mut session = Session::new(ctx.clone(), setup.source, setup.options, stored)?;
     let (iw, ih) = session
         .options
         .fixed_render_size
@@ -108,7 +113,11 @@ pub fn run(ctx: GpuContext, setup: OffscreenSetup) -> Result<()> {
     let (mut trace, mut tonemap, mut rays_per_s, mut ui_gpu) =
         (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     let (mut wait_schedule, mut wait_ui) = (Vec::new(), Vec::new());
+    let mut in_flight = std::collections::VecDeque::new();
     let mut rss_after_warmup = None;
+    // Resident memory every tenth of the run, to see that it stays flat.
+    let mut rss_samples: Vec<(u64, Option<u64>)> = Vec::new();
+    let sample_every = (setup.frames / 10).max(1);
     let start = Instant::now();
     for frame in 0..setup.frames {
         let t0 = Instant::now();
@@ -124,7 +133,7 @@ pub fn run(ctx: GpuContext, setup: OffscreenSetup) -> Result<()> {
         let gpu = session.step();
         let waited_schedule = setup.sync_passes.then(|| wait_ms(&ctx));
         let t1 = Instant::now();
-        ui.render(
+        let submission = ui.render(
             &ctx,
             &session.egui,
             &mut output,
@@ -134,6 +143,15 @@ pub fn run(ctx: GpuContext, setup: OffscreenSetup) -> Result<()> {
         );
         let paint_ms = t1.elapsed().as_secs_f64() * 1e3;
         let waited_ui = setup.sync_passes.then(|| wait_ms(&ctx));
+        in_flight.push_back(submission);
+        if in_flight.len() > FRAMES_IN_FLIGHT
+            && let Some(oldest) = in_flight.pop_front()
+        {
+            let _ = ctx.device.poll(wgpu::PollType::Wait {
+                submission_index: Some(oldest),
+                timeout: None,
+            });
+        }
         let frame_ms = t0.elapsed().as_secs_f64() * 1e3;
         let measured = frame >= warmup;
         if measured {
@@ -164,6 +182,9 @@ pub fn run(ctx: GpuContext, setup: OffscreenSetup) -> Result<()> {
             if frame + 1 == warmup {
                 rss_after_warmup = rss_kib();
             }
+        }
+        if (frame + 1) % sample_every == 0 {
+            rss_samples.push((frame + 1, rss_kib()));
         }
         if let Some(s) = &mut script {
             let mut host = OffscreenHost {
@@ -225,6 +246,7 @@ pub fn run(ctx: GpuContext, setup: OffscreenSetup) -> Result<()> {
         "memory": {
             "rss_kib_after_warmup": rss_after_warmup,
             "rss_kib_end": rss_end,
+            "rss_kib_by_frame": rss_samples,
             "gpu_scene_bytes": renderer.scene.memory.total(),
         },
     });

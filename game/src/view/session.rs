@@ -50,6 +50,36 @@ pub struct SessionOptions {
     pub max_depth: Option<u32>,
 }
 
+/// Settings as read at start-up.
+#[derive(Default)]
+pub struct StoredSettings {
+    pub prefs: ViewerPrefs,
+    /// Why the file could not be used (reported in the panel).
+    pub problem: Option<String>,
+    /// The settings came from a file (not defaults).
+    pub from_file: bool,
+}
+
+/// Reads the settings file once (a corrupt one is set aside by [`ViewerPrefs::load`], so it must not be read
+/// twice).
+pub fn load_settings(options: &SessionOptions) -> StoredSettings {
+    let Some(path) = options.prefs_path.as_deref() else {
+        return StoredSettings::default();
+    };
+    match ViewerPrefs::load(path) {
+        Ok(Some(prefs)) => StoredSettings {
+            prefs,
+            problem: None,
+            from_file: true,
+        },
+        Ok(None) => StoredSettings::default(),
+        Err(e) => StoredSettings {
+            problem: Some(e.to_string()),
+            ..Default::default()
+        },
+    }
+}
+
 struct LoadedScene {
     scene: Arc<SceneAsset>,
     players: Vec<(usize, AnimationPlayer)>,
@@ -88,16 +118,23 @@ pub struct Session {
 }
 
 impl Session {
-    pub fn new(ctx: GpuContext, source: SceneSource, options: SessionOptions) -> Result<Self> {
-        let prefs_load = options
-            .prefs_path
-            .as_deref()
-            .map(ViewerPrefs::load)
-            .transpose();
-        let (prefs, prefs_problem) = match prefs_load {
-            Ok(p) => (p.flatten().unwrap_or_default(), None),
-            Err(e) => (ViewerPrefs::default(), Some(e.to_string())),
-        };
+    /// `stored` is what [`load_settings`] read (the settings and a problem to report, if any).
+    pub fn new(
+        ctx: GpuContext,
+        source: SceneSource,
+        options: SessionOptions,
+        stored: StoredSettings,
+    ) -> Result<Self> {
+        let StoredSettings {
+            mut prefs,
+            problem: prefs_problem,
+            from_file,
+        } = stored;
+        // A CPU adapter (lavapipe) traces ~0.1 M rays/s: start at a fraction of the image area so the window
+        // stays responsive; a saved setting wins.
+        if !from_file && ctx.info.device_type == wgpu::DeviceType::Cpu {
+            prefs.render_scale = 0.25;
+        }
         let loaded = load(&source)?;
         let engine = build_engine(&ctx, &loaded, &source, &prefs, &options)?;
         let egui = egui::Context::default();
@@ -249,6 +286,7 @@ impl Session {
     /// the GPU statistics of earlier frames that arrived.
     pub fn step(&mut self) -> Vec<raykin::render::GpuFrameStats> {
         let now = Instant::now();
+        let measured_dt = self.last_frame.is_some();
         let wall_dt = self
             .last_frame
             .map_or(1.0 / 60.0, |t| now.duration_since(t).as_secs_f64());
@@ -258,19 +296,26 @@ impl Session {
         self.engine.step();
         self.frames += 1;
         let ctx = self.ctx.clone();
+        let cpu_adapter = ctx.info.device_type == wgpu::DeviceType::Cpu;
         let world = self.world();
         let gpu = world.resource_mut::<Renderer>().tracer.poll_stats(&ctx);
         let mut stats = world.resource_mut::<ViewerStats>();
         stats.frames += 1;
-        stats.frame_ms = wall_dt * 1e3;
-        stats.fps = if stats.fps > 0.0 {
-            0.9 * stats.fps + 0.1 / wall_dt.max(1e-6)
-        } else {
-            1.0 / wall_dt.max(1e-6)
-        };
+        if measured_dt {
+            // Smoothed frame time (the first measured frame sets it).
+            stats.frame_ms = if stats.frame_ms > 0.0 {
+                0.8 * stats.frame_ms + 0.2 * wall_dt * 1e3
+            } else {
+                wall_dt * 1e3
+            };
+            stats.fps = 1e3 / stats.frame_ms.max(1e-6);
+        }
         if let Some(last) = gpu.last() {
+            // A CPU adapter's (lavapipe's) timestamps can miss the compute work: use wall time there.
             stats.rays_per_second = Some(match last.passes {
-                Some(p) if p.trace_ms > 0.0 => last.rays as f64 / (p.trace_ms * 1e-3),
+                Some(p) if p.trace_ms > 0.0 && !cpu_adapter => {
+                    last.rays as f64 / (p.trace_ms * 1e-3)
+                }
                 _ => last.rays as f64 / wall_dt.max(1e-6),
             });
             stats.last_gpu = Some(*last);
@@ -380,8 +425,11 @@ fn build_engine(
     let mut state = world.resource_mut::<EditorState>();
     state.fixed_render_size = options.fixed_render_size;
     state.can_save = !matches!(source, SceneSource::Crowd(_));
-    if let SceneSource::File(p) = source {
-        state.open_path = p.display().to_string();
+    match (source, &prefs.last_scene) {
+        (SceneSource::File(p), _) => state.open_path = p.display().to_string(),
+        // Offer the scene of the last session in File > Open.
+        (_, Some(last)) => state.open_path = last.display().to_string(),
+        _ => {}
     }
     for w in &scene.warnings {
         state.report(Severity::Warning, w.clone());

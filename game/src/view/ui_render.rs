@@ -54,7 +54,8 @@ impl UiRenderer {
     }
 
     /// Paints `output` (this frame's egui output; its texture deltas are applied and consumed) into `target`
-    /// of `size_px`, with the tracer's current image in the image area.
+    /// of `size_px`, with the tracer's current image in the image area. Returns the submission, which ends
+    /// the frame's GPU work.
     pub fn render(
         &mut self,
         ctx: &GpuContext,
@@ -63,7 +64,7 @@ impl UiRenderer {
         target: &wgpu::TextureView,
         size_px: [u32; 2],
         tracer: &PathTracer,
-    ) {
+    ) -> wgpu::SubmissionIndex {
         let (device, queue) = (&ctx.device, &ctx.queue);
         raykin::render::display::set_source(&mut self.renderer, tracer);
         for (id, deltas) in output.textures_delta.set.drain() {
@@ -121,13 +122,14 @@ impl UiRenderer {
             t.readback
                 .encode(&mut encoder, &[(&t.resolve, 16)], self.frame);
         }
-        queue.submit(callback_buffers.into_iter().chain([encoder.finish()]));
+        let submission = queue.submit(callback_buffers.into_iter().chain([encoder.finish()]));
         if let Some(t) = &mut self.timer {
             t.readback.after_submit();
         }
         for id in output.textures_delta.free.drain() {
             self.renderer.free_texture(&id);
         }
+        submission
     }
 
     /// Applies `output`'s texture updates without painting (a frame with no surface texture to draw into).

@@ -15,6 +15,18 @@ use winit::event::WindowEvent;
 use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop};
 use winit::window::{Window, WindowId};
 
+/// No window could be opened on this display (the caller may fall back to a headless job).
+#[derive(Debug)]
+pub struct WindowUnavailable(pub String);
+
+impl std::fmt::Display for WindowUnavailable {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for WindowUnavailable {}
+
 pub struct WindowSetup {
     pub source: SceneSource,
     pub options: SessionOptions,
@@ -43,9 +55,11 @@ struct Viewer {
 
 /// Opens the window and runs until it closes (or the script quits).
 pub fn run(setup: WindowSetup) -> Result<()> {
-    let event_loop = EventLoop::new().context(
-        "cannot open a window (no display?); `raykin view --offscreen` runs without one",
-    )?;
+    let event_loop = EventLoop::new().map_err(|e| {
+        WindowUnavailable(format!(
+            "cannot open a window ({e}); `raykin view --offscreen` runs without a display"
+        ))
+    })?;
     let mut viewer = Viewer {
         setup: Some(setup),
         running: None,
@@ -87,15 +101,11 @@ impl Viewer {
         let Some(setup) = self.setup.take() else {
             return Ok(());
         };
-        let prefs = setup
-            .options
-            .prefs_path
-            .as_deref()
-            .and_then(|p| raykin::editor::ViewerPrefs::load(p).ok().flatten())
-            .unwrap_or_default();
-        let (w, h) = setup
-            .window_size
-            .unwrap_or((prefs.window_width.max(320), prefs.window_height.max(240)));
+        let stored = super::session::load_settings(&setup.options);
+        let (w, h) = setup.window_size.unwrap_or((
+            stored.prefs.window_width.max(320),
+            stored.prefs.window_height.max(240),
+        ));
         let title = match &setup.source {
             SceneSource::File(p) => format!("raykin - {}", p.display()),
             SceneSource::Embedded => "raykin - Cornell box".into(),
@@ -108,7 +118,7 @@ impl Viewer {
                         .with_title(title)
                         .with_inner_size(winit::dpi::PhysicalSize::new(w, h)),
                 )
-                .context("cannot create the window")?,
+                .map_err(|e| WindowUnavailable(format!("cannot create the window: {e}")))?,
         );
         let explicit_backend = std::env::var_os("WGPU_BACKEND").is_some();
         let mut descriptor = wgpu::InstanceDescriptor::new_with_display_handle_from_env(Box::new(
@@ -118,9 +128,11 @@ impl Viewer {
             descriptor.backends = wgpu::Backends::PRIMARY;
         }
         let instance = wgpu::Instance::new(descriptor);
-        let surface = instance
-            .create_surface(window.clone())
-            .context("cannot create a drawing surface for the window")?;
+        let surface = instance.create_surface(window.clone()).map_err(|e| {
+            WindowUnavailable(format!(
+                "cannot create a drawing surface for the window: {e}"
+            ))
+        })?;
         let ctx = GpuContext::from_instance(&instance, Some(&surface))?;
         eprintln!("raykin: adapter: {}", ctx.describe());
         let caps = surface.get_capabilities(&ctx.adapter);
@@ -130,7 +142,7 @@ impl Viewer {
                 ctx.info.name
             )
         })?;
-        let mut session = Session::new(ctx.clone(), setup.source, setup.options)?;
+        let mut session = Session::new(ctx.clone(), setup.source, setup.options, stored)?;
         if setup.no_vsync {
             session.state_mut().vsync = false;
         }
@@ -219,7 +231,9 @@ impl Running {
                 let view = frame.texture.create_view(&Default::default());
                 let size = [self.config.width, self.config.height];
                 let tracer = &self.session.engine.renderer().tracer;
-                self.ui
+                // The swapchain bounds the frames in flight (get_current_texture waits for a free image).
+                let _ = self
+                    .ui
                     .render(&ctx, &self.session.egui, &mut output, &view, size, tracer);
                 ctx.queue.present(frame);
             }
