@@ -23,6 +23,7 @@ const NAMED: &[(&str, &str)] = &[
 #[derive(serde::Serialize)]
 struct Row {
     scene: String,
+    static_bvh: String,
     triangles: usize,
     width: u32,
     height: u32,
@@ -92,6 +93,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
                 spp_per_frame: 1,
                 max_depth: args.max_depth,
                 environment: Environment::Sky,
+                static_bvh: args.static_bvh.into(),
                 ..Default::default()
             };
             let start = Instant::now();
@@ -126,6 +128,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             let pixels = width as f64 * height as f64;
             let row = Row {
                 scene: path.display().to_string(),
+                static_bvh: format!("{:?}", args.static_bvh).to_lowercase(),
                 triangles: scene.triangle_count(),
                 width,
                 height,

@@ -136,7 +136,7 @@ impl PathTracer {
         let device = &ctx.device;
         let scene_entries: Vec<_> = (0..10)
             .map(|b| layout_entry(b, true))
-            .chain([uniform_entry(10)])
+            .chain([uniform_entry(10), layout_entry(11, true)])
             .collect();
         let scene_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("scene"),
@@ -328,6 +328,7 @@ impl PathTracer {
                 &scene.texture_infos,
                 &scene.emitters,
                 &self.frame_uniform,
+                &scene.wide_nodes,
             ],
         );
         self.scene_bind_group = Some((scene.generation, group.clone()));
