@@ -6,7 +6,7 @@ pub mod scene_buffers;
 pub mod settings;
 pub mod shaders;
 
-pub use path_tracer::{Aovs, PassTimes, PathTracer};
+pub use path_tracer::{Aovs, PassTimes, PathTracer, RayCastTiming};
 pub use scene_buffers::{GpuMemory, GpuScene, InstanceInput, UploadError};
 pub use settings::{AovView, Environment, RenderSettings, Tonemapper};
 
