@@ -112,20 +112,20 @@ impl Suite {
                     name: "full".into(),
                     linear_scale: s,
                     scaling_note: format!(
-                        "CPU adapter: image sides /{s}, 30 frames, 1024-spp references"
+                        "CPU adapter: image sides /{s} (errors /20), 20 frames, 1024-spp references"
                     ),
                     scenes: named(&["cornell", "flight-helmet", "spheres", "crowd"]),
                     sizes: vec![scaled(1920, 1080), scaled(2560, 1440)],
-                    frames: 30,
-                    warmup: 3,
-                    error_size: scaled(960, 540),
+                    frames: 20,
+                    warmup: 2,
+                    error_size: (48, 27),
                     reference_spp: 1024,
                     error_max_spp: 128,
                     error_repeats: 1,
                     bvh_scenes: named(&["flight-helmet", "spheres"]),
-                    bvh_frames: 10,
+                    bvh_frames: 6,
                     refit_size: scaled(960, 540),
-                    refit_fps: 15.0,
+                    refit_fps: 10.0,
                     refit_seconds: 2.0,
                     refit_trace_repeats: 3,
                     scaling_copies: vec![1, 4, 16, 64],
@@ -134,7 +134,7 @@ impl Suite {
                         .iter()
                         .map(|&(w, h)| scaled(w, h))
                         .collect(),
-                    scaling_frames: 10,
+                    scaling_frames: 6,
                 })
             }
             (other, _) => anyhow::bail!("unknown suite `{other}`: quick or full"),
