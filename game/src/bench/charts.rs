@@ -33,11 +33,17 @@ fn color(i: usize) -> RGBColor {
 
 type Area<'a> = DrawingArea<BitMapBackend<'a>, Shift>;
 
-/// Draws into a white `size` canvas with `title` on top, then writes `path` as PNG.
+/// What a chart shows (first line) and where it was measured (second line: adapter, suite, commit, date).
+pub struct Title {
+    pub what: String,
+    pub context: String,
+}
+
+/// Draws into a white `size` canvas with the two-line title on top, then writes `path` as PNG.
 fn draw_png(
     path: &Path,
     size: (u32, u32),
-    title: &str,
+    title: &Title,
     draw: impl FnOnce(&Area) -> Result<()>,
 ) -> Result<()> {
     static REGISTERED: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
@@ -51,7 +57,10 @@ fn draw_png(
     {
         let root = BitMapBackend::with_buffer(&mut buffer, size).into_drawing_area();
         root.fill(&WHITE)?;
-        let body = root.titled(title, (SANS, 20))?;
+        let body = root.titled(&title.what, (SANS, 20))?.titled(
+            &title.context,
+            (SANS, 13).into_font().color(&BLACK.mix(0.6)),
+        )?;
         draw(&body)?;
         root.present()?;
     }
@@ -101,7 +110,7 @@ fn legend(series_color: RGBColor) -> impl Fn((i32, i32)) -> PathElement<(i32, i3
 }
 
 /// Error vs trace time for one scene: relMSE (left) and FLIP (right), one line per setting.
-pub fn error_vs_time(path: &Path, title: &str, errors: &SceneErrors) -> Result<()> {
+pub fn error_vs_time(path: &Path, title: &Title, errors: &SceneErrors) -> Result<()> {
     draw_png(path, (1500, 620), title, |area| {
         let panels = area.split_evenly((1, 2));
         let times = || {
@@ -138,10 +147,10 @@ pub fn error_vs_time(path: &Path, title: &str, errors: &SceneErrors) -> Result<(
                 } else {
                     "relMSE (tone-mapped)"
                 })
-                .x_labels(12)
-                .y_labels(12)
                 .x_label_formatter(&fmt_num)
                 .y_label_formatter(&fmt_num)
+                .x_labels(14)
+                .y_labels(12)
                 .label_style((SANS, 13))
                 .draw()?;
             for (i, c) in errors.curves.iter().enumerate() {
@@ -176,7 +185,7 @@ pub fn error_vs_time(path: &Path, title: &str, errors: &SceneErrors) -> Result<(
 }
 
 /// Build time against trace time for each obvhs preset, one series per scene.
-pub fn bvh_presets(path: &Path, title: &str, rows: &[PresetRow]) -> Result<()> {
+pub fn bvh_presets(path: &Path, title: &Title, rows: &[PresetRow]) -> Result<()> {
     draw_png(path, (1100, 640), title, |area| {
         let mut chart = ChartBuilder::on(area)
             .margin(15)
@@ -184,30 +193,33 @@ pub fn bvh_presets(path: &Path, title: &str, rows: &[PresetRow]) -> Result<()> {
             .y_label_area_size(70)
             .build_cartesian_2d(
                 log_range(rows.iter().map(|r| r.build_ms)).log_scale(),
-                log_range(rows.iter().map(|r| r.trace_ms.median)).log_scale(),
+                log_range(rows.iter().map(|r| r.trace_ms.min)).log_scale(),
             )?;
         chart
             .configure_mesh()
             .x_desc("BLAS build ms (all meshes, one thread)")
-            .y_desc("trace ms per frame (median)")
+            .y_desc("trace ms per frame (fastest frame)")
             .x_label_formatter(&fmt_num)
             .y_label_formatter(&fmt_num)
+            .x_labels(14)
+            .y_labels(12)
             .label_style((SANS, 13))
             .draw()?;
         let mut scenes: Vec<&str> = rows.iter().map(|r| r.scene.as_str()).collect();
         scenes.dedup();
         for (i, scene) in scenes.iter().enumerate() {
             let col = color(i);
-            let points: Vec<&PresetRow> = rows.iter().filter(|r| r.scene == *scene).collect();
+            let mut points: Vec<&PresetRow> = rows.iter().filter(|r| r.scene == *scene).collect();
+            points.sort_by(|a, b| a.build_ms.total_cmp(&b.build_ms));
             chart
                 .draw_series(LineSeries::new(
-                    points.iter().map(|r| (r.build_ms, r.trace_ms.median)),
+                    points.iter().map(|r| (r.build_ms, r.trace_ms.min)),
                     col.mix(0.5).stroke_width(1),
                 ))?
                 .label(format!("{scene} ({} triangles)", points[0].triangles))
                 .legend(legend(col));
             chart.draw_series(points.iter().map(|r| {
-                EmptyElement::at((r.build_ms, r.trace_ms.median))
+                EmptyElement::at((r.build_ms, r.trace_ms.min))
                     + Circle::new((0, 0), 4, col.filled())
                     + Text::new(format!("{:?}", r.preset), (6, -14), (SANS, 12))
             }))?;
@@ -224,7 +236,7 @@ pub fn bvh_presets(path: &Path, title: &str, rows: &[PresetRow]) -> Result<()> {
 }
 
 /// Refit against rebuild along an animation: SAH ratio, trace ms with each tree, update ms of each.
-pub fn refit_vs_rebuild(path: &Path, title: &str, r: &RefitResult) -> Result<()> {
+pub fn refit_vs_rebuild(path: &Path, title: &Title, r: &RefitResult) -> Result<()> {
     draw_png(path, (1100, 1000), title, |area| {
         let panels = area.split_evenly((3, 1));
         let t_end = r.frames.last().map_or(1.0, |f| f.time_s as f64).max(1e-3);
@@ -242,7 +254,7 @@ pub fn refit_vs_rebuild(path: &Path, title: &str, r: &RefitResult) -> Result<()>
                 false,
             ),
             (
-                "trace ms of the same pose",
+                "trace ms of the same pose (fastest of the repeated frames)",
                 vec![
                     ("refit tree", series(|f| f.trace_ms_refit)),
                     ("rebuilt tree", series(|f| f.trace_ms_rebuilt)),
@@ -274,6 +286,8 @@ pub fn refit_vs_rebuild(path: &Path, title: &str, r: &RefitResult) -> Result<()>
                         .configure_mesh()
                         .x_desc("animation time (s)")
                         .y_label_formatter(&fmt_num)
+                        .x_labels(14)
+                        .y_labels(12)
                         .label_style((SANS, 13))
                         .draw()?;
                     for (i, (name, points)) in lines.iter().enumerate() {
@@ -306,7 +320,7 @@ pub fn refit_vs_rebuild(path: &Path, title: &str, r: &RefitResult) -> Result<()>
 }
 
 /// Stacked bars: median ms of each pass per (scene, size).
-pub fn frame_breakdown(path: &Path, title: &str, rows: &[FrameRow]) -> Result<()> {
+pub fn frame_breakdown(path: &Path, title: &Title, rows: &[FrameRow]) -> Result<()> {
     anyhow::ensure!(!rows.is_empty(), "no frame-loop rows to chart");
     let width = (420 + 120 * rows.len() as u32).max(900);
     draw_png(path, (width, 680), title, |area| {
@@ -378,7 +392,7 @@ pub fn frame_breakdown(path: &Path, title: &str, rows: &[FrameRow]) -> Result<()
 /// Trace time against instanced triangle count (left) and against pixel count (right), log-log.
 pub fn scaling(
     path: &Path,
-    title: &str,
+    title: &Title,
     triangles: &[TriangleScalingRow],
     resolution: &[ResolutionScalingRow],
 ) -> Result<()> {
@@ -407,7 +421,7 @@ pub fn scaling(
         let captions = [
             (
                 format!(
-                    "instanced copies of {} (one BLAS)",
+                    "instanced copies of DamagedHelmet ({} triangles, one BLAS)",
                     triangles.first().map_or(0, |r| r.unique_triangles)
                 ),
                 "triangles in the scene (instanced)",
@@ -436,6 +450,8 @@ pub fn scaling(
                 .y_desc("trace ms per frame (median)")
                 .x_label_formatter(&fmt_num)
                 .y_label_formatter(&fmt_num)
+                .x_labels(14)
+                .y_labels(12)
                 .label_style((SANS, 13))
                 .draw()?;
             let col = color(0);

@@ -141,11 +141,13 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     } else {
         format!(" ({})", suite.scaling_note)
     };
-    let title = |what: &str| {
-        format!(
-            "{what} | {} | {} suite{note} | {commit} {date}",
-            ctx.info.name, suite.name
-        )
+    let context = format!(
+        "{} ({:?}) | {} suite{note} | commit {commit} | {date}",
+        ctx.info.name, ctx.info.device_type, suite.name
+    );
+    let title = |what: &str| charts::Title {
+        what: what.to_string(),
+        context: context.clone(),
     };
 
     let mut loaded = Vec::new();
