@@ -70,6 +70,9 @@ struct Results {
     scaling_resolution: Vec<scaling::ResolutionScalingRow>,
     charts: Vec<String>,
     wall_seconds: f64,
+    /// /proc/loadavg at the start and the end (Linux): on a CPU adapter other processes slow every figure.
+    load_average_start: Option<String>,
+    load_average_end: Option<String>,
 }
 
 /// A headless app on `scene` with its fixed camera and environment, players attached, GPU passes timed.
@@ -98,6 +101,7 @@ fn wants(args: &BenchArgs, part: &str) -> bool {
 
 pub fn run(args: &BenchArgs) -> Result<()> {
     let started = std::time::Instant::now();
+    let load_average_start = load_average();
     for p in &args.parts {
         anyhow::ensure!(
             PARTS.contains(&p.as_str()),
@@ -343,6 +347,8 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         scaling_resolution: res_scaling,
         charts,
         wall_seconds: started.elapsed().as_secs_f64(),
+        load_average_start,
+        load_average_end: load_average(),
     };
     write_outputs(&args.out, &results)?;
     eprintln!(
@@ -498,6 +504,12 @@ fn summary_markdown(r: &Results) -> String {
 path-trace kernel; relMSE on tone-mapped images against the cached reference, its own noise subtracted; \
 ~ = extrapolated along the fitted power law (the curve did not get there within the suite's samples).\n";
     s
+}
+
+fn load_average() -> Option<String> {
+    std::fs::read_to_string("/proc/loadavg")
+        .ok()
+        .map(|s| s.trim().to_string())
 }
 
 fn git_commit() -> Option<String> {
