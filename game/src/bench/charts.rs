@@ -109,6 +109,21 @@ fn legend(series_color: RGBColor) -> impl Fn((i32, i32)) -> PathElement<(i32, i3
     move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], series_color.stroke_width(3))
 }
 
+/// The series legend, boxed, in one style for every chart.
+fn draw_legend<'a, CT: plotters::coord::CoordTranslate>(
+    chart: &mut ChartContext<'a, BitMapBackend<'a>, CT>,
+    position: SeriesLabelPosition,
+) -> Result<()> {
+    chart
+        .configure_series_labels()
+        .position(position)
+        .label_font((SANS, 13))
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK.mix(0.4))
+        .draw()?;
+    Ok(())
+}
+
 /// Error vs trace time for one scene: relMSE (left) and FLIP (right), one line per setting.
 pub fn error_vs_time(path: &Path, title: &Title, errors: &SceneErrors) -> Result<()> {
     draw_png(path, (1500, 620), title, |area| {
@@ -171,13 +186,7 @@ pub fn error_vs_time(path: &Path, title: &Title, errors: &SceneErrors) -> Result
                         BLACK.mix(0.25).stroke_width(1),
                     ))?;
                 }
-                chart
-                    .configure_series_labels()
-                    .position(SeriesLabelPosition::LowerLeft)
-                    .label_font((SANS, 13))
-                    .background_style(WHITE.mix(0.85))
-                    .border_style(BLACK.mix(0.4))
-                    .draw()?;
+                draw_legend(&mut chart, SeriesLabelPosition::LowerLeft)?;
             }
         }
         Ok(())
@@ -224,13 +233,7 @@ pub fn bvh_presets(path: &Path, title: &Title, rows: &[PresetRow]) -> Result<()>
                     + Text::new(format!("{:?}", r.preset), (6, -14), (SANS, 12))
             }))?;
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
-            .label_font((SANS, 13))
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK.mix(0.4))
-            .draw()?;
+        draw_legend(&mut chart, SeriesLabelPosition::UpperRight)?;
         Ok(())
     })
 }
@@ -297,13 +300,7 @@ pub fn refit_vs_rebuild(path: &Path, title: &Title, r: &RefitResult) -> Result<(
                             .label(*name)
                             .legend(legend(col));
                     }
-                    chart
-                        .configure_series_labels()
-                        .position(SeriesLabelPosition::UpperRight)
-                        .label_font((SANS, 13))
-                        .background_style(WHITE.mix(0.85))
-                        .border_style(BLACK.mix(0.4))
-                        .draw()?;
+                    draw_legend(&mut chart, SeriesLabelPosition::UpperRight)?;
                 }};
             }
             if log_y {

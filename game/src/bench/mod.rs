@@ -95,6 +95,14 @@ fn open_app(ctx: &GpuContext, scene: &BenchScene, settings: RenderSettings) -> R
     Ok(app)
 }
 
+fn at_size(base: &RenderSettings, (width, height): (u32, u32)) -> RenderSettings {
+    RenderSettings {
+        width,
+        height,
+        ..base.clone()
+    }
+}
+
 fn wants(args: &BenchArgs, part: &str) -> bool {
     args.parts.is_empty() || args.parts.iter().any(|p| p == part)
 }
@@ -172,11 +180,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     if wants(args, "frames") {
         for scene in &loaded {
             for &(width, height) in &sizes {
-                let settings = RenderSettings {
-                    width,
-                    height,
-                    ..base.clone()
-                };
+                let settings = at_size(&base, (width, height));
                 let row = frame_loop::measure(&ctx, scene, settings, suite.warmup, frames)?;
                 eprintln!(
                     "raykin bench: {} {width}x{height}: {:.2} ms/frame, trace {:.2} ms median ({:.2} p99), {:.3} M primary rays/s, {:.3} M rays/s",
@@ -200,11 +204,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let mut errors = Vec::new();
     if wants(args, "errors") {
         let (w, h) = suite.error_size;
-        let settings = RenderSettings {
-            width: w,
-            height: h,
-            ..base.clone()
-        };
+        let settings = at_size(&base, (w, h));
         let cache = args.cache.clone();
         for scene in loaded.iter().filter(|s| !s.animated()) {
             eprintln!("raykin bench: {}: error vs time at {w}x{h}", scene.name);
@@ -227,11 +227,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let mut presets = Vec::new();
     if wants(args, "bvh") {
         let (w, h) = suite.scaling_size;
-        let settings = RenderSettings {
-            width: w,
-            height: h,
-            ..base.clone()
-        };
+        let settings = at_size(&base, (w, h));
         for name in &suite.bvh_scenes {
             let scene = match loaded.iter().find(|s| &s.name == name) {
                 Some(s) => s,
@@ -265,11 +261,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         let (w, h) = suite.refit_size;
         let (asset, camera) = scenes::cesium_man(&args.assets)?;
         eprintln!("raykin bench: CesiumMan: refit vs rebuild");
-        let settings = RenderSettings {
-            width: w,
-            height: h,
-            ..base.clone()
-        };
+        let settings = at_size(&base, (w, h));
         let r = bvh_quality::refit_vs_rebuild(
             &ctx,
             asset,
