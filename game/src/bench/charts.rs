@@ -109,6 +109,30 @@ fn legend(series_color: RGBColor) -> impl Fn((i32, i32)) -> PathElement<(i32, i3
     move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], series_color.stroke_width(3))
 }
 
+type LogLog = plotters::coord::cartesian::Cartesian2d<
+    plotters::coord::combinators::LogCoord<f64>,
+    plotters::coord::combinators::LogCoord<f64>,
+>;
+
+/// Grid, tick labels and axis names of a log-log chart.
+fn log_log_axes<'a>(
+    chart: &mut ChartContext<'a, BitMapBackend<'a>, LogLog>,
+    x_desc: &str,
+    y_desc: &str,
+) -> Result<()> {
+    chart
+        .configure_mesh()
+        .x_desc(x_desc)
+        .y_desc(y_desc)
+        .x_label_formatter(&fmt_num)
+        .y_label_formatter(&fmt_num)
+        .x_labels(14)
+        .y_labels(12)
+        .label_style((SANS, 13))
+        .draw()?;
+    Ok(())
+}
+
 /// The series legend, boxed, in one style for every chart.
 fn draw_legend<'a, CT: plotters::coord::CoordTranslate>(
     chart: &mut ChartContext<'a, BitMapBackend<'a>, CT>,
@@ -154,20 +178,15 @@ pub fn error_vs_time(path: &Path, title: &Title, errors: &SceneErrors) -> Result
                     log_range(times()).log_scale(),
                     log_range(values).log_scale(),
                 )?;
-            chart
-                .configure_mesh()
-                .x_desc("trace time (ms, cumulative)")
-                .y_desc(if metric == "FLIP" {
+            log_log_axes(
+                &mut chart,
+                "trace time (ms, cumulative)",
+                if metric == "FLIP" {
                     "mean FLIP (tone-mapped)"
                 } else {
                     "relMSE (tone-mapped)"
-                })
-                .x_label_formatter(&fmt_num)
-                .y_label_formatter(&fmt_num)
-                .x_labels(14)
-                .y_labels(12)
-                .label_style((SANS, 13))
-                .draw()?;
+                },
+            )?;
             for (i, c) in errors.curves.iter().enumerate() {
                 let points: Vec<(f64, f64)> =
                     c.points.iter().map(|p| (p.time_ms, value(p))).collect();
@@ -204,16 +223,11 @@ pub fn bvh_presets(path: &Path, title: &Title, rows: &[PresetRow]) -> Result<()>
                 log_range(rows.iter().map(|r| r.build_ms)).log_scale(),
                 log_range(rows.iter().map(|r| r.trace_ms.min)).log_scale(),
             )?;
-        chart
-            .configure_mesh()
-            .x_desc("BLAS build ms (all meshes, one thread)")
-            .y_desc("trace ms per frame (fastest frame)")
-            .x_label_formatter(&fmt_num)
-            .y_label_formatter(&fmt_num)
-            .x_labels(14)
-            .y_labels(12)
-            .label_style((SANS, 13))
-            .draw()?;
+        log_log_axes(
+            &mut chart,
+            "BLAS build ms (all meshes, one thread)",
+            "trace ms per frame (fastest frame)",
+        )?;
         let mut scenes: Vec<&str> = rows.iter().map(|r| r.scene.as_str()).collect();
         scenes.dedup();
         for (i, scene) in scenes.iter().enumerate() {
@@ -441,16 +455,7 @@ pub fn scaling(
                     log_range(data.iter().map(|p| p.0)).log_scale(),
                     log_range(data.iter().map(|p| p.1)).log_scale(),
                 )?;
-            chart
-                .configure_mesh()
-                .x_desc(x_desc)
-                .y_desc("trace ms per frame (median)")
-                .x_label_formatter(&fmt_num)
-                .y_label_formatter(&fmt_num)
-                .x_labels(14)
-                .y_labels(12)
-                .label_style((SANS, 13))
-                .draw()?;
+            log_log_axes(&mut chart, x_desc, "trace ms per frame (median)")?;
             let col = color(0);
             chart.draw_series(LineSeries::new(
                 data.iter().map(|p| (p.0, p.1)),
