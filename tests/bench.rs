@@ -245,3 +245,43 @@ fn check_chart(path: &Path) {
         colours.len()
     );
 }
+
+/// Bad arguments fail at once with a message naming the problem (no GPU work, no partial output).
+#[test]
+fn bad_arguments_fail_with_clear_messages() {
+    let out = std::env::temp_dir().join(format!("raykin-bench-bad-{}", std::process::id()));
+    let run = |args: &[&str]| {
+        let output = std::process::Command::new(env!("CARGO_BIN_EXE_raykin"))
+            .arg("bench")
+            .args(args)
+            .arg("--out")
+            .arg(&out)
+            .env("XDG_RUNTIME_DIR", std::env::temp_dir().join("raykin-xdg"))
+            .output()
+            .expect("raykin runs");
+        assert!(!output.status.success(), "{args:?} should fail");
+        String::from_utf8_lossy(&output.stderr).into_owned()
+    };
+    let missing = run(&["--scene", "/no/such/scene.glb"]);
+    assert!(
+        missing.contains("/no/such/scene.glb") && missing.contains("not a named bench scene"),
+        "{missing}"
+    );
+    let part = run(&["--parts", "everything"]);
+    assert!(
+        part.contains("unknown part") && part.contains("scaling"),
+        "{part}"
+    );
+    let suite = run(&["--suite", "huge"]);
+    assert!(suite.contains("unknown suite `huge`"), "{suite}");
+    let assets = run(&["--scene", "cornell", "--assets", "/no/such/assets"]);
+    assert!(
+        assets.contains("/no/such/assets") && assets.contains("cornell"),
+        "{assets}"
+    );
+    assert!(
+        !out.join("results.json").exists(),
+        "no results from a failed run"
+    );
+    let _ = std::fs::remove_dir_all(&out);
+}

@@ -166,12 +166,14 @@ pub fn refit_vs_rebuild(
                 stats.last_rebuild_seconds * 1e3,
             );
             let ratio = stats.sah_ratio.iter().copied().fold(0.0, f32::max);
-            let mut trace = trace_times(app, 0, repeats.saturating_sub(1));
-            trace.push(
-                app.renderer()
-                    .last_pass_times
-                    .map_or(f64::NAN, |p| p.trace_ms),
-            );
+            // The pose frame's own GPU time counts; without timestamps its wall time would include the BVH
+            // update, so only the repeats (at least one) are timed then.
+            let pose_trace = app.renderer().last_pass_times.map(|p| p.trace_ms);
+            let repeats = repeats
+                .saturating_sub(1)
+                .max(usize::from(pose_trace.is_none()));
+            let mut trace = trace_times(app, 0, repeats);
+            trace.extend(pose_trace);
             Ok((refit, rebuild, Spread::of(&trace).min, ratio))
         };
         // Both trees start from a build at the first pose.
