@@ -109,17 +109,19 @@ fn legend(series_color: RGBColor) -> impl Fn((i32, i32)) -> PathElement<(i32, i3
     move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], series_color.stroke_width(3))
 }
 
-type LogLog = plotters::coord::cartesian::Cartesian2d<
-    plotters::coord::combinators::LogCoord<f64>,
-    plotters::coord::combinators::LogCoord<f64>,
->;
+type LogX<Y> =
+    plotters::coord::cartesian::Cartesian2d<plotters::coord::combinators::LogCoord<f64>, Y>;
 
-/// Grid, tick labels and axis names of a log-log chart.
-fn log_log_axes<'a>(
-    chart: &mut ChartContext<'a, BitMapBackend<'a>, LogLog>,
+/// Grid, tick labels and axis names of a chart with a log x axis (y log or linear).
+fn log_x_axes<'a, Y>(
+    chart: &mut ChartContext<'a, BitMapBackend<'a>, LogX<Y>>,
     x_desc: &str,
     y_desc: &str,
-) -> Result<()> {
+) -> Result<()>
+where
+    Y: plotters::coord::ranged1d::Ranged<ValueType = f64>
+        + plotters::coord::ranged1d::ValueFormatter<f64>,
+{
     chart
         .configure_mesh()
         .x_desc(x_desc)
@@ -178,7 +180,7 @@ pub fn error_vs_time(path: &Path, title: &Title, errors: &SceneErrors) -> Result
                     log_range(times()).log_scale(),
                     log_range(values).log_scale(),
                 )?;
-            log_log_axes(
+            log_x_axes(
                 &mut chart,
                 "trace time (ms, cumulative)",
                 if metric == "FLIP" {
@@ -224,16 +226,11 @@ pub fn bvh_presets(path: &Path, title: &Title, rows: &[PresetRow]) -> Result<()>
                 // Linear from 0: the presets differ by tens of percent, too little for log-axis labels.
                 0.0..rows.iter().map(|r| r.trace_ms.min).fold(0.0, f64::max) * 1.15,
             )?;
-        chart
-            .configure_mesh()
-            .x_desc("BLAS build ms (all meshes, one thread)")
-            .y_desc("trace ms per frame (fastest frame)")
-            .x_label_formatter(&fmt_num)
-            .y_label_formatter(&fmt_num)
-            .x_labels(14)
-            .y_labels(12)
-            .label_style((SANS, 13))
-            .draw()?;
+        log_x_axes(
+            &mut chart,
+            "BLAS build ms (all meshes, one thread)",
+            "trace ms per frame (fastest frame)",
+        )?;
         let mut scenes: Vec<&str> = rows.iter().map(|r| r.scene.as_str()).collect();
         scenes.dedup();
         for (i, scene) in scenes.iter().enumerate() {
@@ -461,7 +458,7 @@ pub fn scaling(
                     log_range(data.iter().map(|p| p.0)).log_scale(),
                     log_range(data.iter().map(|p| p.1)).log_scale(),
                 )?;
-            log_log_axes(&mut chart, x_desc, "trace ms per frame (median)")?;
+            log_x_axes(&mut chart, x_desc, "trace ms per frame (median)")?;
             let col = color(0);
             chart.draw_series(LineSeries::new(
                 data.iter().map(|p| (p.0, p.1)),
