@@ -1,6 +1,5 @@
 //! Measurements behind docs/ANIMATION.md (ignored by default; they print tables):
-//!   cargo test -p raykin --test animation_bench -- --ignored --nocapture
-//! Figures come from the dev profile (engine opt-level 1, dependencies opt-level 2), as the brief builds.
+//!   cargo test --release --workspace --test animation_bench -- --ignored --nocapture
 
 use raykin::animation::{AnimationPlayer, DeformedMeshes, cpu_app};
 use raykin::bvh::{BvhQuality, MeshBvh};
@@ -91,7 +90,8 @@ fn sah_ratio_curves() {
     }
 }
 
-/// CPU skinning time per 100k vertices (the crowd: 96 skinned meshes) and refit/rebuild times per mesh.
+/// CPU skinning and refit time per frame of the crowd (96 skinned meshes, every one moving), per 100k
+/// vertices and per 100k triangles, and refit/rebuild times per mesh.
 #[test]
 #[ignore]
 fn cpu_skinning_time() {
@@ -101,21 +101,62 @@ fn cpu_skinning_time() {
     let r = root(&mut app);
     raykin::animation::attach_players(app.world_mut(), r, &crowd.players);
     app.update();
-    let (mut secs, mut verts) = (0.0, 0usize);
+    // One BVH per deformable mesh, built at the first pose, refit every frame as the renderer does.
+    let mut trees: Vec<(usize, MeshBvh, Vec<[u32; 3]>)> = {
+        let d = app.world().resource::<DeformedMeshes>();
+        (0..scene.meshes.len())
+            .filter(|&m| scene.meshes[m].is_deformable())
+            .map(|m| {
+                let tris = &scene.meshes[m].triangles;
+                let b = MeshBvh::build(
+                    &d.meshes[m].as_ref().unwrap().positions,
+                    tris,
+                    BvhQuality::Medium,
+                )
+                .unwrap();
+                let order = b.ordered_triangles(tris);
+                (m, b, order)
+            })
+            .collect()
+    };
+    let deformed_triangles: usize = trees
+        .iter()
+        .map(|t| scene.meshes[t.0].triangles.len())
+        .sum();
+    let (mut secs, mut verts, mut refit_secs) = (0.0, 0usize, 0.0);
     let frames = 20;
     for _ in 0..frames {
         app.update();
         let d = app.world().resource::<DeformedMeshes>();
         secs += d.last_seconds;
         verts += d.last_vertices;
+        let t0 = std::time::Instant::now();
+        {
+            use rayon::prelude::*;
+            trees.par_iter_mut().for_each(|(m, b, order)| {
+                b.refit(&d.meshes[*m].as_ref().unwrap().positions, order);
+            });
+        }
+        refit_secs += t0.elapsed().as_secs_f64();
     }
+    let per_100k_tris = |s: f64| s / frames as f64 * 1e3 / (deformed_triangles as f64 / 1e5);
     println!(
-        "crowd: {} meshes, {} triangles; deform {:.1} ms/frame for {} vertices: {:.2} ms per 100k vertices",
+        "crowd: {} meshes, {} triangles ({deformed_triangles} deformed); rayon threads {}",
         scene.meshes.len(),
         scene.triangle_count(),
+        rayon::current_num_threads()
+    );
+    println!(
+        "deform (skin + morph, positions/normals/tangents): {:.2} ms/frame for {} vertices: {:.2} ms per 100k vertices, {:.2} ms per 100k triangles",
         secs / frames as f64 * 1e3,
         verts / frames,
-        secs / verts as f64 * 1e5 * 1e3
+        secs / verts as f64 * 1e5 * 1e3,
+        per_100k_tris(secs)
+    );
+    println!(
+        "refit + SAH of every deformed BLAS: {:.2} ms/frame: {:.2} ms per 100k triangles",
+        refit_secs / frames as f64 * 1e3,
+        per_100k_tris(refit_secs)
     );
     for (name, m) in [("CesiumMan", 1usize), ("Fox", scene.meshes.len() - 1)] {
         let d = app.world().resource::<DeformedMeshes>().meshes[m]
@@ -132,7 +173,7 @@ fn cpu_skinning_time() {
         }
         let refit = t0.elapsed().as_secs_f64() / 100.0;
         println!(
-            "{name}: {} triangles: rebuild {:.2} ms, refit {:.3} ms",
+            "{name}: {} triangles: rebuild {:.2} ms, refit + SAH {:.3} ms",
             tris.len(),
             build * 1e3,
             refit * 1e3

@@ -92,6 +92,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
                 spp_per_frame: 1,
                 max_depth: args.max_depth,
                 environment: Environment::Sky,
+                deform: args.deform.into(),
                 ..Default::default()
             };
             let start = Instant::now();
@@ -222,20 +223,33 @@ struct CrowdRow {
     frames: usize,
     triangles: usize,
     skinned_instances: usize,
-    /// Per phase: (median, p99) in ms over the measured frames.
+    /// Where skinning, morphing and refit ran (`--deform`, resolved for the adapter).
+    deform_backend: String,
+    /// Per phase: (median, p99) in ms over the measured frames. CPU phases between frame sets:
     animate_ms: (f64, f64),
     transform_ms: (f64, f64),
+    /// Poses (joint matrices) + CPU skinning/morphing (the latter only on the CPU backend).
     deform_ms: (f64, f64),
     bvh_ms: (f64, f64),
+    render_submit_ms: (f64, f64),
+    /// Parts of the bvh phase (CPU): refit (CPU backend), rebuilds run or installed, uploads of
+    /// deformation results (CPU) or inputs (GPU), top-level build + instance upload.
     refit_ms: (f64, f64),
     rebuild_ms: (f64, f64),
-    render_submit_ms: (f64, f64),
+    upload_ms: (f64, f64),
+    tlas_ms: (f64, f64),
+    /// GPU passes (timestamp queries): skinning + morphing, refit + SAH (GPU backend), trace.
+    skin_gpu_ms: (f64, f64),
+    refit_gpu_ms: (f64, f64),
     trace_gpu_ms: (f64, f64),
+    /// Median skinning + refit per frame per 100k triangles: CPU phases on the CPU backend, GPU passes on
+    /// the GPU backend (the target is <= 1 ms).
+    skin_refit_ms_per_100k_tris: f64,
     rebuilds: u64,
     max_sah_ratio_last_frame: f32,
 }
 
-/// The crowd scene (64 CesiumMan + 32 Fox) through the frame loop: per-phase CPU times and GPU trace time.
+/// The crowd scene (64 CesiumMan + 32 Fox) through the frame loop: per-phase CPU times and GPU pass times.
 pub fn run_crowd(args: &BenchArgs) -> Result<()> {
     let ctx = open_gpu()?;
     let crowd = raykin::scene::crowd_scene(&args.assets)?;
@@ -252,6 +266,10 @@ pub fn run_crowd(args: &BenchArgs) -> Result<()> {
         _ => (vec![(1920, 1080), (2560, 1440)], 300, 10),
     };
     let frames = args.frames.unwrap_or(frames);
+    let sizes = match (args.width, args.height) {
+        (Some(w), h) => vec![(w, h.unwrap_or(w * 9 / 16))],
+        _ => sizes,
+    };
     let mut rows = Vec::new();
     for (width, height) in sizes {
         let settings = RenderSettings {
@@ -260,6 +278,7 @@ pub fn run_crowd(args: &BenchArgs) -> Result<()> {
             spp_per_frame: 1,
             max_depth: args.max_depth,
             environment: Environment::Sky,
+            deform: args.deform.into(),
             ..Default::default()
         };
         let mut app = HeadlessApp::new(ctx.clone(), scene.clone(), settings, &CameraChoice::Auto)?;
@@ -272,7 +291,8 @@ pub fn run_crowd(args: &BenchArgs) -> Result<()> {
             raykin::animation::attach_players(world, root, &crowd.players);
             world.resource_mut::<raykin::render::Renderer>().time_passes = true;
         }
-        let mut phases: Vec<[f64; 8]> = Vec::new();
+        const PHASES: usize = 12;
+        let mut phases: Vec<[f64; PHASES]> = Vec::new();
         for f in 0..warmup + frames {
             app.step();
             if f < warmup {
@@ -281,19 +301,22 @@ pub fn run_crowd(args: &BenchArgs) -> Result<()> {
             let world = app.app.world();
             let t = world.resource::<raykin::frame_timing::FrameTimings>().last;
             let stats = world.resource::<raykin::bvh::refit::BvhStats>();
-            let trace = app
-                .renderer()
-                .last_pass_times
-                .map_or(f64::NAN, |p| p.trace_ms);
+            let gpu = app.renderer().last_pass_times;
+            let gpu_ms =
+                |f: fn(&raykin::render::PassTimes) -> f64| gpu.as_ref().map_or(f64::NAN, f);
             phases.push([
                 t.animate_ms,
                 t.transform_ms,
                 t.deform_ms,
                 t.bvh_ms,
+                t.render_ms,
                 stats.last_refit_seconds * 1e3,
                 stats.last_rebuild_seconds * 1e3,
-                t.render_ms,
-                trace,
+                stats.last_upload_seconds * 1e3,
+                stats.last_tlas_seconds * 1e3,
+                gpu_ms(|p| p.skin_ms),
+                gpu_ms(|p| p.refit_ms),
+                gpu_ms(|p| p.trace_ms),
             ]);
         }
         let stat = |i: usize| {
@@ -301,35 +324,54 @@ pub fn run_crowd(args: &BenchArgs) -> Result<()> {
             v.sort_by(f64::total_cmp);
             (percentile(&v, 0.5), percentile(&v, 0.99))
         };
+        let renderer = app.renderer();
+        let backend = format!("{:?}", renderer.deform_backend);
+        let gpu_backend = renderer.deformer.is_some();
         let stats = app.app.world().resource::<raykin::bvh::refit::BvhStats>();
+        let skin_refit = if gpu_backend {
+            stat(9).0 + stat(10).0
+        } else {
+            stat(2).0 + stat(5).0
+        };
         let row = CrowdRow {
             width,
             height,
             frames,
             triangles,
             skinned_instances: skinned,
+            deform_backend: backend.clone(),
             animate_ms: stat(0),
             transform_ms: stat(1),
             deform_ms: stat(2),
             bvh_ms: stat(3),
-            refit_ms: stat(4),
-            rebuild_ms: stat(5),
-            render_submit_ms: stat(6),
-            trace_gpu_ms: stat(7),
+            render_submit_ms: stat(4),
+            refit_ms: stat(5),
+            rebuild_ms: stat(6),
+            upload_ms: stat(7),
+            tlas_ms: stat(8),
+            skin_gpu_ms: stat(9),
+            refit_gpu_ms: stat(10),
+            trace_gpu_ms: stat(11),
+            skin_refit_ms_per_100k_tris: skin_refit / (triangles as f64 / 1e5),
             rebuilds: stats.rebuilds,
             max_sah_ratio_last_frame: stats.sah_ratio.iter().copied().fold(0.0, f32::max),
         };
         eprintln!(
-            "crowd {width}x{height} ({triangles} tris, {skinned} skinned): median ms animate {:.2} transform {:.2} deform {:.2} bvh {:.2} (refit {:.2}, rebuild {:.2}) render-submit {:.2} GPU trace {:.2} (p99 {:.2}); {} rebuilds",
+            "crowd {width}x{height} ({triangles} tris, {skinned} skinned, deform on {backend}): median ms: animate {:.2} transform {:.2} deform-phase {:.2} bvh-phase {:.2} (refit {:.2}, rebuild {:.2}, upload {:.2}, tlas {:.2}) render-submit {:.2}; GPU skin {:.3} refit {:.3} trace {:.2} (p99 {:.2}); skin+refit {:.2} ms per 100k tris; {} rebuilds",
             row.animate_ms.0,
             row.transform_ms.0,
             row.deform_ms.0,
             row.bvh_ms.0,
             row.refit_ms.0,
             row.rebuild_ms.0,
+            row.upload_ms.0,
+            row.tlas_ms.0,
             row.render_submit_ms.0,
+            row.skin_gpu_ms.0,
+            row.refit_gpu_ms.0,
             row.trace_gpu_ms.0,
             row.trace_gpu_ms.1,
+            row.skin_refit_ms_per_100k_tris,
             row.rebuilds
         );
         rows.push(row);

@@ -47,6 +47,7 @@ pub fn settings_from(args: &SceneArgs) -> RenderSettings {
         seed: args.seed,
         russian_roulette: !args.no_rr,
         nee: !args.no_nee,
+        deform: args.deform.into(),
         ..Default::default()
     }
 }
@@ -275,6 +276,7 @@ pub fn run_default() -> Result<()> {
         time: None,
         animation: None,
         spp_per_dispatch: 16,
+        deform: crate::cli::DeformArg::Auto,
     };
     let camera = CameraChoice::LookAt {
         eye: glam::Vec3::new(-278.0, 273.0, 800.0),

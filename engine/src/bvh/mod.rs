@@ -178,8 +178,10 @@ impl FlatBvh {
         cost / root_area
     }
 
-    /// Bottom-up box update after primitives moved; `prim_bounds(i)` bounds GPU primitive slot `i`.
-    pub fn refit(&mut self, prim_bounds: impl Fn(usize) -> (Vec3, Vec3)) {
+    /// Bottom-up box update after primitives moved; `prim_bounds(i)` bounds GPU primitive slot `i`. Returns
+    /// the refit tree's [`Self::sah_cost`], summed in the same sweep (every term is a box just updated).
+    pub fn refit(&mut self, prim_bounds: impl Fn(usize) -> (Vec3, Vec3)) -> f32 {
+        let mut cost = 0.0;
         for i in (0..self.nodes.len()).rev() {
             for k in 0..2 {
                 let c = self.nodes[i].children[k];
@@ -200,7 +202,16 @@ impl FlatBvh {
                 };
                 self.nodes[i].children[k].set_bounds(lo, hi);
             }
+            let [a, b] = &self.nodes[i].children;
+            cost += union_half_area(a, b);
+            for c in [a, b] {
+                if c.is_leaf() {
+                    cost += c.half_area() * c.count as f32;
+                }
+            }
         }
+        let root = &self.nodes[0].children;
+        cost / union_half_area(&root[0], &root[1]).max(f32::MIN_POSITIVE)
     }
 
     pub fn root_bounds(&self) -> (Vec3, Vec3) {
@@ -262,12 +273,14 @@ impl MeshBvh {
         Ok(Self { flat, build_sah })
     }
 
-    /// Refits to moved vertices; `gpu_triangles` are the mesh's triangles in [`FlatBvh::order`].
-    pub fn refit(&mut self, positions: &[Vec3], gpu_triangles: &[[u32; 3]]) {
-        self.flat.refit(|i| {
+    /// Refits to moved vertices; `gpu_triangles` are the mesh's triangles in [`FlatBvh::order`]. Returns the
+    /// new [`Self::sah_ratio`].
+    pub fn refit(&mut self, positions: &[Vec3], gpu_triangles: &[[u32; 3]]) -> f32 {
+        let cost = self.flat.refit(|i| {
             let [a, b, c] = gpu_triangles[i].map(|v| positions[v as usize]);
             (a.min(b).min(c), a.max(b).max(c))
         });
+        cost / self.build_sah.max(f32::MIN_POSITIVE)
     }
 
     /// `triangles` (a mesh's, in file order) rearranged into this BVH's leaf order.

@@ -27,11 +27,15 @@ struct Timestamps {
     period_ns: f32,
 }
 
-/// GPU time of the last dispatch's passes, in milliseconds.
+/// GPU time of the last frame's passes, in milliseconds (0 for a pass that did not run).
 #[derive(Clone, Copy, Debug, Default, serde::Serialize)]
 pub struct PassTimes {
     pub trace_ms: f64,
     pub tonemap_ms: f64,
+    /// GPU skinning + morphing (`shaders/deform.wgsl`).
+    pub skin_ms: f64,
+    /// GPU BLAS refit + SAH cost (`shaders/refit.wgsl`).
+    pub refit_ms: f64,
 }
 
 pub struct PathTracer {
@@ -334,7 +338,9 @@ impl PathTracer {
         group
     }
 
-    /// Traces `spp` more samples per pixel into the accumulation buffers (and tone-maps if asked).
+    /// Traces `spp` more samples per pixel into the accumulation buffers (and tone-maps if asked), in one
+    /// submission after `before` (the frame's GPU deform passes).
+    #[allow(clippy::too_many_arguments)]
     pub fn dispatch(
         &mut self,
         ctx: &GpuContext,
@@ -343,6 +349,7 @@ impl PathTracer {
         camera: &CameraView,
         spp: u32,
         tonemap: bool,
+        before: Vec<wgpu::CommandBuffer>,
     ) {
         let (env_mode, env_color) = match settings.environment {
             Environment::Constant(c) => (0, c),
@@ -397,7 +404,8 @@ impl PathTracer {
         if let Some(t) = &self.timestamps {
             encoder.resolve_query_set(&t.set, 0..if tonemap { 4 } else { 2 }, &t.resolve, 0);
         }
-        ctx.queue.submit([encoder.finish()]);
+        ctx.queue
+            .submit(before.into_iter().chain([encoder.finish()]));
     }
 
     fn encode_tonemap(
@@ -449,6 +457,7 @@ impl PathTracer {
         Some(PassTimes {
             trace_ms: ms(ticks[0], ticks[1]),
             tonemap_ms: ms(ticks[2], ticks[3]),
+            ..Default::default()
         })
     }
 

@@ -42,6 +42,9 @@ pub struct MeshSlot {
     pub positions: Option<Vec<Vec3>>,
     /// BLAS nodes reserved for this mesh (a deformable mesh reserves room for any rebuilt tree).
     pub blas_capacity: u32,
+    /// Conservative bounds of a GPU-deformed mesh at its current pose (its CPU tree's boxes are stale);
+    /// the top-level BVH uses them instead of the tree's root box.
+    pub deformed_bounds: Option<(Vec3, Vec3)>,
 }
 
 /// Byte counts of what the scene occupies on the GPU.
@@ -95,7 +98,7 @@ pub struct InstanceInput {
     pub mesh: u32,
 }
 
-fn storage(ctx: &GpuContext, label: &str, bytes: &[u8]) -> wgpu::Buffer {
+pub(crate) fn storage(ctx: &GpuContext, label: &str, bytes: &[u8]) -> wgpu::Buffer {
     // wgpu rejects empty bindings: keep at least 16 bytes.
     let padded;
     let contents = if bytes.len() < 16 {
@@ -318,6 +321,7 @@ impl GpuScene {
                 bvh,
                 positions: None,
                 blas_capacity,
+                deformed_bounds: None,
             });
         }
 
@@ -393,15 +397,17 @@ impl GpuScene {
     }
 
     /// Writes this frame's deformed meshes over their own vertex-pool ranges (same encodings as the initial
-    /// upload), refits their BLASes and uploads the nodes; returns each mesh's new SAH ratio. The CPU work
-    /// (encoding, refit, SAH) runs in parallel over meshes, the queue writes after it in mesh order.
+    /// upload), refits their BLASes and uploads the nodes; returns each mesh's new SAH ratio and the CPU
+    /// seconds spent on the queue writes. The CPU work (encoding, refit + SAH in one sweep) runs in parallel
+    /// over meshes, the queue writes after it in mesh order.
     pub fn apply_deformations(
         &mut self,
         ctx: &GpuContext,
         deformed: &crate::animation::DeformedMeshes,
-    ) -> Vec<(usize, f32)> {
+    ) -> (Vec<(usize, f32)>, f64) {
         struct Update {
             mesh: usize,
+            /// Encoded normals and tangents (positions are written straight from the deformed mesh).
             words: Vec<(u32, Vec<u32>)>,
             sah_ratio: f32,
         }
@@ -421,13 +427,7 @@ impl GpuScene {
                     unreachable!("filtered to deformed meshes")
                 };
                 let gpu = slot.gpu;
-                let mut words = vec![(
-                    gpu.position_offset,
-                    d.positions
-                        .iter()
-                        .flat_map(|p| p.to_array().map(f32::to_bits))
-                        .collect(),
-                )];
+                let mut words = Vec::new();
                 if let (Some(n), true) = (&d.normals, gpu.normal_offset != NONE) {
                     words.push((
                         gpu.normal_offset,
@@ -451,7 +451,11 @@ impl GpuScene {
                     &d.positions,
                     &slot.gpu_triangles,
                 );
-                slot.positions = Some(d.positions.clone());
+                // Reuses the previous frame's allocation.
+                match &mut slot.positions {
+                    Some(p) => p.clone_from(&d.positions),
+                    None => slot.positions = Some(d.positions.clone()),
+                }
                 Update {
                     mesh: m,
                     words,
@@ -459,9 +463,18 @@ impl GpuScene {
                 }
             })
             .collect();
-        updates
+        let start = std::time::Instant::now();
+        let ratios = updates
             .into_iter()
             .map(|u| {
+                let slot = &self.mesh_slots[u.mesh];
+                if let Some(d) = deformed.meshes[u.mesh].as_ref() {
+                    ctx.queue.write_buffer(
+                        &self.vertex_pool,
+                        slot.gpu.position_offset as u64 * 4,
+                        bytemuck::cast_slice(&d.positions),
+                    );
+                }
                 for (offset, words) in &u.words {
                     ctx.queue.write_buffer(
                         &self.vertex_pool,
@@ -469,7 +482,6 @@ impl GpuScene {
                         bytemuck::cast_slice(words),
                     );
                 }
-                let slot = &self.mesh_slots[u.mesh];
                 ctx.queue.write_buffer(
                     &self.blas_nodes,
                     slot.gpu.blas_root as u64 * 64,
@@ -477,7 +489,15 @@ impl GpuScene {
                 );
                 (u.mesh, u.sah_ratio)
             })
-            .collect()
+            .collect();
+        (ratios, start.elapsed().as_secs_f64())
+    }
+
+    /// Whether a mesh has emissive triangles (next-event estimation needs their world areas on the CPU).
+    pub fn has_emitters(&self, mesh: usize) -> bool {
+        self.emissive_triangles
+            .get(mesh)
+            .is_some_and(|e| !e.is_empty())
     }
 
     /// Rebuilds a mesh's BLAS from its current positions inside its reserved node range, and rewrites its
@@ -489,10 +509,27 @@ impl GpuScene {
         mesh: usize,
         quality: crate::bvh::BvhQuality,
     ) -> Result<(), crate::bvh::BvhTooDeep> {
+        let slot = &self.mesh_slots[mesh];
+        let positions = slot
+            .positions
+            .as_deref()
+            .unwrap_or(&scene.meshes[mesh].positions);
+        let bvh = MeshBvh::build(positions, &scene.meshes[mesh].triangles, quality)?;
+        self.install_bvh(ctx, scene, mesh, bvh);
+        Ok(())
+    }
+
+    /// Replaces a mesh's BLAS with `bvh` in its reserved node range and rewrites its triangle range in the
+    /// new leaf order. False (and nothing changed) when the tree does not fit the reserved range.
+    pub fn install_bvh(
+        &mut self,
+        ctx: &GpuContext,
+        scene: &SceneAsset,
+        mesh: usize,
+        bvh: MeshBvh,
+    ) -> bool {
         let data = &scene.meshes[mesh];
         let slot = &self.mesh_slots[mesh];
-        let positions = slot.positions.as_deref().unwrap_or(&data.positions);
-        let bvh = MeshBvh::build(positions, &data.triangles, quality)?;
         if bvh.flat.nodes.len() > slot.blas_capacity as usize {
             // Cannot happen for a tree with >= 1 triangle per leaf; keep the refit tree rather than overrun.
             tracing::warn!(
@@ -501,7 +538,7 @@ impl GpuScene {
                 bvh.flat.nodes.len(),
                 slot.blas_capacity
             );
-            return Ok(());
+            return false;
         }
         let mut nodes = bvh.flat.nodes.clone();
         nodes.resize(slot.blas_capacity as usize, crate::bvh::GpuBvhNode::EMPTY);
@@ -520,7 +557,7 @@ impl GpuScene {
         let slot = &mut self.mesh_slots[mesh];
         slot.gpu_triangles = ordered.indices;
         slot.bvh = bvh;
-        Ok(())
+        true
     }
 
     /// Uploads instances (in TLAS leaf order), the TLAS and the emitter list for this frame's placements.
@@ -533,7 +570,10 @@ impl GpuScene {
         let boxes: Vec<(Vec3, Vec3)> = inputs
             .iter()
             .map(|i| {
-                let (lo, hi) = self.mesh_slots[i.mesh as usize].bvh.flat.root_bounds();
+                let slot = &self.mesh_slots[i.mesh as usize];
+                let (lo, hi) = slot
+                    .deformed_bounds
+                    .unwrap_or_else(|| slot.bvh.flat.root_bounds());
                 transform_box(i.world, lo, hi)
             })
             .collect();

@@ -51,6 +51,8 @@ pub struct RenderSettings {
     /// Next-event estimation on emissive triangles (with MIS).
     pub nee: bool,
     pub bvh_quality: crate::bvh::BvhQuality,
+    /// Where deformable meshes are skinned, morphed and refit (`Auto`: GPU on real GPUs).
+    pub deform: crate::gpu_deform::DeformBackend,
 }
 
 impl Default for RenderSettings {
@@ -70,6 +72,7 @@ impl Default for RenderSettings {
             rr_depth: 3,
             nee: true,
             bvh_quality: crate::bvh::BvhQuality::Medium,
+            deform: crate::gpu_deform::DeformBackend::Auto,
         }
     }
 }

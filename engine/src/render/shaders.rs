@@ -6,6 +6,9 @@ pub const BVH: &str = include_str!("../../../shaders/bvh.wgsl");
 pub const BRDF: &str = include_str!("../../../shaders/brdf.wgsl");
 pub const PATH_TRACE: &str = include_str!("../../../shaders/path_trace.wgsl");
 pub const TONEMAP: &str = include_str!("../../../shaders/tonemap.wgsl");
+/// GPU skinning + morphing and the GPU BLAS refit (`crate::gpu_deform`); standalone modules.
+pub const DEFORM: &str = include_str!("../../../shaders/deform.wgsl");
+pub const REFIT: &str = include_str!("../../../shaders/refit.wgsl");
 
 /// The path tracer module: shared declarations, traversal, BRDF, then the kernel.
 pub fn path_trace_source() -> String {
@@ -21,5 +24,7 @@ pub fn all_modules() -> Vec<(&'static str, String)> {
     vec![
         ("path_trace", path_trace_source()),
         ("tonemap", tonemap_source()),
+        ("deform", DEFORM.to_string()),
+        ("refit", REFIT.to_string()),
     ]
 }
