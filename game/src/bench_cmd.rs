@@ -247,6 +247,10 @@ struct CrowdRow {
     skin_refit_ms_per_100k_tris: f64,
     rebuilds: u64,
     max_sah_ratio_last_frame: f32,
+    /// Static GPU deform inputs (rest attributes, influences, morph deltas), GPU backend only.
+    gpu_deform_inputs_mib: f64,
+    /// Geometry + BVH (+ GPU deform buffers on the GPU backend) per triangle.
+    bytes_per_triangle_geometry_bvh: f64,
 }
 
 /// The crowd scene (64 CesiumMan + 32 Fox) through the frame loop: per-phase CPU times and GPU pass times.
@@ -355,9 +359,15 @@ pub fn run_crowd(args: &BenchArgs) -> Result<()> {
             skin_refit_ms_per_100k_tris: skin_refit / (triangles as f64 / 1e5),
             rebuilds: stats.rebuilds,
             max_sah_ratio_last_frame: stats.sah_ratio.iter().copied().fold(0.0, f32::max),
+            gpu_deform_inputs_mib: renderer
+                .deformer
+                .as_ref()
+                .map_or(0.0, |d| d.input_bytes as f64 / 1048576.0),
+            bytes_per_triangle_geometry_bvh: renderer.scene.memory.geometry_and_bvh() as f64
+                / triangles as f64,
         };
         eprintln!(
-            "crowd {width}x{height} ({triangles} tris, {skinned} skinned, deform on {backend}): median ms: animate {:.2} transform {:.2} deform-phase {:.2} bvh-phase {:.2} (refit {:.2}, rebuild {:.2}, upload {:.2}, tlas {:.2}) render-submit {:.2}; GPU skin {:.3} refit {:.3} trace {:.2} (p99 {:.2}); skin+refit {:.2} ms per 100k tris; {} rebuilds",
+            "crowd {width}x{height} ({triangles} tris, {skinned} skinned, deform on {backend}): median ms: animate {:.2} transform {:.2} deform-phase {:.2} bvh-phase {:.2} (refit {:.2}, rebuild {:.2}, upload {:.2}, tlas {:.2}) render-submit {:.2}; GPU skin {:.3} refit {:.3} trace {:.2} (p99 {:.2}); skin+refit {:.2} ms per 100k tris; {} rebuilds; GPU deform inputs {:.1} MiB; geometry + BVH {:.1} B/tri",
             row.animate_ms.0,
             row.transform_ms.0,
             row.deform_ms.0,
@@ -372,7 +382,9 @@ pub fn run_crowd(args: &BenchArgs) -> Result<()> {
             row.trace_gpu_ms.0,
             row.trace_gpu_ms.1,
             row.skin_refit_ms_per_100k_tris,
-            row.rebuilds
+            row.rebuilds,
+            row.gpu_deform_inputs_mib,
+            row.bytes_per_triangle_geometry_bvh
         );
         rows.push(row);
     }

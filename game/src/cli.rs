@@ -126,7 +126,8 @@ pub struct SceneArgs {
     #[arg(long, default_value_t = 16)]
     pub spp_per_dispatch: u32,
     /// Where skinning, morphing and BVH refit run: GPU compute passes or the CPU (the reference); auto
-    /// picks the GPU on real GPUs and the CPU on a software adapter (lavapipe). The image is the same.
+    /// picks the GPU on real GPUs and the CPU on a software adapter (lavapipe). The image is the same
+    /// up to float rounding.
     #[arg(long, value_enum, default_value_t = DeformArg::Auto)]
     pub deform: DeformArg,
 }

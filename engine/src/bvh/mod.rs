@@ -181,19 +181,28 @@ impl FlatBvh {
     /// Bottom-up box update after primitives moved; `prim_bounds(i)` bounds GPU primitive slot `i`. Returns
     /// the refit tree's [`Self::sah_cost`], summed in the same sweep (every term is a box just updated).
     pub fn refit(&mut self, prim_bounds: impl Fn(usize) -> (Vec3, Vec3)) -> f32 {
+        let half_area = |d: Vec3| {
+            let d = d.max(Vec3::ZERO);
+            d.x * d.y + d.y * d.z + d.z * d.x
+        };
         let mut cost = 0.0;
+        let (mut root_lo, mut root_hi) = (Vec3::MAX, Vec3::MIN);
         for i in (0..self.nodes.len()).rev() {
+            // The union of the node's children, and the leaves' area x count, as `sah_cost` sums them.
+            let (mut union_lo, mut union_hi) = (Vec3::MAX, Vec3::MIN);
             for k in 0..2 {
                 let c = self.nodes[i].children[k];
                 if c.is_empty() {
                     continue;
                 }
                 let (lo, hi) = if c.is_leaf() {
-                    (c.index as usize..(c.index + c.count) as usize)
+                    let (lo, hi) = (c.index as usize..(c.index + c.count) as usize)
                         .map(&prim_bounds)
                         .fold((Vec3::MAX, Vec3::MIN), |(lo, hi), (a, b)| {
                             (lo.min(a), hi.max(b))
-                        })
+                        });
+                    cost += half_area(hi - lo) * c.count as f32;
+                    (lo, hi)
                 } else {
                     let [a, b] = self.nodes[c.index as usize].children;
                     let lo = Vec3::from(a.min).min(Vec3::from(b.min));
@@ -201,17 +210,20 @@ impl FlatBvh {
                     (lo, hi)
                 };
                 self.nodes[i].children[k].set_bounds(lo, hi);
+                union_lo = union_lo.min(lo);
+                union_hi = union_hi.max(hi);
             }
-            let [a, b] = &self.nodes[i].children;
-            cost += union_half_area(a, b);
-            for c in [a, b] {
-                if c.is_leaf() {
-                    cost += c.half_area() * c.count as f32;
-                }
+            if union_lo.x <= union_hi.x {
+                cost += half_area(union_hi - union_lo);
             }
+            (root_lo, root_hi) = (union_lo, union_hi);
         }
-        let root = &self.nodes[0].children;
-        cost / union_half_area(&root[0], &root[1]).max(f32::MIN_POSITIVE)
+        let root_area = if root_lo.x <= root_hi.x {
+            half_area(root_hi - root_lo)
+        } else {
+            0.0
+        };
+        cost / root_area.max(f32::MIN_POSITIVE)
     }
 
     pub fn root_bounds(&self) -> (Vec3, Vec3) {

@@ -147,6 +147,8 @@ pub struct GpuDeformer {
     timed: bool,
     /// Bytes of static deform inputs (rest attributes, influences, morph deltas) on the GPU.
     pub input_bytes: u64,
+    /// Bytes of every buffer this deformer owns (inputs, per-frame data, refit tables, readbacks).
+    pub gpu_bytes: u64,
 }
 
 fn layout_entry(binding: u32, ty: wgpu::BufferBindingType) -> wgpu::BindGroupLayoutEntry {
@@ -401,7 +403,23 @@ impl GpuDeformer {
             }),
             period_ns: ctx.queue.get_timestamp_period(),
         });
+        let gpu_bytes = [
+            &data_buffer,
+            &mesh_buffer,
+            &matrix_buffer,
+            &weight_buffer,
+            &active_buffer,
+            &refit_mesh_buffer,
+            &level_order_buffer,
+            &level_start_buffer,
+            &sah_buffer,
+        ]
+        .iter()
+        .map(|b| b.size())
+        .sum::<u64>()
+            + 3 * meshes.len() as u64 * 4;
         Ok(Some(Self {
+            gpu_bytes,
             sah: SahReadback::new(ctx, meshes.len()),
             matrices: vec![Mat4::IDENTITY; inputs.matrix_count as usize],
             weights: vec![0.0; inputs.weight_count as usize],

@@ -97,11 +97,13 @@ impl Renderer {
             }
         }
         self.deform_backend = DeformBackend::Cpu;
+        self.scene.memory.deform = 0;
         if wanted != DeformBackend::Gpu {
             return None;
         }
         match GpuDeformer::new(ctx, scene, &self.scene) {
             Ok(deformer) => {
+                self.scene.memory.deform = deformer.as_ref().map_or(0, |d| d.gpu_bytes);
                 self.deformer = deformer;
                 self.deform_backend = DeformBackend::Gpu;
                 None

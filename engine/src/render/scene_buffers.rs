@@ -56,12 +56,15 @@ pub struct GpuMemory {
     pub materials: u64,
     pub texels: u64,
     pub instances_and_tlas: u64,
+    /// GPU deformation: rest attributes, influences, morph deltas, per-frame matrices/weights and refit
+    /// tables of the meshes the GPU deforms (0 on the CPU backend).
+    pub deform: u64,
 }
 
 impl GpuMemory {
     /// Geometry + BVH: the figure the memory target counts (no textures).
     pub fn geometry_and_bvh(&self) -> u64 {
-        self.blas_nodes + self.triangles + self.vertex_pool + self.instances_and_tlas
+        self.blas_nodes + self.triangles + self.vertex_pool + self.instances_and_tlas + self.deform
     }
     pub fn total(&self) -> u64 {
         self.geometry_and_bvh() + self.materials + self.texels
@@ -372,6 +375,7 @@ impl GpuScene {
             materials: (materials.len() * 64 + texture_infos.len() * 16) as u64,
             texels: (texels.len() * 4) as u64,
             instances_and_tlas: 0,
+            deform: 0,
         };
         let gpu_scene = Self {
             blas_nodes: storage(ctx, "blas nodes", bytemuck::cast_slice(&blas_nodes)),
