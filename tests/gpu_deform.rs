@@ -314,3 +314,34 @@ fn gpu_sah_ratio_matches_cpu() {
     assert!(checked > 0);
     assert_eq!(stats.rebuilds, 0);
 }
+
+/// Switching `RenderSettings::deform` mid-run (the viewer's toggle) re-deforms every mesh on the new
+/// backend in the same frame: CPU after GPU writes exactly the CPU's vertices, GPU after CPU the GPU's.
+#[test]
+fn switching_backend_mid_run_redeforms_everything() {
+    let scene = load(shared_assets().join("CesiumMan/glTF-Binary/CesiumMan.glb"));
+    let reference = posed(&scene, DeformBackend::Cpu, 0, 0.8);
+    let want = words(&reference, &reference.renderer().scene.vertex_pool);
+    let mut app = posed(&scene, DeformBackend::Gpu, 0, 0.8);
+    assert!(app.renderer().deformer.is_some());
+    let gpu_pool = words(&app, &app.renderer().scene.vertex_pool);
+
+    app.settings_mut().deform = DeformBackend::Cpu;
+    app.step();
+    let renderer = app.renderer();
+    assert_eq!(renderer.deform_backend, DeformBackend::Cpu);
+    assert!(renderer.deformer.is_none());
+    assert!(
+        renderer
+            .scene
+            .mesh_slots
+            .iter()
+            .all(|s| s.deformed_bounds.is_none())
+    );
+    assert_eq!(words(&app, &renderer.scene.vertex_pool), want);
+
+    app.settings_mut().deform = DeformBackend::Gpu;
+    app.step();
+    assert_eq!(app.renderer().deform_backend, DeformBackend::Gpu);
+    assert_eq!(words(&app, &app.renderer().scene.vertex_pool), gpu_pool);
+}

@@ -115,12 +115,6 @@ pub struct DeformFrame {
     pub rebuild_seconds: f64,
 }
 
-struct Timestamps {
-    set: wgpu::QuerySet,
-    resolve: wgpu::Buffer,
-    period_ns: f32,
-}
-
 pub struct GpuDeformer {
     meshes: Vec<Deformed>,
     /// By scene mesh: index among the GPU-deformed meshes.
@@ -142,7 +136,8 @@ pub struct GpuDeformer {
     groups: u32,
     sah: SahReadback,
     rebuilds: Vec<RebuildJob>,
-    timestamps: Option<Timestamps>,
+    /// Pairs: deform pass, refit pass.
+    timestamps: Option<crate::gpu::PassTimestamps>,
     /// Whether the last encoded frame wrote timestamps.
     timed: bool,
     /// Bytes of static deform inputs (rest attributes, influences, morph deltas) on the GPU.
@@ -389,20 +384,7 @@ impl GpuDeformer {
                 (&sah_buffer, write),
             ],
         );
-        let timestamps = ctx.supports_timestamps().then(|| Timestamps {
-            set: ctx.device.create_query_set(&wgpu::QuerySetDescriptor {
-                label: Some("deform timestamps"),
-                ty: wgpu::QueryType::Timestamp,
-                count: 4,
-            }),
-            resolve: ctx.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("deform timestamp resolve"),
-                size: 32,
-                usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
-                mapped_at_creation: false,
-            }),
-            period_ns: ctx.queue.get_timestamp_period(),
-        });
+        let timestamps = crate::gpu::PassTimestamps::new(ctx, "deform timestamps", 2);
         let gpu_bytes = [
             &data_buffer,
             &mesh_buffer,
@@ -524,15 +506,7 @@ impl GpuDeformer {
         let mut encoded = false;
         self.timed = false;
         if refitting {
-            let ts = |begin: u32| {
-                self.timestamps
-                    .as_ref()
-                    .map(|t| wgpu::ComputePassTimestampWrites {
-                        query_set: &t.set,
-                        beginning_of_pass_write_index: Some(begin),
-                        end_of_pass_write_index: Some(begin + 1),
-                    })
-            };
+            let ts = |pair: u32| self.timestamps.as_ref().map(|t| t.pass_writes(pair));
             {
                 let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                     label: Some("deform"),
@@ -548,7 +522,7 @@ impl GpuDeformer {
             {
                 let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                     label: Some("refit"),
-                    timestamp_writes: ts(2),
+                    timestamp_writes: ts(1),
                 });
                 let (x, y) = grid(self.meshes.len() as u32);
                 pass.set_pipeline(&self.refit_pipeline);
@@ -556,7 +530,7 @@ impl GpuDeformer {
                 pass.dispatch_workgroups(x, y, 1);
             }
             if let Some(t) = &self.timestamps {
-                encoder.resolve_query_set(&t.set, 0..4, &t.resolve, 0);
+                t.resolve(&mut encoder, 2);
                 self.timed = true;
             }
             let samples = (0..self.meshes.len())
@@ -723,13 +697,14 @@ impl GpuDeformer {
     /// GPU times of the deform and refit passes of the last frame (blocks until it finished); `None` when
     /// that frame ran no deform pass or the adapter has no timestamps.
     pub fn read_pass_times(&self, ctx: &GpuContext) -> Option<DeformPassTimes> {
-        let t = self.timestamps.as_ref().filter(|_| self.timed)?;
-        let bytes = ctx.read_buffer(&t.resolve, 32);
-        let ticks: &[u64] = bytemuck::cast_slice(&bytes);
-        let ms = |a: u64, b: u64| b.saturating_sub(a) as f64 * t.period_ns as f64 * 1e-6;
+        let ms = self
+            .timestamps
+            .as_ref()
+            .filter(|_| self.timed)?
+            .read_ms(ctx);
         Some(DeformPassTimes {
-            skin_ms: ms(ticks[0], ticks[1]),
-            refit_ms: ms(ticks[2], ticks[3]),
+            skin_ms: ms[0],
+            refit_ms: ms[1],
         })
     }
 

@@ -20,13 +20,6 @@ struct TonemapParams {
     _pad: [u32; 2],
 }
 
-/// Timestamp queries: [trace begin, trace end, tonemap begin, tonemap end].
-struct Timestamps {
-    set: wgpu::QuerySet,
-    resolve: wgpu::Buffer,
-    period_ns: f32,
-}
-
 /// GPU time of the last frame's passes, in milliseconds (0 for a pass that did not run).
 #[derive(Clone, Copy, Debug, Default, serde::Serialize)]
 pub struct PassTimes {
@@ -59,7 +52,8 @@ pub struct PathTracer {
     pub height: u32,
     /// Samples per pixel accumulated since the last reset.
     pub samples: u32,
-    timestamps: Option<Timestamps>,
+    /// Pairs: trace, tonemap.
+    timestamps: Option<crate::gpu::PassTimestamps>,
 }
 
 fn layout_entry(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
@@ -231,20 +225,7 @@ impl PathTracer {
             &tonemap_layout,
             &[&v.accum, &v.albedo, &v.normal, &v.rgba8, &tonemap_uniform],
         );
-        let timestamps = ctx.supports_timestamps().then(|| Timestamps {
-            set: device.create_query_set(&wgpu::QuerySetDescriptor {
-                label: Some("pass timestamps"),
-                ty: wgpu::QueryType::Timestamp,
-                count: 4,
-            }),
-            resolve: device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("timestamp resolve"),
-                size: 32,
-                usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
-                mapped_at_creation: false,
-            }),
-            period_ns: ctx.queue.get_timestamp_period(),
-        });
+        let timestamps = crate::gpu::PassTimestamps::new(ctx, "pass timestamps", 2);
         let mut tracer = Self {
             trace_pipeline,
             tonemap_pipeline,
@@ -384,13 +365,7 @@ impl PathTracer {
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("path trace"),
-                timestamp_writes: self.timestamps.as_ref().map(|t| {
-                    wgpu::ComputePassTimestampWrites {
-                        query_set: &t.set,
-                        beginning_of_pass_write_index: Some(0),
-                        end_of_pass_write_index: Some(1),
-                    }
-                }),
+                timestamp_writes: self.timestamps.as_ref().map(|t| t.pass_writes(0)),
             });
             pass.set_pipeline(&self.trace_pipeline);
             pass.set_bind_group(0, &scene_group, &[]);
@@ -402,7 +377,7 @@ impl PathTracer {
             self.encode_tonemap(ctx, &mut encoder, settings);
         }
         if let Some(t) = &self.timestamps {
-            encoder.resolve_query_set(&t.set, 0..if tonemap { 4 } else { 2 }, &t.resolve, 0);
+            t.resolve(&mut encoder, if tonemap { 2 } else { 1 });
         }
         ctx.queue
             .submit(before.into_iter().chain([encoder.finish()]));
@@ -427,14 +402,7 @@ impl PathTracer {
             .write_buffer(&self.tonemap_uniform, 0, bytemuck::bytes_of(&params));
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("tonemap"),
-            timestamp_writes: self
-                .timestamps
-                .as_ref()
-                .map(|t| wgpu::ComputePassTimestampWrites {
-                    query_set: &t.set,
-                    beginning_of_pass_write_index: Some(2),
-                    end_of_pass_write_index: Some(3),
-                }),
+            timestamp_writes: self.timestamps.as_ref().map(|t| t.pass_writes(1)),
         });
         pass.set_pipeline(&self.tonemap_pipeline);
         pass.set_bind_group(0, &self.tonemap_bind_group, &[]);
@@ -450,13 +418,10 @@ impl PathTracer {
 
     /// GPU times of the last dispatch (blocks until it finished); `None` without timestamp support.
     pub fn read_pass_times(&self, ctx: &GpuContext) -> Option<PassTimes> {
-        let t = self.timestamps.as_ref()?;
-        let bytes = ctx.read_buffer(&t.resolve, 32);
-        let ticks: &[u64] = bytemuck::cast_slice(&bytes);
-        let ms = |a: u64, b: u64| b.saturating_sub(a) as f64 * t.period_ns as f64 * 1e-6;
+        let ms = self.timestamps.as_ref()?.read_ms(ctx);
         Some(PassTimes {
-            trace_ms: ms(ticks[0], ticks[1]),
-            tonemap_ms: ms(ticks[2], ticks[3]),
+            trace_ms: ms[0],
+            tonemap_ms: ms[1],
             ..Default::default()
         })
     }
