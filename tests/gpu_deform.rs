@@ -54,6 +54,39 @@ fn app(scene: &Arc<SceneAsset>, backend: DeformBackend) -> HeadlessApp {
     HeadlessApp::new(gpu(), scene.clone(), settings(backend), &CameraChoice::Auto).unwrap()
 }
 
+/// CesiumMan with the bad skin data the CPU reference has fallbacks for: influences naming joints outside
+/// the skin, vertices whose weights are all zero (they follow the node), and a morph target at weight 0.5
+/// with NaN deltas on some vertices (those fall back to their rest position).
+fn cesium_with_bad_data() -> Arc<SceneAsset> {
+    let mut scene = (*load(shared_assets().join("CesiumMan/glTF-Binary/CesiumMan.glb"))).clone();
+    for mesh in scene.meshes.iter_mut().filter(|m| m.skin_weights.is_some()) {
+        let sw = mesh.skin_weights.as_mut().unwrap();
+        for (v, (j, w)) in sw.joints.iter_mut().zip(&mut sw.weights).enumerate() {
+            match v % 7 {
+                0 => j[0] = 500,
+                1 => *w = [0.0; 4],
+                _ => {}
+            }
+        }
+        let n = mesh.positions.len();
+        mesh.morph_targets.push(raykin::scene::MorphTarget {
+            positions: (0..n)
+                .map(|v| {
+                    if v % 11 == 0 {
+                        Vec3::NAN
+                    } else {
+                        Vec3::new(0.0, 0.01 * (v % 5) as f32, 0.0)
+                    }
+                })
+                .collect(),
+            normals: None,
+            tangents: None,
+        });
+        mesh.default_morph_weights = vec![0.5];
+    }
+    Arc::new(scene)
+}
+
 /// The scene posed at (clip, t) after one frame with `backend`.
 fn posed(scene: &Arc<SceneAsset>, backend: DeformBackend, clip: usize, t: f32) -> HeadlessApp {
     let mut app = app(scene, backend);
@@ -223,6 +256,12 @@ fn gpu_deformation_matches_cpu_reference() {
             cesium_with_tangents(),
             0,
             [0.7, 1.3, 2.0],
+        ),
+        (
+            "CesiumMan+bad data",
+            cesium_with_bad_data(),
+            0,
+            [0.5, 1.0, 1.5],
         ),
         (
             "Fox",
