@@ -213,9 +213,10 @@ fn compare(scene: &Arc<SceneAsset>, cpu: &HeadlessApp, gpu_app: &HeadlessApp, t:
             }
         }
         // Refit: the GPU's boxes are exactly a CPU refit of the same tree from the GPU's positions.
-        let count = slot.bvh.flat.nodes.len();
+        let tree = slot.blas.binary().expect("a deformable mesh has a BVH2");
+        let count = tree.flat.nodes.len();
         let gpu_nodes = &nodes_g[g.blas_root as usize..g.blas_root as usize + count];
-        let mut cpu_tree = slot.bvh.clone();
+        let mut cpu_tree = tree.clone();
         cpu_tree.refit(&pg, &slot.gpu_triangles);
         assert_eq!(
             cpu_tree.flat.nodes, gpu_nodes,
@@ -342,7 +343,7 @@ fn gpu_sah_ratio_matches_cpu() {
             slot.gpu.position_offset,
             scene.meshes[m].positions.len(),
         );
-        let mut tree = slot.bvh.clone();
+        let mut tree = slot.blas.binary().unwrap().clone();
         tree.refit(&positions, &slot.gpu_triangles);
         let (want, got) = (tree.sah_ratio(), stats.sah_ratio[m]);
         eprintln!("mesh {m}: SAH ratio GPU {got:.5}, CPU {want:.5}");

@@ -283,12 +283,18 @@ impl GpuDeformer {
         for (i, (&m, d)) in eligible.iter().zip(&inputs.meshes).enumerate() {
             index_of[m] = Some(i);
             let slot = &gpu.mesh_slots[m];
-            let levels = LevelOrder::of(&slot.bvh.flat);
+            let Some(bvh) = slot.blas.binary() else {
+                return Err(format!(
+                    "{}: mesh `{}` deforms but has no refittable BVH",
+                    scene.source, scene.meshes[m].name
+                ));
+            };
+            let levels = LevelOrder::of(&bvh.flat);
             let refit = RefitMeshGpu {
                 blas_root: slot.gpu.blas_root,
                 triangle_offset: slot.gpu.triangle_offset,
                 position_offset: slot.gpu.position_offset,
-                node_count: slot.bvh.flat.nodes.len() as u32,
+                node_count: bvh.flat.nodes.len() as u32,
                 order_offset: order_words.len() as u32,
                 level_offset: level_starts.len() as u32,
                 levels: levels.levels() as u32,
@@ -306,7 +312,7 @@ impl GpuDeformer {
                 joint_count: d.joint_count as usize,
                 weight_base: d.weight_base as usize,
                 targets: d.morph_targets as usize,
-                build_sah: slot.bvh.build_sah,
+                build_sah: bvh.build_sah,
                 tree: 0,
             });
         }
@@ -356,7 +362,7 @@ impl GpuDeformer {
         let (deform_pipeline, deform_group) = pipeline_and_group(
             ctx,
             "deform",
-            crate::render::shaders::DEFORM,
+            &crate::render::shaders::deform_source(),
             "deform",
             &[
                 (&data_buffer, read),
@@ -371,7 +377,7 @@ impl GpuDeformer {
         let (refit_pipeline, refit_group) = pipeline_and_group(
             ctx,
             "refit",
-            crate::render::shaders::REFIT,
+            &crate::render::shaders::refit_source(),
             "refit",
             &[
                 (&gpu.blas_nodes, write),

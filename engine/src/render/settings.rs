@@ -51,6 +51,8 @@ pub struct RenderSettings {
     /// Next-event estimation on emissive triangles (with MIS).
     pub nee: bool,
     pub bvh_quality: crate::bvh::BvhQuality,
+    /// BVH layout of static meshes (deformable meshes always refit a BVH2).
+    pub static_bvh: crate::bvh::StaticLayout,
     /// Where deformable meshes are skinned, morphed and refit (`Auto`: GPU on real GPUs).
     pub deform: crate::gpu_deform::DeformBackend,
 }
@@ -72,6 +74,7 @@ impl Default for RenderSettings {
             rr_depth: 3,
             nee: true,
             bvh_quality: crate::bvh::BvhQuality::Medium,
+            static_bvh: crate::bvh::StaticLayout::Wide,
             deform: crate::gpu_deform::DeformBackend::Auto,
         }
     }
