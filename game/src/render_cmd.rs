@@ -47,6 +47,7 @@ pub fn settings_from(args: &SceneArgs) -> RenderSettings {
         seed: args.seed,
         russian_roulette: !args.no_rr,
         nee: !args.no_nee,
+        deform: args.deform.into(),
         static_bvh: args.static_bvh.into(),
         ..Default::default()
     }
@@ -276,6 +277,7 @@ pub fn run_default() -> Result<()> {
         time: None,
         animation: None,
         spp_per_dispatch: 16,
+        deform: crate::cli::DeformArg::Auto,
         static_bvh: crate::cli::StaticBvh::Wide,
     };
     let camera = CameraChoice::LookAt {

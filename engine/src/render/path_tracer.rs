@@ -20,18 +20,15 @@ struct TonemapParams {
     _pad: [u32; 2],
 }
 
-/// Timestamp queries: [trace begin, trace end, tonemap begin, tonemap end].
-struct Timestamps {
-    set: wgpu::QuerySet,
-    resolve: wgpu::Buffer,
-    period_ns: f32,
-}
-
-/// GPU time of the last dispatch's passes, in milliseconds.
+/// GPU time of the last frame's passes, in milliseconds (0 for a pass that did not run).
 #[derive(Clone, Copy, Debug, Default, serde::Serialize)]
 pub struct PassTimes {
     pub trace_ms: f64,
     pub tonemap_ms: f64,
+    /// GPU skinning + morphing (`shaders/deform.wgsl`).
+    pub skin_ms: f64,
+    /// GPU BLAS refit + SAH cost (`shaders/refit.wgsl`).
+    pub refit_ms: f64,
 }
 
 /// Camera rays, and optionally one diffuse bounce ray per hit, cast without shading.
@@ -71,7 +68,8 @@ pub struct PathTracer {
     pub height: u32,
     /// Samples per pixel accumulated since the last reset.
     pub samples: u32,
-    timestamps: Option<Timestamps>,
+    /// Pairs: trace, tonemap.
+    timestamps: Option<crate::gpu::PassTimestamps>,
 }
 
 fn layout_entry(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
@@ -243,20 +241,7 @@ impl PathTracer {
             &tonemap_layout,
             &[&v.accum, &v.albedo, &v.normal, &v.rgba8, &tonemap_uniform],
         );
-        let timestamps = ctx.supports_timestamps().then(|| Timestamps {
-            set: device.create_query_set(&wgpu::QuerySetDescriptor {
-                label: Some("pass timestamps"),
-                ty: wgpu::QueryType::Timestamp,
-                count: 4,
-            }),
-            resolve: device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("timestamp resolve"),
-                size: 32,
-                usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
-                mapped_at_creation: false,
-            }),
-            period_ns: ctx.queue.get_timestamp_period(),
-        });
+        let timestamps = crate::gpu::PassTimestamps::new(ctx, "pass timestamps", 2);
         let mut tracer = Self {
             trace_pipeline,
             raycaster: None,
@@ -352,7 +337,9 @@ impl PathTracer {
         group
     }
 
-    /// Traces `spp` more samples per pixel into the accumulation buffers (and tone-maps if asked).
+    /// Traces `spp` more samples per pixel into the accumulation buffers (and tone-maps if asked), in one
+    /// submission after `before` (the frame's GPU deform passes).
+    #[allow(clippy::too_many_arguments)]
     pub fn dispatch(
         &mut self,
         ctx: &GpuContext,
@@ -361,6 +348,7 @@ impl PathTracer {
         camera: &CameraView,
         spp: u32,
         tonemap: bool,
+        before: Vec<wgpu::CommandBuffer>,
     ) {
         self.write_frame(ctx, scene, settings, camera, spp, settings.max_depth);
         let scene_group = self.scene_bind_group(ctx, scene);
@@ -381,19 +369,14 @@ impl PathTracer {
             self.encode_tonemap(ctx, &mut encoder, settings);
         }
         if let Some(t) = &self.timestamps {
-            encoder.resolve_query_set(&t.set, 0..if tonemap { 4 } else { 2 }, &t.resolve, 0);
+            t.resolve(&mut encoder, if tonemap { 2 } else { 1 });
         }
-        ctx.queue.submit([encoder.finish()]);
+        ctx.queue
+            .submit(before.into_iter().chain([encoder.finish()]));
     }
 
     fn trace_timestamps(&self) -> Option<wgpu::ComputePassTimestampWrites<'_>> {
-        self.timestamps
-            .as_ref()
-            .map(|t| wgpu::ComputePassTimestampWrites {
-                query_set: &t.set,
-                beginning_of_pass_write_index: Some(0),
-                end_of_pass_write_index: Some(1),
-            })
+        self.timestamps.as_ref().map(|t| t.pass_writes(0))
     }
 
     /// Casts one camera ray per pixel centre and, with `diffuse_bounce`, one cosine-distributed ray from each
@@ -468,7 +451,7 @@ impl PathTracer {
             pass.dispatch_workgroups(self.width.div_ceil(8), self.height.div_ceil(8), 1);
         }
         if let Some(t) = &self.timestamps {
-            encoder.resolve_query_set(&t.set, 0..2, &t.resolve, 0);
+            t.resolve(&mut encoder, 1);
         }
         ctx.queue.submit([encoder.finish()]);
         let gpu_ms = self.read_pass_times(ctx)?.trace_ms;
@@ -535,14 +518,7 @@ impl PathTracer {
             .write_buffer(&self.tonemap_uniform, 0, bytemuck::bytes_of(&params));
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("tonemap"),
-            timestamp_writes: self
-                .timestamps
-                .as_ref()
-                .map(|t| wgpu::ComputePassTimestampWrites {
-                    query_set: &t.set,
-                    beginning_of_pass_write_index: Some(2),
-                    end_of_pass_write_index: Some(3),
-                }),
+            timestamp_writes: self.timestamps.as_ref().map(|t| t.pass_writes(1)),
         });
         pass.set_pipeline(&self.tonemap_pipeline);
         pass.set_bind_group(0, &self.tonemap_bind_group, &[]);
@@ -558,13 +534,11 @@ impl PathTracer {
 
     /// GPU times of the last dispatch (blocks until it finished); `None` without timestamp support.
     pub fn read_pass_times(&self, ctx: &GpuContext) -> Option<PassTimes> {
-        let t = self.timestamps.as_ref()?;
-        let bytes = ctx.read_buffer(&t.resolve, 32);
-        let ticks: &[u64] = bytemuck::cast_slice(&bytes);
-        let ms = |a: u64, b: u64| b.saturating_sub(a) as f64 * t.period_ns as f64 * 1e-6;
+        let ms = self.timestamps.as_ref()?.read_ms(ctx);
         Some(PassTimes {
-            trace_ms: ms(ticks[0], ticks[1]),
-            tonemap_ms: ms(ticks[2], ticks[3]),
+            trace_ms: ms[0],
+            tonemap_ms: ms[1],
+            ..Default::default()
         })
     }
 

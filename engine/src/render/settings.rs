@@ -53,6 +53,8 @@ pub struct RenderSettings {
     pub bvh_quality: crate::bvh::BvhQuality,
     /// BVH layout of static meshes (deformable meshes always refit a BVH2).
     pub static_bvh: crate::bvh::StaticLayout,
+    /// Where deformable meshes are skinned, morphed and refit (`Auto`: GPU on real GPUs).
+    pub deform: crate::gpu_deform::DeformBackend,
 }
 
 impl Default for RenderSettings {
@@ -73,6 +75,7 @@ impl Default for RenderSettings {
             nee: true,
             bvh_quality: crate::bvh::BvhQuality::Medium,
             static_bvh: crate::bvh::StaticLayout::Wide,
+            deform: crate::gpu_deform::DeformBackend::Auto,
         }
     }
 }

@@ -7,6 +7,9 @@ pub const BRDF: &str = include_str!("../../../shaders/brdf.wgsl");
 pub const PATH_TRACE: &str = include_str!("../../../shaders/path_trace.wgsl");
 pub const TONEMAP: &str = include_str!("../../../shaders/tonemap.wgsl");
 pub const RAYCAST: &str = include_str!("../../../shaders/raycast.wgsl");
+/// GPU skinning + morphing and the GPU BLAS refit (`crate::gpu_deform`); standalone modules.
+pub const DEFORM: &str = include_str!("../../../shaders/deform.wgsl");
+pub const REFIT: &str = include_str!("../../../shaders/refit.wgsl");
 
 /// The path tracer module: shared declarations, traversal, BRDF, then the kernel.
 pub fn path_trace_source() -> String {
@@ -34,6 +37,14 @@ pub fn tonemap_source() -> String {
     file("tonemap.wgsl", TONEMAP)
 }
 
+pub fn deform_source() -> String {
+    file("deform.wgsl", DEFORM)
+}
+
+pub fn refit_source() -> String {
+    file("refit.wgsl", REFIT)
+}
+
 /// Kernel development: with `RAYKIN_SHADER_DIR` set, WGSL files found in that folder replace the built-in
 /// copies (edit a kernel and rerun without rebuilding; A/B variants in one GPU session). Unset in normal use.
 fn file(name: &str, built_in: &str) -> String {
@@ -56,5 +67,7 @@ pub fn all_modules() -> Vec<(&'static str, String)> {
         ("path_trace", path_trace_source()),
         ("tonemap", tonemap_source()),
         ("raycast", raycast_source()),
+        ("deform", deform_source()),
+        ("refit", refit_source()),
     ]
 }
