@@ -3,6 +3,7 @@
 //! a deformed mesh rewrites only its own positions/normals and BLAS nodes.
 
 use super::layout::*;
+use crate::bvh::refit::RebuildPolicy;
 use crate::bvh::{FlatBvh, MeshBvh};
 use crate::gpu::GpuContext;
 use crate::scene::{AlphaMode, MeshData, SceneAsset, Wrap};
@@ -42,6 +43,41 @@ pub struct MeshSlot {
     pub positions: Option<Vec<Vec3>>,
     /// BLAS nodes reserved for this mesh (a deformable mesh reserves room for any rebuilt tree).
     pub blas_capacity: u32,
+    /// The tree was rebuilt since upload (its topology and triangle order are no longer the upload's).
+    pub rebuilt: bool,
+    /// The tree built at upload, kept once [`RebuildPolicy::PoseDetermined`] first needs it.
+    upload_bvh: Option<MeshBvh>,
+}
+
+impl MeshSlot {
+    /// Puts back the tree built at upload (keeping a copy the first time); returns the upload triangle order
+    /// to write when the current tree was a rebuilt one. The tree's bounds are stale until the next refit.
+    fn restore_upload_tree(
+        &mut self,
+        mesh: &MeshData,
+        materials: &[GpuMaterial],
+        quality: crate::bvh::BvhQuality,
+    ) -> Option<OrderedTriangles> {
+        if self.upload_bvh.is_none() {
+            // Until the first rebuild the current tree has the upload topology; after one, the same
+            // deterministic build over the rest positions gives it back.
+            let upload = if self.rebuilt {
+                MeshBvh::build(&mesh.positions, &mesh.triangles, quality).ok()?
+            } else {
+                self.bvh.clone()
+            };
+            self.upload_bvh = Some(upload);
+        }
+        if !self.rebuilt {
+            return None;
+        }
+        let upload = self.upload_bvh.clone()?;
+        let ordered = order_triangles(mesh, &upload, self.gpu.triangle_offset, materials);
+        self.bvh = upload;
+        self.gpu_triangles = ordered.indices.clone();
+        self.rebuilt = false;
+        Some(ordered)
+    }
 }
 
 /// Byte counts of what the scene occupies on the GPU.
@@ -81,10 +117,14 @@ pub struct GpuScene {
     pub memory: GpuMemory,
     pub emitter_count: u32,
     pub emitter_total_power: f32,
+    /// For each GPU instance (TLAS leaf order), its index in the last [`Self::update_instances`] input.
+    pub instance_order: Vec<u32>,
     /// Emissive triangles per mesh (triangle slot, material), for building the emitter list.
     emissive_triangles: Vec<Vec<(u32, u32)>>,
     /// Bumped whenever buffers are recreated, so bind groups are rebuilt.
     pub generation: u64,
+    /// Build quality of the upload (rebuilds of the upload tree use it).
+    bvh_quality: crate::bvh::BvhQuality,
     pub build_seconds: f64,
 }
 
@@ -318,6 +358,8 @@ impl GpuScene {
                 bvh,
                 positions: None,
                 blas_capacity,
+                rebuilt: false,
+                upload_bvh: None,
             });
         }
 
@@ -385,8 +427,10 @@ impl GpuScene {
             memory,
             emitter_count: 0,
             emitter_total_power: 0.0,
+            instance_order: Vec::new(),
             emissive_triangles,
             generation: 1,
+            bvh_quality: quality,
             build_seconds: start.elapsed().as_secs_f64(),
         };
         Ok((gpu_scene, notes))
@@ -395,16 +439,23 @@ impl GpuScene {
     /// Writes this frame's deformed meshes over their own vertex-pool ranges (same encodings as the initial
     /// upload), refits their BLASes and uploads the nodes; returns each mesh's new SAH ratio. The CPU work
     /// (encoding, refit, SAH) runs in parallel over meshes, the queue writes after it in mesh order.
+    /// Under [`RebuildPolicy::PoseDetermined`] a rebuilt mesh first goes back to its upload tree and
+    /// triangle order, so the refit result depends on this pose alone.
     pub fn apply_deformations(
         &mut self,
         ctx: &GpuContext,
+        scene: &SceneAsset,
         deformed: &crate::animation::DeformedMeshes,
+        policy: RebuildPolicy,
     ) -> Vec<(usize, f32)> {
         struct Update {
             mesh: usize,
             words: Vec<(u32, Vec<u32>)>,
             sah_ratio: f32,
+            /// The triangle order went back to the upload tree's.
+            restored: Option<OrderedTriangles>,
         }
+        let (materials, quality) = (&self.material_data, self.bvh_quality);
         let mut changed = vec![false; self.mesh_slots.len()];
         for &m in &deformed.changed {
             if deformed.meshes.get(m).is_some_and(Option::is_some) && m < changed.len() {
@@ -446,6 +497,9 @@ impl GpuScene {
                         .collect();
                     words.push((gpu.tangent_offset, tangent_words));
                 }
+                let restored = (policy == RebuildPolicy::PoseDetermined)
+                    .then(|| slot.restore_upload_tree(&scene.meshes[m], materials, quality))
+                    .flatten();
                 let sah_ratio = crate::bvh::refit::refit_and_measure(
                     &mut slot.bvh,
                     &d.positions,
@@ -456,12 +510,22 @@ impl GpuScene {
                     mesh: m,
                     words,
                     sah_ratio,
+                    restored,
                 }
             })
             .collect();
         updates
             .into_iter()
             .map(|u| {
+                if let Some(ordered) = u.restored {
+                    let offset = self.mesh_slots[u.mesh].gpu.triangle_offset;
+                    ctx.queue.write_buffer(
+                        &self.triangles,
+                        offset as u64 * 16,
+                        bytemuck::cast_slice(&ordered.packed),
+                    );
+                    self.emissive_triangles[u.mesh] = ordered.emissive;
+                }
                 for (offset, words) in &u.words {
                     ctx.queue.write_buffer(
                         &self.vertex_pool,
@@ -520,6 +584,7 @@ impl GpuScene {
         let slot = &mut self.mesh_slots[mesh];
         slot.gpu_triangles = ordered.indices;
         slot.bvh = bvh;
+        slot.rebuilt = true;
         Ok(())
     }
 
@@ -567,6 +632,7 @@ impl GpuScene {
             self.generation += 1;
         }
         self.emitter_count = emitters.len() as u32;
+        self.instance_order = tlas.order.clone();
         self.memory.instances_and_tlas =
             (instance_bytes.len() + tlas_bytes.len() + emitter_bytes.len()) as u64;
         Ok(())
