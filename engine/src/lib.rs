@@ -10,6 +10,8 @@ pub mod frame_timing;
 pub mod gpu;
 pub mod headless;
 pub mod image_io;
+pub mod motion;
+pub mod record;
 pub mod render;
 pub mod scene;
 
