@@ -460,15 +460,11 @@ fn motion_vectors_match_analytic_motion() {
     let (w, fps) = (32.0f32, 10.0f32);
     let tan = (std::f32::consts::FRAC_PI_4 * 0.5).tan();
 
-    // The quad slides +0.1 per frame at depth 5 under a still camera: every quad pixel moved
-    // -0.1 / (5 tan(fov/2)) * w/2 pixels since the previous frame; the background did not move.
-    let out = base.join("slide");
-    let o = record(
-        &scene,
-        &out,
-        &[
+    // Frame 4 of clip `clip` at 10 fps, 32x32, 1 spp.
+    let frame_4 = |clip: &str, out: &Path, extra: &[&str]| {
+        let common = [
             "--animation",
-            "slide",
+            clip,
             "--fps",
             "10",
             "--frames",
@@ -481,10 +477,13 @@ fn motion_vectors_match_analytic_motion() {
             "32",
             "--spp",
             "1",
-            "--aovs",
-            "motion,depth",
-        ],
-    );
+        ];
+        record(&scene, out, &[&common[..], extra].concat())
+    };
+    // The quad slides +0.1 per frame at depth 5 under a still camera: every quad pixel moved
+    // -0.1 / (5 tan(fov/2)) * w/2 pixels since the previous frame; the background did not move.
+    let out = base.join("slide");
+    let o = frame_4("slide", &out, &["--aovs", "motion,depth"]);
     assert_ok(&o);
     let motion = read_motion(&out.join("frame_00004.motion.exr"));
     let expected_dx = -(1.0 / fps) / (5.0 * tan) * (w / 2.0);
@@ -518,30 +517,7 @@ fn motion_vectors_match_analytic_motion() {
     // The camera pans 0.05 rad per frame about +Y: a pixel's direction at infinity was, one frame earlier, at
     // the screen position of the same world direction seen by the camera rotated back.
     let out = base.join("pan");
-    let o = record(
-        &scene,
-        &out,
-        &[
-            "--animation",
-            "pan",
-            "--camera",
-            "0",
-            "--fps",
-            "10",
-            "--frames",
-            "10",
-            "--range",
-            "4..5",
-            "--width",
-            "32",
-            "--height",
-            "32",
-            "--spp",
-            "1",
-            "--aovs",
-            "motion",
-        ],
-    );
+    let o = frame_4("pan", &out, &["--camera", "0", "--aovs", "motion"]);
     assert_ok(&o);
     let motion = read_motion(&out.join("frame_00004.motion.exr"));
     let angle_now = 0.5 * 0.4f32;
@@ -855,7 +831,7 @@ fn pose_determined_bvh_does_not_depend_on_earlier_poses() {
     let _serial = serial();
     let scene = Arc::new(
         raykin::scene::load_gltf(
-            &common::shared_assets().join("CesiumMan/glTF/CesiumMan.gltf"),
+            common::shared_assets().join("CesiumMan/glTF/CesiumMan.gltf"),
             &Default::default(),
         )
         .unwrap(),
@@ -867,9 +843,13 @@ fn pose_determined_bvh_does_not_depend_on_earlier_poses() {
         ..Default::default()
     };
     let posed = |policy: RebuildPolicy, times: &[f32]| {
-        let mut app =
-            HeadlessApp::new(ctx.clone(), scene.clone(), settings.clone(), &CameraChoice::Auto)
-                .unwrap();
+        let mut app = HeadlessApp::new(
+            ctx.clone(),
+            scene.clone(),
+            settings.clone(),
+            &CameraChoice::Auto,
+        )
+        .unwrap();
         app.set_rebuild_policy(policy);
         for &t in times {
             app.pose(Some(0), t, &CameraChoice::Auto).unwrap();
@@ -888,8 +868,14 @@ fn pose_determined_bvh_does_not_depend_on_earlier_poses() {
     let history = [0.0, 0.3, 1.3, 1.6];
     let (after_history, rebuilds) = posed(RebuildPolicy::PoseDetermined, &history);
     let (direct, _) = posed(RebuildPolicy::PoseDetermined, &[1.6]);
-    assert!(rebuilds > 0, "the history must rebuild a tree for this test to mean anything");
-    assert!(after_history == direct, "the BVH after other poses differs from posing directly");
+    assert!(
+        rebuilds > 0,
+        "the history must rebuild a tree for this test to mean anything"
+    );
+    assert!(
+        after_history == direct,
+        "the BVH after other poses differs from posing directly"
+    );
     let (after_history, _) = posed(RebuildPolicy::Amortised, &history);
     let (direct, _) = posed(RebuildPolicy::Amortised, &[1.6]);
     assert!(

@@ -87,16 +87,7 @@ impl HeadlessApp {
         if !seconds.is_finite() {
             return Err(format!("time {seconds} is not a finite number of seconds"));
         }
-        let world = self.app.world_mut();
-        let roots: Vec<bevy_ecs::entity::Entity> = world
-            .query_filtered::<bevy_ecs::entity::Entity, bevy_ecs::query::With<crate::scene::SceneRoot>>()
-            .iter(world)
-            .collect();
-        for root in roots {
-            world
-                .entity_mut(root)
-                .insert(crate::animation::AnimationPlayer::paused_at(clip, seconds));
-        }
+        crate::animation::hold_at(self.app.world_mut(), clip, seconds);
         Ok(())
     }
 

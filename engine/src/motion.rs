@@ -144,17 +144,8 @@ impl PreviousPose {
         seconds: f32,
         camera: &CameraChoice,
     ) -> Result<(), String> {
-        let world = self.app.world_mut();
         if let Some(clip) = clip {
-            let roots: Vec<Entity> = world
-                .query_filtered::<Entity, With<SceneRoot>>()
-                .iter(world)
-                .collect();
-            for root in roots {
-                world
-                    .entity_mut(root)
-                    .insert(crate::animation::AnimationPlayer::paused_at(clip, seconds));
-            }
+            crate::animation::hold_at(self.app.world_mut(), clip, seconds);
         }
         self.app.update();
         let aspect = self.projection.width as f32 / self.projection.height.max(1) as f32;

@@ -6,7 +6,8 @@ use crate::render_cmd::{camera_spec, load_scene, open_gpu, settings_from};
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressStyle};
 use raykin::record::{
-    FrameFormat, RecordEvent, RecordJob, RecordRequest, RecordSummary, Recorder, Sampling,
+    FrameFormat, FrameOptions, RecordEvent, RecordJob, RecordRequest, RecordSummary, Recorder,
+    Sampling,
 };
 use std::path::{Path, PathBuf};
 use std::process::{Command, ExitCode, Stdio};
@@ -49,15 +50,17 @@ fn run(args: &RecordArgs) -> Result<ExitCode> {
         start: args.start,
         end: args.end,
         frames: args.frames,
-        sampling: match args.time_budget_ms {
-            Some(ms) => Sampling::TimeBudgetMs(ms),
-            None => Sampling::Spp(scene_args.spp),
+        frame: FrameOptions {
+            sampling: match args.time_budget_ms {
+                Some(ms) => Sampling::TimeBudgetMs(ms),
+                None => Sampling::Spp(scene_args.spp),
+            },
+            spp_per_dispatch: scene_args.spp_per_dispatch,
+            camera: camera_spec(scene_args),
+            format: args.format,
+            aovs: args.aovs.clone(),
+            render: settings_from(scene_args),
         },
-        spp_per_dispatch: scene_args.spp_per_dispatch,
-        camera: camera_spec(scene_args),
-        format: args.format,
-        aovs: args.aovs.clone(),
-        render: settings_from(scene_args),
     };
     let settings = raykin::record::plan(&scene, &request)?;
     if settings.clip.is_none() {
@@ -278,7 +281,7 @@ fn merge(dir: &Path, video: Option<&Path>) -> Result<ExitCode> {
             .next()
             .context("the merged manifest disappeared")?
             .1;
-        check_video(video, manifest.settings.format)?;
+        check_video(video, manifest.settings.frame.format)?;
         encode_video(dir, manifest.settings.fps, video)?;
     }
     Ok(ExitCode::SUCCESS)

@@ -15,8 +15,8 @@ mod recorder;
 pub use manifest::{FrameRecord, Manifest, MergeSummary, merge};
 pub use output::{FileRecord, scene_hash};
 pub use plan::{
-    Aov, CameraSpec, FrameFormat, RecordRequest, RecordSettings, Sampling, frame_seed, parse_range,
-    plan, resolve_range,
+    Aov, CameraSpec, FrameFormat, FrameOptions, RecordRequest, RecordSettings, Sampling,
+    frame_seed, parse_range, plan, resolve_range,
 };
 pub use recorder::{RecordEvent, RecordJob, RecordSummary, Recorder};
 

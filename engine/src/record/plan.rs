@@ -121,6 +121,20 @@ impl CameraSpec {
     }
 }
 
+/// How each frame is sampled, framed and written: passed from a request to the settings as is.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FrameOptions {
+    pub sampling: Sampling,
+    /// Samples per GPU submission (part of the settings: it fixes the order in which samples are summed).
+    pub spp_per_dispatch: u32,
+    pub camera: CameraSpec,
+    pub format: FrameFormat,
+    /// Sorted, without repeats once planned.
+    pub aovs: Vec<Aov>,
+    /// Size, depth, environment, base seed, exposure (PNG) and the rest of the image-affecting settings.
+    pub render: RenderSettings,
+}
+
 /// Everything that determines a recording's files. Two runs with equal settings (and scene) write equal
 /// frames, so resuming, re-rendering one frame and merging slices are safe exactly when these match.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -133,15 +147,8 @@ pub struct RecordSettings {
     pub start: f32,
     /// Frames in the whole recording (indices 0..frames).
     pub frames: u32,
-    pub sampling: Sampling,
-    /// Samples per GPU submission (part of the settings: it fixes the order in which samples are summed).
-    pub spp_per_dispatch: u32,
-    pub camera: CameraSpec,
-    pub format: FrameFormat,
-    /// Sorted, without repeats.
-    pub aovs: Vec<Aov>,
-    /// Size, depth, environment, base seed, exposure (PNG) and the rest of the image-affecting settings.
-    pub render: RenderSettings,
+    #[serde(flatten)]
+    pub frame: FrameOptions,
 }
 
 impl RecordSettings {
@@ -158,11 +165,11 @@ impl RecordSettings {
 
     /// The random seed of frame `k`.
     pub fn seed(&self, k: u32) -> u32 {
-        frame_seed(self.render.seed, k)
+        frame_seed(self.frame.render.seed, k)
     }
 
     pub fn frame_file(&self, k: u32) -> String {
-        format!("frame_{k:05}.{}", self.format.extension())
+        format!("frame_{k:05}.{}", self.frame.format.extension())
     }
 
     pub fn aov_file(k: u32, aov: Aov) -> String {
@@ -171,7 +178,8 @@ impl RecordSettings {
 
     /// Every file of frame `k`: AOVs first, the frame itself last (the order they are written in).
     pub fn files(&self, k: u32) -> Vec<String> {
-        self.aovs
+        self.frame
+            .aovs
             .iter()
             .map(|&a| Self::aov_file(k, a))
             .chain([self.frame_file(k)])
@@ -207,12 +215,7 @@ pub struct RecordRequest {
     pub end: Option<f32>,
     /// Frame count instead of T1.
     pub frames: Option<u32>,
-    pub sampling: Sampling,
-    pub spp_per_dispatch: u32,
-    pub camera: CameraSpec,
-    pub format: FrameFormat,
-    pub aovs: Vec<Aov>,
-    pub render: RenderSettings,
+    pub frame: FrameOptions,
 }
 
 /// Resolves a request against the scene: the clip, T0..T1 inside it, and the frame count.
@@ -230,7 +233,7 @@ pub fn plan(scene: &SceneAsset, req: &RecordRequest) -> Result<RecordSettings, R
             req.start
         ));
     }
-    match req.sampling {
+    match req.frame.sampling {
         Sampling::Spp(0) => return fail("--spp 0: a frame needs at least one sample".into()),
         Sampling::TimeBudgetMs(ms) if !(ms.is_finite() && ms > 0.0) => {
             return fail(format!(
@@ -291,23 +294,18 @@ pub fn plan(scene: &SceneAsset, req: &RecordRequest) -> Result<RecordSettings, R
             ));
         }
     };
-    let mut aovs = req.aovs.clone();
-    aovs.sort();
-    aovs.dedup();
-    let mut render = req.render.clone();
-    render.spp_per_frame = req.spp_per_dispatch.max(1);
+    let mut frame = req.frame.clone();
+    frame.aovs.sort();
+    frame.aovs.dedup();
+    frame.spp_per_dispatch = frame.spp_per_dispatch.max(1);
+    frame.render.spp_per_frame = frame.spp_per_dispatch;
     let settings = RecordSettings {
         clip,
         clip_name: clip.map(|c| scene.animations[c].name.clone()),
         fps: req.fps,
         start: req.start,
         frames,
-        sampling: req.sampling,
-        spp_per_dispatch: req.spp_per_dispatch.max(1),
-        camera: req.camera.clone(),
-        format: req.format,
-        aovs,
-        render,
+        frame,
     };
     if let (Some(c), Some(d)) = (clip, duration) {
         let last = settings.time(frames - 1);

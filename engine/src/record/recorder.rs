@@ -217,22 +217,22 @@ impl Recorder {
             return Ok(summary);
         }
         let settings = self.job.settings.clone();
-        let camera = settings.camera.choice();
+        let camera = settings.frame.camera.choice();
         let mut app = HeadlessApp::new(
             ctx,
             self.job.scene.clone(),
-            settings.render.clone(),
+            settings.frame.render.clone(),
             &camera,
         )?;
         summary.notes.append(&mut app.notes);
         app.set_rebuild_policy(RebuildPolicy::PoseDetermined);
-        let motion = settings.aovs.contains(&Aov::Motion);
+        let motion = settings.frame.aovs.contains(&Aov::Motion);
         app.set_hit_aov(motion);
         let mut previous = motion.then(|| {
             PreviousPose::new(
                 self.job.scene.clone(),
-                settings.render.width,
-                settings.render.height,
+                settings.frame.render.width,
+                settings.frame.render.height,
             )
         });
         let adapter = app.ctx.describe();
@@ -310,9 +310,9 @@ fn sample(
         events(RecordEvent::Samples { frame: k, spp });
         !cancel.load(Ordering::SeqCst)
     };
-    match settings.sampling {
+    match settings.frame.sampling {
         Sampling::Spp(n) => {
-            let spp = app.accumulate_while(n, settings.spp_per_dispatch, &mut report);
+            let spp = app.accumulate_while(n, settings.frame.spp_per_dispatch, &mut report);
             (spp, spp == n && !cancel.load(Ordering::SeqCst))
         }
         Sampling::TimeBudgetMs(budget) => {
@@ -333,7 +333,7 @@ fn sample(
                 if left < per_sample {
                     return (done, true);
                 }
-                chunk = ((left / per_sample) as u32).clamp(1, settings.spp_per_dispatch);
+                chunk = ((left / per_sample) as u32).clamp(1, settings.frame.spp_per_dispatch);
             }
         }
     }
@@ -347,7 +347,7 @@ fn write_frame(
     k: u32,
     previous: Option<&PreviousPose>,
 ) -> Result<Vec<output::FileRecord>, RecordError> {
-    let (w, h) = (settings.render.width, settings.render.height);
+    let (w, h) = (settings.frame.render.width, settings.frame.render.height);
     let encoded = |name: &str, result: Result<Vec<u8>, String>| {
         result.map_err(|reason| RecordError::Write {
             path: dir.join(name),
@@ -355,9 +355,9 @@ fn write_frame(
         })
     };
     let mut files = Vec::new();
-    if !settings.aovs.is_empty() {
+    if !settings.frame.aovs.is_empty() {
         let aovs = app.aovs();
-        for &aov in &settings.aovs {
+        for &aov in &settings.frame.aovs {
             let data: Vec<[f32; 3]> = match aov {
                 Aov::Albedo => aovs.albedo.clone(),
                 Aov::Normal => aovs.normal.clone(),
@@ -370,7 +370,7 @@ fn write_frame(
         }
     }
     let name = settings.frame_file(k);
-    let bytes = match settings.format {
+    let bytes = match settings.frame.format {
         FrameFormat::Exr => {
             let radiance = app.radiance();
             if let Some(bad) = radiance.iter().flatten().find(|v| !v.is_finite()) {
