@@ -196,6 +196,9 @@ fn show(bar: &ProgressBar, event: RecordEvent) {
 }
 
 fn print_summary(s: &RecordSummary) {
+    for note in &s.notes {
+        eprintln!("raykin: note: {note}");
+    }
     if s.rendered == 0 {
         return;
     }
@@ -213,9 +216,6 @@ fn print_summary(s: &RecordSummary) {
     } else {
         format!("{spp_lo}-{spp_hi} spp")
     };
-    for note in &s.notes {
-        eprintln!("raykin: note: {note}");
-    }
     eprintln!(
         "raykin: rendered {} frame(s) of {}..{} in {:.1} s ({} skipped): {mean:.0} ms per frame (min {lo:.0}, max \
          {hi:.0}), {spp}; {} of {} frames of the recording complete; manifest {}",

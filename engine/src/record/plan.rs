@@ -294,6 +294,15 @@ pub fn plan(scene: &SceneAsset, req: &RecordRequest) -> Result<RecordSettings, R
             ));
         }
     };
+    if let CameraSpec::Index(i) = req.frame.camera {
+        let cameras = scene.nodes.iter().filter(|n| n.camera.is_some()).count();
+        if i >= cameras {
+            return fail(format!(
+                "{}: --camera {i}: the scene has {cameras} camera(s)",
+                scene.source
+            ));
+        }
+    }
     let mut frame = req.frame.clone();
     frame.aovs.sort();
     frame.aovs.dedup();

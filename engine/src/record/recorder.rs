@@ -102,6 +102,20 @@ impl Recorder {
         } else {
             manifest::read_all(dir)?
         };
+        let own_path = manifest::manifest_path(dir, job.slice.as_ref());
+        // This run's own manifest from an attempt that finished no frame holds nothing to protect.
+        manifests.retain(|(path, m)| {
+            let stale = *path == own_path
+                && m.frames.is_empty()
+                && !m.differences(&job.scene_hash, &job.settings).is_empty();
+            if stale {
+                notes.push(format!(
+                    "replaced {} (other settings, no frame finished)",
+                    path.display()
+                ));
+            }
+            !stale
+        });
         for (path, m) in &manifests {
             let differences = m.differences(&job.scene_hash, &job.settings);
             if !differences.is_empty() {
@@ -135,7 +149,7 @@ impl Recorder {
         }
         let done = manifest::verified_frames(dir, &manifests);
         let range = job.slice.clone().unwrap_or(0..job.settings.frames);
-        let manifest_path = manifest::manifest_path(dir, job.slice.as_ref());
+        let manifest_path = own_path;
         let own = manifests
             .iter()
             .position(|(p, _)| *p == manifest_path)
