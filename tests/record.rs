@@ -517,8 +517,21 @@ fn motion_vectors_match_analytic_motion() {
     // The camera pans 0.05 rad per frame about +Y: a pixel's direction at infinity was, one frame earlier, at
     // the screen position of the same world direction seen by the camera rotated back.
     let out = base.join("pan");
-    let o = frame_4("pan", &out, &["--camera", "0", "--aovs", "motion"]);
+    let o = frame_4(
+        "pan",
+        &out,
+        &["--camera", "0", "--aovs", "motion", "--format", "exr"],
+    );
     assert_ok(&o);
+    let (_, _, radiance) = raykin::image_io::read_exr(&out.join("frame_00004.exr")).unwrap();
+    assert!(
+        radiance
+            .iter()
+            .flatten()
+            .all(|v| v.is_finite() && *v >= 0.0)
+            && radiance.len() == 1024,
+        "linear EXR frame"
+    );
     let motion = read_motion(&out.join("frame_00004.motion.exr"));
     let angle_now = 0.5 * 0.4f32;
     let angle_before = 0.5 * 0.3f32;

@@ -18,6 +18,7 @@ use crate::scene::SkinnedMesh;
 use crate::scene::{GlobalTransform, MeshInstance, SceneAsset, SceneNode, SceneNodes, SceneRoot};
 use bevy_ecs::prelude::*;
 use glam::{Vec2, Vec3};
+use rayon::prelude::*;
 use std::sync::Arc;
 
 pub const STATUS_SURFACE: f32 = 1.0;
@@ -86,10 +87,10 @@ fn world_triangle(
 ) -> Option<[Vec3; 3]> {
     let deformed = world
         .get_resource::<crate::animation::DeformedMeshes>()
-        .and_then(|d| d.meshes.get(mesh)?.as_ref().map(|m| m.positions.clone()));
+        .and_then(|d| d.meshes.get(mesh)?.as_ref());
     let skinned = world.get::<SkinnedMesh>(entity).is_some();
     let node_world = world.get::<GlobalTransform>(entity)?.0;
-    let positions = deformed.as_deref().unwrap_or(&scene.meshes[mesh].positions);
+    let positions = deformed.map_or(&scene.meshes[mesh].positions, |d| &d.positions);
     let corner = |v: u32| -> Option<Vec3> {
         let p = *positions.get(v as usize)?;
         Some(if skinned && deformed.is_some() {
@@ -156,72 +157,77 @@ impl PreviousPose {
 }
 
 /// Motion vectors `[dx, dy, status]` per pixel for the renderer's current frame (primary hits recorded with
-/// [`HeadlessApp::set_hit_aov`]) against `previous`. Empty when no hits were recorded.
+/// [`HeadlessApp::set_hit_aov`]) against `previous`, computed in parallel over pixels. Empty when no hits were
+/// recorded.
 pub fn motion_vectors(app: &HeadlessApp, previous: &PreviousPose) -> Vec<[f32; 3]> {
     let hits = app.primary_hits();
     let renderer = app.renderer();
-    let (width, height) = (renderer.tracer.width, renderer.tracer.height);
-    let current = Projection {
-        view: app.camera(),
-        width,
-        height,
-    };
-    let world = app.app.world();
     let scene = app.scene();
-    hits.iter()
+    let frames = TwoFrames {
+        now: app.app.world(),
+        before: previous.app.world(),
+        nodes_before: &previous.nodes,
+        renderer,
+        scene: &scene,
+        projection_now: Projection {
+            view: app.camera(),
+            width: renderer.tracer.width,
+            height: renderer.tracer.height,
+        },
+        projection_before: previous.projection,
+    };
+    hits.par_iter()
         .enumerate()
-        .map(|(pixel, hit)| {
-            let centre = Vec2::new(
-                (pixel as u32 % width) as f32 + 0.5,
-                (pixel as u32 / width) as f32 + 0.5,
-            );
-            let motion = match hit.instance {
-                // A still camera sees a still environment: exactly 0, not a rounding residue.
-                None if previous.projection.view == current.view => {
-                    Some((Vec2::ZERO, STATUS_ENVIRONMENT))
-                }
-                None => {
-                    let d = current.ray_direction(centre);
-                    previous
-                        .projection
-                        .direction(d)
-                        .map(|prev| (prev - centre, STATUS_ENVIRONMENT))
-                }
-                Some(_) => surface_motion(world, &scene, app, previous, &current, hit),
-            };
-            match motion {
+        .map(
+            |(pixel, hit)| match frames.pixel_motion(pixel as u32, hit) {
                 Some((m, status)) if m.is_finite() => [m.x, m.y, status],
                 _ => [0.0, 0.0, STATUS_INVALID],
-            }
-        })
+            },
+        )
         .collect()
 }
 
-fn surface_motion(
-    world: &World,
-    scene: &SceneAsset,
-    app: &HeadlessApp,
-    previous: &PreviousPose,
-    current: &Projection,
-    hit: &PrimaryHit,
-) -> Option<(Vec2, f32)> {
-    let renderer = app.renderer();
-    let entity = *renderer.instance_entities.get(hit.instance? as usize)?;
-    let mesh = world.get::<MeshInstance>(entity)?.mesh;
-    let node = world.get::<SceneNode>(entity)?.node;
-    let slot = renderer.scene.mesh_slots.get(mesh)?;
-    let local = hit.triangle.checked_sub(slot.gpu.triangle_offset)? as usize;
-    let verts = *slot.gpu_triangles.get(local)?;
-    let now = barycentric_point(
-        world_triangle(world, scene, entity, mesh, verts)?,
-        hit.barycentrics,
-    );
-    let prev_entity = *previous.nodes.get(node)?;
-    let before = barycentric_point(
-        world_triangle(previous.app.world(), scene, prev_entity, mesh, verts)?,
-        hit.barycentrics,
-    );
-    let xy_now = current.point(now)?;
-    let xy_before = previous.projection.point(before)?;
-    Some((xy_before - xy_now, STATUS_SURFACE))
+/// The current frame (the renderer's world and GPU scene) and the previous pose, read-only.
+struct TwoFrames<'a> {
+    now: &'a World,
+    before: &'a World,
+    nodes_before: &'a [Entity],
+    renderer: &'a crate::render::Renderer,
+    scene: &'a SceneAsset,
+    projection_now: Projection,
+    projection_before: Projection,
+}
+
+impl TwoFrames<'_> {
+    fn pixel_motion(&self, pixel: u32, hit: &PrimaryHit) -> Option<(Vec2, f32)> {
+        let width = self.projection_now.width;
+        let centre = Vec2::new((pixel % width) as f32 + 0.5, (pixel / width) as f32 + 0.5);
+        let Some(instance) = hit.instance else {
+            // A still camera sees a still environment: exactly 0, not a rounding residue.
+            if self.projection_before.view == self.projection_now.view {
+                return Some((Vec2::ZERO, STATUS_ENVIRONMENT));
+            }
+            let d = self.projection_now.ray_direction(centre);
+            let before = self.projection_before.direction(d)?;
+            return Some((before - centre, STATUS_ENVIRONMENT));
+        };
+        let entity = *self.renderer.instance_entities.get(instance as usize)?;
+        let mesh = self.now.get::<MeshInstance>(entity)?.mesh;
+        let node = self.now.get::<SceneNode>(entity)?.node;
+        let slot = self.renderer.scene.mesh_slots.get(mesh)?;
+        let local = hit.triangle.checked_sub(slot.gpu.triangle_offset)? as usize;
+        let verts = *slot.gpu_triangles.get(local)?;
+        let now = barycentric_point(
+            world_triangle(self.now, self.scene, entity, mesh, verts)?,
+            hit.barycentrics,
+        );
+        let entity_before = *self.nodes_before.get(node)?;
+        let before = barycentric_point(
+            world_triangle(self.before, self.scene, entity_before, mesh, verts)?,
+            hit.barycentrics,
+        );
+        let xy_now = self.projection_now.point(now)?;
+        let xy_before = self.projection_before.point(before)?;
+        Some((xy_before - xy_now, STATUS_SURFACE))
+    }
 }

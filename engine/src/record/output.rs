@@ -15,10 +15,11 @@ pub struct FileRecord {
 }
 
 pub fn sha256_hex(bytes: &[u8]) -> String {
-    Sha256::digest(bytes)
-        .iter()
-        .map(|b| format!("{b:02x}"))
-        .collect()
+    hex(&Sha256::digest(bytes))
+}
+
+fn hex(digest: &[u8]) -> String {
+    digest.iter().map(|b| format!("{b:02x}")).collect()
 }
 
 /// Writes `DIR/name` atomically (temporary file, flush, rename) and returns its record.
@@ -117,12 +118,5 @@ pub fn scene_hash(path: &Path) -> Result<String, RecordError> {
             }
         }
     }
-    Ok(format!(
-        "sha256:{}",
-        hasher
-            .finalize()
-            .iter()
-            .map(|b| format!("{b:02x}"))
-            .collect::<String>()
-    ))
+    Ok(format!("sha256:{}", hex(&hasher.finalize())))
 }
