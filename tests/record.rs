@@ -792,8 +792,9 @@ mkdir -p "$MNT/ro" && mount -t tmpfs -o ro tmpfs "$MNT/ro"
     );
     let Some(o) = in_mount_namespace(&script, &mnt) else {
         eprintln!(
-            "SKIPPED: this machine allows no private mount namespace (unshare -rm), so no tmpfs"
+            "no private mount namespace (unshare -rm): a file-size limit makes the writes fail instead"
         );
+        write_failure_under_file_size_limit();
         return;
     };
     let log = String::from_utf8_lossy(&o.stdout).into_owned() + &stderr(&o);
@@ -895,4 +896,39 @@ fn pose_determined_bvh_does_not_depend_on_earlier_poses() {
         after_history != direct,
         "the interactive policy keeps history (else this test checks nothing)"
     );
+}
+
+/// The same guarantees without a tmpfs: `ulimit -f` (SIGXFSZ ignored) makes writes past 4 KiB fail with
+/// "File too large" once the manifest outgrows it; finished frames stay whole, a re-run completes the set.
+#[cfg(unix)]
+fn write_failure_under_file_size_limit() {
+    let dir = scratch("file-size-limit");
+    let o = Command::new("sh")
+        .args([
+            "-c",
+            r#"ulimit -f 8; trap '' XFSZ; exec "$RAYKIN" record "$SCENE" --out "$OUT" "$@""#,
+            "sh",
+        ])
+        .args(RECORDING)
+        .env("RAYKIN", env!("CARGO_BIN_EXE_raykin"))
+        .env("SCENE", rigged_simple())
+        .env("OUT", &dir)
+        .env("XDG_RUNTIME_DIR", std::env::temp_dir().join("raykin-xdg"))
+        .output()
+        .unwrap();
+    let log = stderr(&o);
+    assert!(
+        !o.status.success(),
+        "the size limit must fail the run:\n{log}"
+    );
+    assert!(
+        log.contains("File too large") && log.contains("frames of the recording are complete"),
+        "{log}"
+    );
+    assert_no_partials(&dir);
+    let kept = assert_manifest_matches_disk(&dir, "manifest.json");
+    assert!((1..10).contains(&kept), "{kept} frames before the failure");
+    let o = record(&rigged_simple(), &dir, RECORDING);
+    assert_ok(&o);
+    assert_eq!(frames(&dir), frames(reference()));
 }
