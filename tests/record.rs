@@ -874,7 +874,12 @@ fn pose_determined_bvh_does_not_depend_on_earlier_poses() {
             .scene
             .mesh_slots
             .iter()
-            .map(|s| (s.bvh.flat.nodes.clone(), s.gpu_triangles.clone()))
+            .map(|s| {
+                (
+                    s.blas.binary().map(|b| b.flat.nodes.clone()),
+                    s.gpu_triangles.clone(),
+                )
+            })
             .collect();
         (trees, app.bvh_stats().rebuilds)
     };

@@ -48,6 +48,7 @@ pub fn settings_from(args: &SceneArgs) -> RenderSettings {
         seed: args.seed,
         russian_roulette: !args.no_rr,
         nee: !args.no_nee,
+        static_bvh: args.static_bvh.into(),
         ..Default::default()
     }
 }
@@ -281,6 +282,7 @@ pub fn run_default() -> Result<()> {
         time: None,
         animation: None,
         spp_per_dispatch: 16,
+        static_bvh: crate::cli::StaticBvh::Wide,
     };
     let camera = CameraChoice::LookAt {
         eye: glam::Vec3::new(-278.0, 273.0, 800.0),

@@ -51,6 +51,8 @@ pub struct RenderSettings {
     /// Next-event estimation on emissive triangles (with MIS).
     pub nee: bool,
     pub bvh_quality: crate::bvh::BvhQuality,
+    /// BVH layout of static meshes (deformable meshes always refit a BVH2).
+    pub static_bvh: crate::bvh::StaticLayout,
 }
 
 impl Default for RenderSettings {
@@ -70,6 +72,7 @@ impl Default for RenderSettings {
             rr_depth: 3,
             nee: true,
             bvh_quality: crate::bvh::BvhQuality::Medium,
+            static_bvh: crate::bvh::StaticLayout::Wide,
         }
     }
 }
