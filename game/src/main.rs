@@ -1,6 +1,6 @@
 //! `raykin`: path-trace animated glTF scenes. With no arguments it renders the embedded default scene.
 
-mod bench_cmd;
+mod bench;
 mod cli;
 mod record_cmd;
 mod render_cmd;
@@ -19,8 +19,7 @@ fn main() -> std::process::ExitCode {
         Some(cli::Command::Render(args)) => render_cmd::run(&args),
         // The recorder has its own exit statuses (interrupted: 130).
         Some(cli::Command::Record(args)) => return record_cmd::main(&args),
-        Some(cli::Command::Bench(args)) if args.crowd => bench_cmd::run_crowd(&args),
-        Some(cli::Command::Bench(args)) => bench_cmd::run(&args),
+        Some(cli::Command::Bench(args)) => bench::run(&args),
         None => render_cmd::run_default(),
     };
     match result {
