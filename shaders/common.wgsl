@@ -8,6 +8,8 @@ const MATERIAL_DOUBLE_SIDED: u32 = 1u;
 const MATERIAL_ALPHA_MASK: u32 = 2u;
 const MATERIAL_ALPHA_BLEND: u32 = 4u;
 const FRAME_NEE: u32 = 1u;
+// Write the primary-hit AOV (the recorder's motion vectors need it; off otherwise).
+const FRAME_HIT_AOV: u32 = 2u;
 
 struct BvhChild { min: vec3<f32>, index: u32, max: vec3<f32>, count: u32 }
 struct BvhNode { a: BvhChild, b: BvhChild }

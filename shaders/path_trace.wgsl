@@ -9,6 +9,9 @@
 @group(1) @binding(2) var<storage, read_write> aov_normal: array<vec4<f32>>;
 // Rays traced by the last dispatch (camera, bounce and shadow rays), for rays/s figures.
 @group(1) @binding(3) var<storage, read_write> ray_counter: array<atomic<u32>>;
+// What the ray through the pixel centre hits first: instance (NONE: nothing), triangle slot, barycentrics as
+// f32 bits. Written only with FRAME_HIT_AOV, once per accumulation (a 16-byte stub is bound otherwise).
+@group(1) @binding(4) var<storage, read_write> aov_hit: array<vec4<u32>>;
 
 var<private> rays_traced: u32;
 var<workgroup> workgroup_rays: atomic<u32>;
@@ -325,12 +328,26 @@ fn trace_pixels(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_in
     }
 }
 
+// Direction of the camera ray through `offset` (in pixels, 0..1 each way) of pixel `gid`.
+fn camera_ray_dir(gid: vec2<u32>, offset: vec2<f32>) -> vec3<f32> {
+    let aspect = f32(frame.width) / f32(frame.height);
+    let ndc = vec2<f32>(
+        (f32(gid.x) + offset.x) / f32(frame.width) * 2.0 - 1.0,
+        1.0 - (f32(gid.y) + offset.y) / f32(frame.height) * 2.0);
+    let d_cam = vec3<f32>(ndc.x * frame.tan_half_fov * aspect, ndc.y * frame.tan_half_fov, -1.0);
+    return normalize((frame.world_from_camera * vec4<f32>(d_cam, 0.0)).xyz);
+}
+
 fn trace_pixel(gid: vec2<u32>) {
     let pixel = gid.y * frame.width + gid.x;
     let cam = frame.world_from_camera;
     let origin = cam[3].xyz;
     let forward = -cam[2].xyz;
-    let aspect = f32(frame.width) / f32(frame.height);
+    if (frame.flags & FRAME_HIT_AOV) != 0u && frame.sample_base == 0u {
+        rays_traced++;
+        let hit = trace(Ray(origin, camera_ray_dir(gid, vec2<f32>(0.5))), MISS, false);
+        aov_hit[pixel] = vec4<u32>(hit.instance, hit.triangle, bitcast<u32>(hit.bary.x), bitcast<u32>(hit.bary.y));
+    }
     var radiance = vec3<f32>(0.0);
     var albedo_depth = vec4<f32>(0.0);
     var normal_hits = vec4<f32>(0.0);
@@ -338,11 +355,7 @@ fn trace_pixel(gid: vec2<u32>) {
         var rng = rng_new(pixel, frame.sample_base + s, frame.seed);
         // Box filter: a uniform point in the pixel.
         let jitter = vec2<f32>(rand(&rng), rand(&rng));
-        let ndc = vec2<f32>(
-            (f32(gid.x) + jitter.x) / f32(frame.width) * 2.0 - 1.0,
-            1.0 - (f32(gid.y) + jitter.y) / f32(frame.height) * 2.0);
-        let d_cam = vec3<f32>(ndc.x * frame.tan_half_fov * aspect, ndc.y * frame.tan_half_fov, -1.0);
-        let dir = normalize((cam * vec4<f32>(d_cam, 0.0)).xyz);
+        let dir = camera_ray_dir(gid, jitter);
         let r = trace_path(Ray(origin, dir), forward, &rng);
         // A non-finite sample would poison the pixel forever; it is dropped (it should never happen).
         if finite3(r.radiance) { radiance += r.radiance; }

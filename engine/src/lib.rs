@@ -11,6 +11,8 @@ pub mod gpu;
 pub mod gpu_deform;
 pub mod headless;
 pub mod image_io;
+pub mod motion;
+pub mod record;
 pub mod render;
 pub mod scene;
 

@@ -18,6 +18,8 @@ pub struct Cli {
 pub enum Command {
     /// Render one image of a scene, headless.
     Render(RenderArgs),
+    /// Record an animation as a frame sequence: deterministic, resumable, shardable (--range, --merge).
+    Record(RecordArgs),
     /// Measure frame times, rays per second, BVH build time and GPU memory.
     Bench(BenchArgs),
 }
@@ -175,6 +177,54 @@ pub struct RenderArgs {
     /// Write a JSON report (adapter, timings, memory) to this file.
     #[arg(long)]
     pub report: Option<PathBuf>,
+}
+
+#[derive(Args, Debug)]
+#[command(mut_arg("scene", |a| a.required(false).required_unless_present("merge")))]
+#[command(
+    after_help = "Frame k is the pose at START + k/FPS with its own seed from (--seed, k); re-running the \
+same command resumes. docs/RECORDING.md: files, manifest, motion vectors, Slurm arrays."
+)]
+pub struct RecordArgs {
+    #[command(flatten)]
+    pub scene: Option<SceneArgs>,
+    /// Output folder: frame_00000.png|exr, AOVs (frame_00000.NAME.exr), manifest.json.
+    #[arg(long, required_unless_present = "merge")]
+    pub out: Option<PathBuf>,
+    /// Frames per second of the recording (frame k is the pose at START + k/FPS).
+    #[arg(long, default_value_t = 30.0)]
+    pub fps: f32,
+    /// T0: seconds into the clip of frame 0.
+    #[arg(long, default_value_t = 0.0)]
+    pub start: f32,
+    /// T1: the frames cover [START, END) (default: the clip's end).
+    #[arg(long, conflicts_with = "frames")]
+    pub end: Option<f32>,
+    /// Number of frames instead of --end (required for a scene without animations).
+    #[arg(long)]
+    pub frames: Option<u32>,
+    /// Render only frames A..B (A to B-1; also A..=B, A.., ..B), e.g. one task of a Slurm array.
+    #[arg(long, value_parser = raykin::record::parse_range)]
+    pub range: Option<(Option<u32>, Option<u32>)>,
+    /// Sample each frame for this long instead of a fixed --spp (frames are then not bit-reproducible).
+    #[arg(long, conflicts_with = "spp")]
+    pub time_budget_ms: Option<f64>,
+    /// png (tone-mapped sRGB) or exr (linear radiance).
+    #[arg(long, default_value = "png")]
+    pub format: raykin::record::FrameFormat,
+    /// Extra linear EXR images per frame, comma-separated: albedo,normal,depth,motion.
+    #[arg(long, value_delimiter = ',')]
+    pub aovs: Vec<raykin::record::Aov>,
+    /// Start a new recording in a folder that holds another one (its manifests are set aside, frames
+    /// overwritten).
+    #[arg(long)]
+    pub force: bool,
+    /// Encode the PNG frames into this video with ffmpeg once every frame is complete.
+    #[arg(long)]
+    pub video: Option<PathBuf>,
+    /// Fold the part manifests of --range runs in this folder into manifest.json and report missing frames.
+    #[arg(long, conflicts_with_all = ["out", "range", "force"])]
+    pub merge: Option<PathBuf>,
 }
 
 pub fn parse_vec3(s: &str) -> Result<glam::Vec3, String> {

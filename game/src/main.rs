@@ -2,6 +2,7 @@
 
 mod bench;
 mod cli;
+mod record_cmd;
 mod render_cmd;
 
 use clap::Parser;
@@ -16,6 +17,8 @@ fn main() -> std::process::ExitCode {
     let cli = cli::Cli::parse();
     let result = match cli.command {
         Some(cli::Command::Render(args)) => render_cmd::run(&args),
+        // The recorder has its own exit statuses (interrupted: 130).
+        Some(cli::Command::Record(args)) => return record_cmd::main(&args),
         Some(cli::Command::Bench(args)) => bench::run(&args),
         None => render_cmd::run_default(),
     };

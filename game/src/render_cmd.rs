@@ -6,6 +6,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use raykin::camera::CameraChoice;
 use raykin::gpu::GpuContext;
 use raykin::headless::HeadlessApp;
+use raykin::record::CameraSpec;
 use raykin::render::{Environment, RenderSettings};
 use raykin::scene::{LoadOptions, SceneAsset};
 use std::path::{Path, PathBuf};
@@ -77,14 +78,19 @@ pub fn pose_from(scene: &SceneAsset, args: &SceneArgs) -> Result<Option<(usize, 
 }
 
 pub fn camera_from(args: &SceneArgs) -> CameraChoice {
+    camera_spec(args).choice()
+}
+
+/// `--camera I` or `--look-from/--look-at/--fov`, in the form a recording's manifest stores.
+pub fn camera_spec(args: &SceneArgs) -> CameraSpec {
     match (args.look_from, args.look_at, args.camera) {
-        (Some(eye), Some(target), _) => CameraChoice::LookAt {
-            eye,
-            target,
-            yfov: args.fov.to_radians(),
+        (Some(eye), Some(target), _) => CameraSpec::LookAt {
+            eye: eye.to_array(),
+            target: target.to_array(),
+            yfov_degrees: args.fov,
         },
-        (_, _, Some(i)) => CameraChoice::Index(i),
-        _ => CameraChoice::Auto,
+        (_, _, Some(i)) => CameraSpec::Index(i),
+        _ => CameraSpec::Auto,
     }
 }
 

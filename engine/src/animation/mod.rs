@@ -376,6 +376,20 @@ pub fn find_clip(scene: &crate::scene::SceneAsset, name_or_index: &str) -> Resul
     }
 }
 
+/// Holds every spawned scene copy at `seconds` into `clip` (a paused player on each scene root): the next
+/// animation pass poses exactly that time, whatever ran before.
+pub fn hold_at(world: &mut World, clip: usize, seconds: f32) {
+    let roots: Vec<Entity> = world
+        .query_filtered::<Entity, With<crate::scene::SceneRoot>>()
+        .iter(world)
+        .collect();
+    for root in roots {
+        world
+            .entity_mut(root)
+            .insert(AnimationPlayer::paused_at(clip, seconds));
+    }
+}
+
 /// Adds `(node, player)` pairs to a spawned scene copy whose root is `root` (see [`crate::scene::crowd_scene`]).
 pub fn attach_players(world: &mut World, root: Entity, players: &[(usize, AnimationPlayer)]) {
     let Some(nodes) = world.get::<SceneNodes>(root).map(|n| n.0.clone()) else {

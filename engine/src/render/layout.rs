@@ -119,7 +119,7 @@ pub struct GpuFrame {
     /// Path depth from which Russian roulette may end a path (u32::MAX: never).
     pub rr_depth: u32,
     pub emitter_count: u32,
-    /// Bit 0: next-event estimation on.
+    /// Bit 0: next-event estimation on; bit 1: write the primary-hit AOV.
     pub flags: u32,
     /// Sum over emitters of luminance(emissive) x world area: the normaliser of emitter selection.
     pub emitter_total_power: f32,
@@ -127,6 +127,8 @@ pub struct GpuFrame {
 }
 
 pub const FRAME_NEE: u32 = 1;
+/// Bit 1: write the primary-hit AOV (first dispatch after a reset only).
+pub const FRAME_HIT_AOV: u32 = 2;
 
 /// Octahedral encoding of a unit vector into two snorm16 values (WGSL `unpack2x16snorm` decodes it).
 pub fn oct_encode(v: Vec3) -> u32 {

@@ -6,7 +6,7 @@ pub mod scene_buffers;
 pub mod settings;
 pub mod shaders;
 
-pub use path_tracer::{Aovs, PassTimes, PathTracer, RayCastTiming};
+pub use path_tracer::{Aovs, PassTimes, PathTracer, PrimaryHit, RayCastTiming};
 pub use scene_buffers::{GpuMemory, GpuScene, InstanceInput, UploadError};
 pub use settings::{AovView, Environment, RenderSettings, Tonemapper};
 
@@ -28,6 +28,8 @@ pub struct Renderer {
     pub tracer: PathTracer,
     /// Instances as last uploaded: a change restarts accumulation.
     last_instances: Vec<InstanceInput>,
+    /// The entity behind each GPU instance (TLAS leaf order), to map primary hits back to scene nodes.
+    pub instance_entities: Vec<Entity>,
     last_settings: Option<RenderSettings>,
     last_camera: Option<CameraView>,
     /// Set by systems that changed geometry (deformation) this frame.
@@ -67,6 +69,7 @@ impl Renderer {
             scene: gpu_scene,
             tracer,
             last_instances: Vec::new(),
+            instance_entities: Vec::new(),
             last_settings: None,
             last_camera: None,
             geometry_changed: false,
@@ -180,24 +183,33 @@ pub fn update_instances(
     assets: Res<SceneAssets>,
     mut renderer: ResMut<Renderer>,
     mut stats: ResMut<BvhStats>,
-    instances: Query<(&GlobalTransform, &MeshInstance, Option<&SkinnedMesh>)>,
+    instances: Query<(
+        Entity,
+        &GlobalTransform,
+        &MeshInstance,
+        Option<&SkinnedMesh>,
+    )>,
 ) {
     let start = std::time::Instant::now();
     stats.last_tlas_seconds = 0.0;
     // Skinned vertices are already in world space (the joint matrices place them).
-    let mut inputs: Vec<InstanceInput> = instances
+    let mut placed: Vec<(InstanceInput, Entity)> = instances
         .iter()
-        .map(|(g, m, skinned)| InstanceInput {
-            world: if skinned.is_some() {
+        .map(|(e, g, m, skinned)| {
+            let world = if skinned.is_some() {
                 glam::Mat4::IDENTITY
             } else {
                 g.0
-            },
-            mesh: m.mesh as u32,
+            };
+            let input = InstanceInput {
+                world,
+                mesh: m.mesh as u32,
+            };
+            (input, e)
         })
         .collect();
     // Query order is not stable across archetype changes; sort for a deterministic TLAS.
-    inputs.sort_by(|a, b| {
+    placed.sort_by(|(a, _), (b, _)| {
         a.mesh.cmp(&b.mesh).then_with(|| {
             a.world
                 .to_cols_array()
@@ -205,6 +217,7 @@ pub fn update_instances(
                 .unwrap_or(std::cmp::Ordering::Equal)
         })
     });
+    let (inputs, entities): (Vec<InstanceInput>, Vec<Entity>) = placed.into_iter().unzip();
     if inputs == renderer.last_instances && !renderer.geometry_changed {
         return;
     }
@@ -212,6 +225,12 @@ pub fn update_instances(
     if let Err(e) = renderer.scene.update_instances(&ctx, &assets.0, &inputs) {
         tracing::error!("top-level BVH: {e}");
     }
+    renderer.instance_entities = renderer
+        .scene
+        .instance_order
+        .iter()
+        .map(|&i| entities[i as usize])
+        .collect();
     renderer.last_instances = inputs;
     renderer.tracer.reset(&ctx);
     stats.last_tlas_seconds = start.elapsed().as_secs_f64();
@@ -235,7 +254,9 @@ pub fn refit_deformed(
     let (ratios, upload_seconds) = if deformed.changed.is_empty() {
         (Vec::new(), 0.0)
     } else {
-        renderer.scene.apply_deformations(&ctx, &deformed)
+        renderer
+            .scene
+            .apply_deformations(&ctx, scene, &deformed, stats.policy)
     };
     for (m, ratio) in ratios {
         stats.sah_ratio[m] = ratio;

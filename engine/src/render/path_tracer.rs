@@ -59,6 +59,10 @@ pub struct PathTracer {
     pub aov_albedo_depth: wgpu::Buffer,
     pub aov_normal: wgpu::Buffer,
     pub output_rgba8: wgpu::Buffer,
+    /// Primary hit through each pixel centre (instance, triangle, barycentrics); a 16-byte stub while
+    /// `hit_aov_enabled` is off, so nothing is spent on it unless asked.
+    pub aov_hit: wgpu::Buffer,
+    hit_aov_enabled: bool,
     /// Rays traced by the last dispatch.
     ray_counter: wgpu::Buffer,
     scene_bind_group: Option<(u64, wgpu::BindGroup)>,
@@ -163,6 +167,7 @@ impl PathTracer {
                 layout_entry(1, false),
                 layout_entry(2, false),
                 layout_entry(3, false),
+                layout_entry(4, false),
             ],
         });
         let tonemap_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -231,10 +236,11 @@ impl PathTracer {
                 | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
+        let aov_hit = hit_buffer(ctx, width, height, false);
         let accum_bind_group = bind_group(
             ctx,
             &accum_layout,
-            &[&v.accum, &v.albedo, &v.normal, &ray_counter],
+            &[&v.accum, &v.albedo, &v.normal, &ray_counter, &aov_hit],
         );
         let tonemap_bind_group = bind_group(
             ctx,
@@ -255,6 +261,8 @@ impl PathTracer {
             aov_albedo_depth: v.albedo,
             aov_normal: v.normal,
             output_rgba8: v.rgba8,
+            aov_hit,
+            hit_aov_enabled: false,
             ray_counter,
             scene_bind_group: None,
             accum_bind_group,
@@ -273,10 +281,17 @@ impl PathTracer {
             return;
         }
         let v = view_buffers(ctx, width, height);
+        self.aov_hit = hit_buffer(ctx, width, height, self.hit_aov_enabled);
         self.accum_bind_group = bind_group(
             ctx,
             &self.accum_layout,
-            &[&v.accum, &v.albedo, &v.normal, &self.ray_counter],
+            &[
+                &v.accum,
+                &v.albedo,
+                &v.normal,
+                &self.ray_counter,
+                &self.aov_hit,
+            ],
         );
         self.tonemap_bind_group = bind_group(
             ctx,
@@ -297,6 +312,27 @@ impl PathTracer {
         ) = (v.accum, v.albedo, v.normal, v.rgba8);
         (self.width, self.height) = (width, height);
         self.reset(ctx);
+    }
+
+    /// Turns the primary-hit AOV on or off (allocating its buffer only while on); takes effect at the next
+    /// accumulation restart.
+    pub fn set_hit_aov(&mut self, ctx: &GpuContext, enabled: bool) {
+        if enabled == self.hit_aov_enabled {
+            return;
+        }
+        self.hit_aov_enabled = enabled;
+        self.aov_hit = hit_buffer(ctx, self.width, self.height, enabled);
+        self.accum_bind_group = bind_group(
+            ctx,
+            &self.accum_layout,
+            &[
+                &self.accum,
+                &self.aov_albedo_depth,
+                &self.aov_normal,
+                &self.ray_counter,
+                &self.aov_hit,
+            ],
+        );
     }
 
     /// Restarts accumulation (camera, scene or settings changed).
@@ -491,7 +527,13 @@ impl PathTracer {
                 u32::MAX
             },
             emitter_count: scene.emitter_count,
-            flags: if settings.nee { FRAME_NEE } else { 0 },
+            // The primary-hit AOV is written by the first dispatch of an accumulation (the path kernel).
+            flags: if settings.nee { FRAME_NEE } else { 0 }
+                | if self.hit_aov_enabled && self.samples == 0 {
+                    FRAME_HIT_AOV
+                } else {
+                    0
+                },
             emitter_total_power: scene.emitter_total_power,
             _pad: 0,
         };
@@ -586,6 +628,47 @@ impl PathTracer {
     pub fn read_rgba8(&self, ctx: &GpuContext) -> Vec<u8> {
         ctx.read_buffer(&self.output_rgba8, self.output_rgba8.size())
     }
+
+    /// The primary hit through each pixel centre, row-major (empty while the hit AOV is off).
+    pub fn read_hits(&self, ctx: &GpuContext) -> Vec<PrimaryHit> {
+        if !self.hit_aov_enabled {
+            return Vec::new();
+        }
+        let bytes = ctx.read_buffer(&self.aov_hit, self.aov_hit.size());
+        bytemuck::cast_slice::<u8, [u32; 4]>(&bytes)
+            .iter()
+            .map(|h| PrimaryHit {
+                instance: (h[0] != NONE).then_some(h[0]),
+                triangle: h[1],
+                barycentrics: [f32::from_bits(h[2]), f32::from_bits(h[3])],
+            })
+            .collect()
+    }
+}
+
+/// The first surface the ray through a pixel centre hits.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PrimaryHit {
+    /// Index into the GPU instance buffer (TLAS leaf order); `None` where the ray left the scene.
+    pub instance: Option<u32>,
+    /// Slot in the GPU triangle buffer (the mesh's triangle offset included).
+    pub triangle: u32,
+    /// Weights of the triangle's second and third vertices.
+    pub barycentrics: [f32; 2],
+}
+
+fn hit_buffer(ctx: &GpuContext, width: u32, height: u32, enabled: bool) -> wgpu::Buffer {
+    let size = if enabled {
+        (width as u64 * height as u64).max(1) * 16
+    } else {
+        16
+    };
+    ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("aov primary hit"),
+        size,
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+        mapped_at_creation: false,
+    })
 }
 
 #[derive(Clone, Debug, Default)]

@@ -3,6 +3,7 @@
 //! a deformed mesh rewrites only its own positions/normals and BLAS nodes.
 
 use super::layout::*;
+use crate::bvh::refit::RebuildPolicy;
 use crate::bvh::{Blas, FlatBvh, MeshBvh, StaticLayout};
 use crate::gpu::GpuContext;
 use crate::scene::{AlphaMode, MeshData, SceneAsset, Wrap};
@@ -45,6 +46,46 @@ pub struct MeshSlot {
     /// Conservative bounds of a GPU-deformed mesh at its current pose (its CPU tree's boxes are stale);
     /// the top-level BVH uses them instead of the tree's root box.
     pub deformed_bounds: Option<(Vec3, Vec3)>,
+    /// The tree was rebuilt since upload (its topology and triangle order are no longer the upload's).
+    pub rebuilt: bool,
+    /// The tree built at upload, kept once [`RebuildPolicy::PoseDetermined`] first needs it.
+    upload_bvh: Option<MeshBvh>,
+}
+
+impl MeshSlot {
+    /// Puts back the tree built at upload (keeping a copy the first time); returns the upload triangle order
+    /// to write when the current tree was a rebuilt one. The tree's bounds are stale until the next refit.
+    fn restore_upload_tree(
+        &mut self,
+        mesh: &MeshData,
+        materials: &[GpuMaterial],
+        quality: crate::bvh::BvhQuality,
+    ) -> Option<OrderedTriangles> {
+        if self.upload_bvh.is_none() {
+            // Until the first rebuild the current tree has the upload topology; after one, the same
+            // deterministic build over the rest positions gives it back.
+            let upload = if self.rebuilt {
+                MeshBvh::build(&mesh.positions, &mesh.triangles, quality).ok()?
+            } else {
+                self.blas.binary()?.clone()
+            };
+            self.upload_bvh = Some(upload);
+        }
+        if !self.rebuilt {
+            return None;
+        }
+        let upload = self.upload_bvh.clone()?;
+        let ordered = order_triangles(
+            mesh,
+            &upload.flat.order,
+            self.gpu.triangle_offset,
+            materials,
+        );
+        self.blas = Blas::Binary(upload);
+        self.gpu_triangles = ordered.indices.clone();
+        self.rebuilt = false;
+        Some(ordered)
+    }
 }
 
 /// Byte counts of what the scene occupies on the GPU.
@@ -90,10 +131,14 @@ pub struct GpuScene {
     pub memory: GpuMemory,
     pub emitter_count: u32,
     pub emitter_total_power: f32,
+    /// For each GPU instance (TLAS leaf order), its index in the last [`Self::update_instances`] input.
+    pub instance_order: Vec<u32>,
     /// Emissive triangles per mesh (triangle slot, material), for building the emitter list.
     emissive_triangles: Vec<Vec<(u32, u32)>>,
     /// Bumped whenever buffers are recreated, so bind groups are rebuilt.
     pub generation: u64,
+    /// Build quality of the upload (rebuilds of the upload tree use it).
+    bvh_quality: crate::bvh::BvhQuality,
     pub build_seconds: f64,
 }
 
@@ -354,6 +399,8 @@ impl GpuScene {
                 positions: None,
                 blas_capacity,
                 deformed_bounds: None,
+                rebuilt: false,
+                upload_bvh: None,
             });
         }
         if wide_nodes.len() as u32 >= WIDE_BLAS {
@@ -433,8 +480,10 @@ impl GpuScene {
             memory,
             emitter_count: 0,
             emitter_total_power: 0.0,
+            instance_order: Vec::new(),
             emissive_triangles,
             generation: 1,
+            bvh_quality: quality,
             build_seconds: start.elapsed().as_secs_f64(),
         };
         Ok((gpu_scene, notes))
@@ -443,18 +492,25 @@ impl GpuScene {
     /// Writes this frame's deformed meshes over their own vertex-pool ranges (same encodings as the initial
     /// upload), refits their BLASes and uploads the nodes; returns each mesh's new SAH ratio and the CPU
     /// seconds spent on the queue writes. The CPU work (encoding, refit + SAH in one sweep) runs in parallel
-    /// over meshes, the queue writes after it in mesh order.
+    /// over meshes, the queue writes after it in mesh order. Under [`RebuildPolicy::PoseDetermined`] a
+    /// rebuilt mesh first goes back to its upload tree and triangle order, so the refit result depends on
+    /// this pose alone.
     pub fn apply_deformations(
         &mut self,
         ctx: &GpuContext,
+        scene: &SceneAsset,
         deformed: &crate::animation::DeformedMeshes,
+        policy: RebuildPolicy,
     ) -> (Vec<(usize, f32)>, f64) {
         struct Update {
             mesh: usize,
             /// Encoded normals and tangents (positions are written straight from the deformed mesh).
             words: Vec<(u32, Vec<u32>)>,
             sah_ratio: f32,
+            /// The triangle order went back to the upload tree's.
+            restored: Option<OrderedTriangles>,
         }
+        let (materials, quality) = (&self.material_data, self.bvh_quality);
         let mut changed = vec![false; self.mesh_slots.len()];
         for &m in &deformed.changed {
             if deformed.meshes.get(m).is_some_and(Option::is_some) && m < changed.len() {
@@ -490,6 +546,9 @@ impl GpuScene {
                         .collect();
                     words.push((gpu.tangent_offset, tangent_words));
                 }
+                let restored = (policy == RebuildPolicy::PoseDetermined)
+                    .then(|| slot.restore_upload_tree(&scene.meshes[m], materials, quality))
+                    .flatten();
                 let bvh = slot
                     .blas
                     .binary_mut()
@@ -505,6 +564,7 @@ impl GpuScene {
                     mesh: m,
                     words,
                     sah_ratio,
+                    restored,
                 }
             })
             .collect();
@@ -512,6 +572,15 @@ impl GpuScene {
         let ratios = updates
             .into_iter()
             .map(|u| {
+                if let Some(ordered) = u.restored {
+                    let offset = self.mesh_slots[u.mesh].gpu.triangle_offset;
+                    ctx.queue.write_buffer(
+                        &self.triangles,
+                        offset as u64 * 16,
+                        bytemuck::cast_slice(&ordered.packed),
+                    );
+                    self.emissive_triangles[u.mesh] = ordered.emissive;
+                }
                 let slot = &self.mesh_slots[u.mesh];
                 if let Some(d) = deformed.meshes[u.mesh].as_ref() {
                     ctx.queue.write_buffer(
@@ -609,6 +678,7 @@ impl GpuScene {
         let slot = &mut self.mesh_slots[mesh];
         slot.gpu_triangles = ordered.indices;
         slot.blas = Blas::Binary(bvh);
+        slot.rebuilt = true;
         true
     }
 
@@ -659,6 +729,7 @@ impl GpuScene {
             self.generation += 1;
         }
         self.emitter_count = emitters.len() as u32;
+        self.instance_order = tlas.order.clone();
         self.memory.instances_and_tlas =
             (instance_bytes.len() + tlas_bytes.len() + emitter_bytes.len()) as u64;
         Ok(())

@@ -952,7 +952,8 @@ fn finite_or<T: Finite>(v: T, fallback: T) -> T {
     if v.all_finite() { v } else { fallback }
 }
 
-fn percent_decode(uri: &str) -> String {
+/// glTF URIs are percent-encoded (`%20` for a space).
+pub(crate) fn percent_decode(uri: &str) -> String {
     let bytes = uri.as_bytes();
     let mut out = Vec::with_capacity(bytes.len());
     let mut i = 0;

@@ -8,6 +8,7 @@ mod spawn;
 mod tangents;
 
 pub use compose::{CrowdScene, compose, crowd_scene, unshare_deformable_meshes};
+pub(crate) use gltf_loader::percent_decode;
 pub use gltf_loader::{LoadOptions, load_gltf, load_gltf_slice};
 pub use spawn::{
     CameraComponent, GlobalTransform, MeshInstance, MorphWeights, SceneNode, SceneNodes,
