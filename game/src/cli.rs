@@ -103,6 +103,9 @@ pub struct SceneArgs {
     /// Samples per pixel per GPU submission.
     #[arg(long, default_value_t = 16)]
     pub spp_per_dispatch: u32,
+    /// Denoise the image (edge-avoiding a-trous filter guided by normal, depth and albedo).
+    #[arg(long)]
+    pub denoise: bool,
 }
 
 #[derive(Args, Debug)]

@@ -47,6 +47,7 @@ pub fn settings_from(args: &SceneArgs) -> RenderSettings {
         seed: args.seed,
         russian_roulette: !args.no_rr,
         nee: !args.no_nee,
+        denoise: args.denoise,
         ..Default::default()
     }
 }
@@ -108,6 +109,7 @@ struct RenderReport {
     height: u32,
     spp: u32,
     max_depth: u32,
+    denoise: bool,
     triangles: usize,
     bvh_build_and_upload_s: f64,
     gpu_memory_geometry_bvh_bytes: u64,
@@ -183,7 +185,11 @@ fn render_to_file(
     bar.finish_and_clear();
     let wall = start.elapsed().as_secs_f64();
     let (w, h) = (settings.width, settings.height);
-    let radiance = app.radiance();
+    let radiance = if settings.denoise {
+        app.denoised_radiance()
+    } else {
+        app.radiance()
+    };
     if let Some(bad) = radiance.iter().flatten().find(|v| !v.is_finite()) {
         anyhow::bail!("internal error: the render has a non-finite pixel value ({bad})");
     }
@@ -212,9 +218,10 @@ fn render_to_file(
     }
     let renderer = app.renderer();
     eprintln!(
-        "raykin: wrote {} ({w}x{h}, {} spp, {:.2} s, {:.2} M samples/s)",
+        "raykin: wrote {} ({w}x{h}, {} spp{}, {:.2} s, {:.2} M samples/s)",
         out.display(),
         args.spp,
+        if settings.denoise { ", denoised" } else { "" },
         wall,
         (w as f64 * h as f64 * args.spp as f64) / wall / 1e6
     );
@@ -227,6 +234,7 @@ fn render_to_file(
             height: h,
             spp: args.spp,
             max_depth: args.max_depth,
+            denoise: settings.denoise,
             triangles: scene.triangle_count(),
             bvh_build_and_upload_s: renderer.scene.build_seconds,
             gpu_memory_geometry_bvh_bytes: renderer.scene.memory.geometry_and_bvh(),
@@ -275,6 +283,7 @@ pub fn run_default() -> Result<()> {
         time: None,
         animation: None,
         spp_per_dispatch: 16,
+        denoise: false,
     };
     let camera = CameraChoice::LookAt {
         eye: glam::Vec3::new(-278.0, 273.0, 800.0),

@@ -1,12 +1,14 @@
 //! Pipelines and per-view buffers of the path tracer: dispatch, accumulation, tone mapping, readback, and GPU
 //! timestamps around each pass where the adapter has them.
 
+use super::denoise::{DenoiseInputs, DenoiseParams, Denoiser};
 use super::layout::*;
 use super::scene_buffers::GpuScene;
-use super::settings::{Environment, RenderSettings};
+use super::settings::{AovView, Environment, RenderSettings};
 use crate::camera::CameraView;
 use crate::gpu::GpuContext;
 use bytemuck::{Pod, Zeroable};
+use std::sync::OnceLock;
 
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
@@ -20,7 +22,7 @@ struct TonemapParams {
     _pad: [u32; 2],
 }
 
-/// Timestamp queries: [trace begin, trace end, tonemap begin, tonemap end].
+/// Timestamp queries: [trace begin, trace end, tonemap begin, tonemap end, denoise begin, denoise end].
 struct Timestamps {
     set: wgpu::QuerySet,
     resolve: wgpu::Buffer,
@@ -32,6 +34,8 @@ struct Timestamps {
 pub struct PassTimes {
     pub trace_ms: f64,
     pub tonemap_ms: f64,
+    /// 0 when the last dispatch did not denoise.
+    pub denoise_ms: f64,
 }
 
 pub struct PathTracer {
@@ -45,6 +49,8 @@ pub struct PathTracer {
     pub accum: wgpu::Buffer,
     pub aov_albedo_depth: wgpu::Buffer,
     pub aov_normal: wgpu::Buffer,
+    /// Unscattered radiance sum + sum of luminance(scattered)^2: what the denoiser needs beyond the AOVs.
+    pub moments: wgpu::Buffer,
     pub output_rgba8: wgpu::Buffer,
     /// Rays traced by the last dispatch.
     ray_counter: wgpu::Buffer,
@@ -56,9 +62,13 @@ pub struct PathTracer {
     /// Samples per pixel accumulated since the last reset.
     pub samples: u32,
     timestamps: Option<Timestamps>,
+    denoiser: Denoiser,
+    /// The tone mapper's bindings with the denoised image as its input (made when first needed).
+    denoised_tonemap_group: OnceLock<wgpu::BindGroup>,
+    denoised_last_dispatch: bool,
 }
 
-fn layout_entry(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
+pub(super) fn layout_entry(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
         binding,
         visibility: wgpu::ShaderStages::COMPUTE,
@@ -108,6 +118,7 @@ struct ViewBuffers {
     accum: wgpu::Buffer,
     albedo: wgpu::Buffer,
     normal: wgpu::Buffer,
+    moments: wgpu::Buffer,
     rgba8: wgpu::Buffer,
 }
 
@@ -127,6 +138,7 @@ fn view_buffers(ctx: &GpuContext, width: u32, height: u32) -> ViewBuffers {
         accum: make("accum", 16),
         albedo: make("aov albedo", 16),
         normal: make("aov normal", 16),
+        moments: make("denoiser moments", 16),
         rgba8: make("rgba8", 4),
     }
 }
@@ -149,6 +161,7 @@ impl PathTracer {
                 layout_entry(1, false),
                 layout_entry(2, false),
                 layout_entry(3, false),
+                layout_entry(4, false),
             ],
         });
         let tonemap_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -220,7 +233,7 @@ impl PathTracer {
         let accum_bind_group = bind_group(
             ctx,
             &accum_layout,
-            &[&v.accum, &v.albedo, &v.normal, &ray_counter],
+            &[&v.accum, &v.albedo, &v.normal, &ray_counter, &v.moments],
         );
         let tonemap_bind_group = bind_group(
             ctx,
@@ -231,11 +244,11 @@ impl PathTracer {
             set: device.create_query_set(&wgpu::QuerySetDescriptor {
                 label: Some("pass timestamps"),
                 ty: wgpu::QueryType::Timestamp,
-                count: 4,
+                count: 6,
             }),
             resolve: device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("timestamp resolve"),
-                size: 32,
+                size: 48,
                 usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
                 mapped_at_creation: false,
             }),
@@ -252,6 +265,7 @@ impl PathTracer {
             accum: v.accum,
             aov_albedo_depth: v.albedo,
             aov_normal: v.normal,
+            moments: v.moments,
             output_rgba8: v.rgba8,
             ray_counter,
             scene_bind_group: None,
@@ -261,6 +275,9 @@ impl PathTracer {
             height,
             samples: 0,
             timestamps,
+            denoiser: Denoiser::new(ctx),
+            denoised_tonemap_group: OnceLock::new(),
+            denoised_last_dispatch: false,
         };
         tracer.reset(ctx);
         tracer
@@ -274,7 +291,13 @@ impl PathTracer {
         self.accum_bind_group = bind_group(
             ctx,
             &self.accum_layout,
-            &[&v.accum, &v.albedo, &v.normal, &self.ray_counter],
+            &[
+                &v.accum,
+                &v.albedo,
+                &v.normal,
+                &self.ray_counter,
+                &v.moments,
+            ],
         );
         self.tonemap_bind_group = bind_group(
             ctx,
@@ -291,16 +314,24 @@ impl PathTracer {
             self.accum,
             self.aov_albedo_depth,
             self.aov_normal,
+            self.moments,
             self.output_rgba8,
-        ) = (v.accum, v.albedo, v.normal, v.rgba8);
+        ) = (v.accum, v.albedo, v.normal, v.moments, v.rgba8);
         (self.width, self.height) = (width, height);
+        self.denoiser.release();
+        self.denoised_tonemap_group = OnceLock::new();
         self.reset(ctx);
     }
 
     /// Restarts accumulation (camera, scene or settings changed).
     pub fn reset(&mut self, ctx: &GpuContext) {
         let mut encoder = ctx.device.create_command_encoder(&Default::default());
-        for b in [&self.accum, &self.aov_albedo_depth, &self.aov_normal] {
+        for b in [
+            &self.accum,
+            &self.aov_albedo_depth,
+            &self.aov_normal,
+            &self.moments,
+        ] {
             encoder.clear_buffer(b, 0, None);
         }
         ctx.queue.submit([encoder.finish()]);
@@ -391,13 +422,101 @@ impl PathTracer {
             pass.dispatch_workgroups(self.width.div_ceil(8), self.height.div_ceil(8), 1);
         }
         self.samples += spp;
+        let denoise = tonemap && Self::shows_denoised(settings);
         if tonemap {
-            self.encode_tonemap(ctx, &mut encoder, settings);
+            self.encode_display(ctx, &mut encoder, settings);
         }
         if let Some(t) = &self.timestamps {
-            encoder.resolve_query_set(&t.set, 0..if tonemap { 4 } else { 2 }, &t.resolve, 0);
+            // Denoising only happens with the display transform: queries 0..6 are then all written.
+            let written = match (tonemap, denoise) {
+                (_, true) => 6,
+                (true, false) => 4,
+                (false, false) => 2,
+            };
+            encoder.resolve_query_set(&t.set, 0..written, &t.resolve, 0);
         }
+        self.denoised_last_dispatch = denoise;
         ctx.queue.submit([encoder.finish()]);
+    }
+
+    /// Whether the display shows the denoised image (colour view with the denoiser on).
+    fn shows_denoised(settings: &RenderSettings) -> bool {
+        settings.denoise && settings.view == AovView::Color
+    }
+
+    fn denoise_inputs(&self) -> DenoiseInputs<'_> {
+        DenoiseInputs {
+            accum: &self.accum,
+            albedo_depth: &self.aov_albedo_depth,
+            normal_hits: &self.aov_normal,
+            moments: &self.moments,
+            width: self.width,
+            height: self.height,
+        }
+    }
+
+    fn encode_denoise(
+        &self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        params: &DenoiseParams,
+    ) -> &wgpu::Buffer {
+        let timestamps = self
+            .timestamps
+            .as_ref()
+            .map(|t| wgpu::ComputePassTimestampWrites {
+                query_set: &t.set,
+                beginning_of_pass_write_index: Some(4),
+                end_of_pass_write_index: Some(5),
+            });
+        self.denoiser
+            .encode(ctx, encoder, &self.denoise_inputs(), params, timestamps)
+    }
+
+    /// The display transform, denoising first when the settings ask for it.
+    fn encode_display(
+        &self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        settings: &RenderSettings,
+    ) {
+        if !Self::shows_denoised(settings) {
+            self.encode_tonemap(ctx, encoder, settings, &self.tonemap_bind_group);
+            return;
+        }
+        let denoised = self.encode_denoise(ctx, encoder, &settings.denoise_params);
+        let group = self.denoised_tonemap_group.get_or_init(|| {
+            bind_group(
+                ctx,
+                &self.tonemap_layout,
+                &[
+                    denoised,
+                    &self.aov_albedo_depth,
+                    &self.aov_normal,
+                    &self.output_rgba8,
+                    &self.tonemap_uniform,
+                ],
+            )
+        });
+        self.encode_tonemap(ctx, encoder, settings, group);
+    }
+
+    /// Denoises the current accumulation (whatever `RenderSettings::denoise` says) and reads it back: linear
+    /// RGB per pixel, row-major from the top-left.
+    pub fn denoised_radiance(&self, ctx: &GpuContext, params: &DenoiseParams) -> Vec<[f32; 3]> {
+        let mut encoder = ctx.device.create_command_encoder(&Default::default());
+        let output = self.encode_denoise(ctx, &mut encoder, params);
+        ctx.queue.submit([encoder.finish()]);
+        let bytes = ctx.read_buffer(output, output.size());
+        bytemuck::cast_slice::<u8, [f32; 4]>(&bytes)
+            .iter()
+            .map(|p| [p[0], p[1], p[2]])
+            .collect()
+    }
+
+    /// GPU memory of the denoiser's buffers (0 until it first ran at this view size).
+    pub fn denoiser_memory_bytes(&self) -> u64 {
+        self.denoiser.memory_bytes()
     }
 
     fn encode_tonemap(
@@ -405,6 +524,7 @@ impl PathTracer {
         ctx: &GpuContext,
         encoder: &mut wgpu::CommandEncoder,
         settings: &RenderSettings,
+        group: &wgpu::BindGroup,
     ) {
         let params = TonemapParams {
             width: self.width,
@@ -429,26 +549,31 @@ impl PathTracer {
                 }),
         });
         pass.set_pipeline(&self.tonemap_pipeline);
-        pass.set_bind_group(0, &self.tonemap_bind_group, &[]);
+        pass.set_bind_group(0, group, &[]);
         pass.dispatch_workgroups(self.width.div_ceil(8), self.height.div_ceil(8), 1);
     }
 
-    /// Tone-maps the current accumulation into `output_rgba8`.
+    /// Tone-maps the current accumulation (denoised if the settings say so) into `output_rgba8`.
     pub fn tonemap(&self, ctx: &GpuContext, settings: &RenderSettings) {
         let mut encoder = ctx.device.create_command_encoder(&Default::default());
-        self.encode_tonemap(ctx, &mut encoder, settings);
+        self.encode_display(ctx, &mut encoder, settings);
         ctx.queue.submit([encoder.finish()]);
     }
 
     /// GPU times of the last dispatch (blocks until it finished); `None` without timestamp support.
     pub fn read_pass_times(&self, ctx: &GpuContext) -> Option<PassTimes> {
         let t = self.timestamps.as_ref()?;
-        let bytes = ctx.read_buffer(&t.resolve, 32);
+        let bytes = ctx.read_buffer(&t.resolve, 48);
         let ticks: &[u64] = bytemuck::cast_slice(&bytes);
         let ms = |a: u64, b: u64| b.saturating_sub(a) as f64 * t.period_ns as f64 * 1e-6;
         Some(PassTimes {
             trace_ms: ms(ticks[0], ticks[1]),
             tonemap_ms: ms(ticks[2], ticks[3]),
+            denoise_ms: if self.denoised_last_dispatch {
+                ms(ticks[4], ticks[5])
+            } else {
+                0.0
+            },
         })
     }
 

@@ -6,6 +6,7 @@ pub const BVH: &str = include_str!("../../../shaders/bvh.wgsl");
 pub const BRDF: &str = include_str!("../../../shaders/brdf.wgsl");
 pub const PATH_TRACE: &str = include_str!("../../../shaders/path_trace.wgsl");
 pub const TONEMAP: &str = include_str!("../../../shaders/tonemap.wgsl");
+pub const DENOISE: &str = include_str!("../../../shaders/denoise.wgsl");
 
 /// The path tracer module: shared declarations, traversal, BRDF, then the kernel.
 pub fn path_trace_source() -> String {
@@ -16,10 +17,15 @@ pub fn tonemap_source() -> String {
     TONEMAP.to_string()
 }
 
+pub fn denoise_source() -> String {
+    DENOISE.to_string()
+}
+
 /// Every compute module the renderer builds, by name, for validation.
 pub fn all_modules() -> Vec<(&'static str, String)> {
     vec![
         ("path_trace", path_trace_source()),
         ("tonemap", tonemap_source()),
+        ("denoise", denoise_source()),
     ]
 }
