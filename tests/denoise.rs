@@ -44,6 +44,22 @@ fn cornell(double_sided_light: bool) -> Arc<SceneAsset> {
     Arc::new(scene)
 }
 
+/// The box seen from the reference's camera, `size` pixels square.
+fn cornell_app(
+    ctx: raykin::gpu::GpuContext,
+    double_sided_light: bool,
+    size: u32,
+    seed: u32,
+) -> HeadlessApp {
+    HeadlessApp::new(
+        ctx,
+        cornell(double_sided_light),
+        cornell_settings(size, seed),
+        &cornell_camera(),
+    )
+    .expect("the Cornell box uploads")
+}
+
 /// Mitsuba 3 with the exact glTF BRDF, 131072 spp (tests/reference/cornell/).
 fn mitsuba_reference() -> Vec<[f32; 3]> {
     let dir = repo_root().join("tests/reference/cornell");
@@ -91,6 +107,35 @@ fn edge_contrast(img: &[[f32; 3]], pairs: &[(usize, usize)]) -> f64 {
         / pairs.len() as f64
 }
 
+struct EdgeImages<'a> {
+    reference: &'a [[f32; 3]],
+    noisy: &'a [[f32; 3]],
+    denoised: &'a [[f32; 3]],
+    size: u32,
+}
+
+/// The denoised contrast across `pairs` is within `bound` of the reference's, while a blind 5x5 blur of the
+/// noisy input loses at least 20% of it (the metric can see blur).
+fn assert_edges_kept(what: &str, pairs: &[(usize, usize)], images: &EdgeImages, bound: f64) {
+    let expected = edge_contrast(images.reference, pairs);
+    let ratio = |img: &[[f32; 3]]| edge_contrast(img, pairs) / expected;
+    let denoised = ratio(images.denoised);
+    let blurred = ratio(&box_blur(images.noisy, images.size));
+    eprintln!(
+        "{} {what} pairs: contrast / reference: denoised {denoised:.3}, noisy {:.3}, 5x5 blur {blurred:.3}",
+        pairs.len(),
+        ratio(images.noisy)
+    );
+    assert!(
+        (denoised - 1.0).abs() < bound,
+        "{what}s: denoised contrast is {denoised:.3} of the reference's"
+    );
+    assert!(
+        blurred < 0.8,
+        "control: a blind blur keeps {blurred:.3} of the {what} contrast; the metric cannot see blur"
+    );
+}
+
 /// Horizontally and vertically adjacent pixel pairs for which `is_edge` holds.
 fn adjacent_pairs(size: u32, mut is_edge: impl FnMut(usize, usize) -> bool) -> Vec<(usize, usize)> {
     let s = size as usize;
@@ -116,13 +161,7 @@ fn adjacent_pairs(size: u32, mut is_edge: impl FnMut(usize, usize) -> bool) -> V
 fn denoising_cuts_the_error_against_mitsuba_at_low_spp() {
     let (ctx, _gpu) = gpu();
     let reference = mitsuba_reference();
-    let mut app = HeadlessApp::new(
-        ctx,
-        cornell(true),
-        cornell_settings(CORNELL_SIZE, 11),
-        &cornell_camera(),
-    )
-    .expect("uploads");
+    let mut app = cornell_app(ctx, true, CORNELL_SIZE, 11);
     let mut done = 0;
     for (spp, min_factor) in [(1, 3.0), (4, 2.0)] {
         app.accumulate(spp - done, 64, |_| {});
@@ -225,13 +264,7 @@ fn flat_region_keeps_its_mean() {
 fn scene_energy_is_kept() {
     let (ctx, _gpu) = gpu();
     for (double_sided, bound) in [(false, 0.01), (true, 0.03)] {
-        let mut app = HeadlessApp::new(
-            ctx.clone(),
-            cornell(double_sided),
-            cornell_settings(CORNELL_SIZE, 5),
-            &cornell_camera(),
-        )
-        .expect("uploads");
+        let mut app = cornell_app(ctx.clone(), double_sided, CORNELL_SIZE, 5);
         app.accumulate(16, 64, |_| {});
         let (noisy, denoised) = (app.radiance(), app.denoised_radiance());
         let total = |img: &[[f32; 3]]| img.iter().map(|p| luminance(*p)).sum::<f64>();
@@ -348,23 +381,13 @@ fn texture_edges_stay_sharp() {
         on_plane(a) && on_plane(b) && la.max(lb) > 0.6 && la.min(lb) < 0.15
     });
     assert!(pairs.len() >= 40, "only {} checker-edge pairs", pairs.len());
-    let expected = edge_contrast(&reference, &pairs);
-    let ratio = |img: &[[f32; 3]]| edge_contrast(img, &pairs) / expected;
-    let (denoised_ratio, blurred_ratio) =
-        (ratio(&denoised), ratio(&box_blur(&noisy, CHECKER_SIZE)));
-    eprintln!(
-        "{} checker-edge pairs: contrast / reference: denoised {denoised_ratio:.3}, noisy {:.3}, 5x5 blur {blurred_ratio:.3}",
-        pairs.len(),
-        ratio(&noisy)
-    );
-    assert!(
-        (denoised_ratio - 1.0).abs() < 0.1,
-        "checker edges: denoised contrast is {denoised_ratio:.3} of the reference's"
-    );
-    assert!(
-        blurred_ratio < 0.8,
-        "control: a blind blur keeps {blurred_ratio:.3} of the contrast; the metric cannot see blur"
-    );
+    let images = EdgeImages {
+        reference: &reference,
+        noisy: &noisy,
+        denoised: &denoised,
+        size: CHECKER_SIZE,
+    };
+    assert_edges_kept("checker-edge", &pairs, &images, 0.1);
     let plane: Vec<usize> = (0..noisy.len()).filter(|&i| on_plane(i)).collect();
     let energy = |img: &[[f32; 3]]| plane.iter().map(|&i| luminance(img[i])).sum::<f64>();
     let kept = energy(&denoised) / energy(&noisy);
@@ -382,13 +405,7 @@ fn texture_edges_stay_sharp() {
 fn geometric_edges_stay_sharp() {
     let (ctx, _gpu) = gpu();
     let reference = mitsuba_reference();
-    let mut app = HeadlessApp::new(
-        ctx,
-        cornell(true),
-        cornell_settings(CORNELL_SIZE, 21),
-        &cornell_camera(),
-    )
-    .expect("uploads");
+    let mut app = cornell_app(ctx, true, CORNELL_SIZE, 21);
     app.accumulate(4, 64, |_| {});
     let (noisy, denoised, aovs) = (app.radiance(), app.denoised_radiance(), app.aovs());
     // The light's own outline is no geometric edge of the filter's (its emission is added back unfiltered),
@@ -424,69 +441,62 @@ fn geometric_edges_stay_sharp() {
         "only {} geometric-edge pairs",
         pairs.len()
     );
-    let expected = edge_contrast(&reference, &pairs);
-    let ratio = |img: &[[f32; 3]]| edge_contrast(img, &pairs) / expected;
-    let (denoised_ratio, blurred_ratio) =
-        (ratio(&denoised), ratio(&box_blur(&noisy, CORNELL_SIZE)));
-    eprintln!(
-        "{} geometric-edge pairs: contrast / reference: denoised {denoised_ratio:.3}, noisy {:.3}, 5x5 blur {blurred_ratio:.3}",
-        pairs.len(),
-        ratio(&noisy)
-    );
-    assert!(
-        (denoised_ratio - 1.0).abs() < 0.25,
-        "geometric edges: denoised contrast is {denoised_ratio:.3} of the reference's"
-    );
-    assert!(
-        blurred_ratio < 0.8,
-        "control: a blind blur keeps {blurred_ratio:.3} of the contrast; the metric cannot see blur"
-    );
+    let images = EdgeImages {
+        reference: &reference,
+        noisy: &noisy,
+        denoised: &denoised,
+        size: CORNELL_SIZE,
+    };
+    assert_edges_kept("geometric-edge", &pairs, &images, 0.25);
 }
 
-/// Writes accumulation buffers as if `samples` samples per pixel had been traced: mean radiance `radiance`,
-/// first-hit AOVs and per-sample luminance variance taken from the app's own accumulation.
+/// The path tracer's raw accumulation per pixel: radiance + count, albedo + depth, normal + hits, moments.
+type Accumulation = [Vec<[f32; 4]>; 4];
+
+fn read_accumulation(app: &HeadlessApp) -> Accumulation {
+    let t = &app.renderer().tracer;
+    [&t.accum, &t.aov_albedo_depth, &t.aov_normal, &t.moments]
+        .map(|b| bytemuck::cast_slice(&app.ctx.read_buffer(b, b.size())).to_vec())
+}
+
+fn write_accumulation(app: &HeadlessApp, data: &Accumulation) {
+    let t = &app.renderer().tracer;
+    for (buffer, values) in [&t.accum, &t.aov_albedo_depth, &t.aov_normal, &t.moments]
+        .into_iter()
+        .zip(data)
+    {
+        app.ctx
+            .queue
+            .write_buffer(buffer, 0, bytemuck::cast_slice::<[f32; 4], u8>(values));
+    }
+}
+
+/// Rewrites the accumulation as if `samples` samples per pixel had been traced, with mean radiance `radiance`
+/// (all of it scattered, so all of it is filtered), the app's first-hit AOVs and the given per-sample
+/// luminance variance.
 fn write_synthetic_accumulation(
     app: &HeadlessApp,
     radiance: &[[f32; 3]],
     samples: f32,
     per_sample_variance: &[f64],
 ) {
-    let tracer = &app.renderer().tracer;
-    let ctx = &app.ctx;
-    let read = |b: &wgpu::Buffer| -> Vec<[f32; 4]> {
-        bytemuck::cast_slice(&ctx.read_buffer(b, b.size())).to_vec()
-    };
-    let (accum, albedo_depth, normal) = (
-        read(&tracer.accum),
-        read(&tracer.aov_albedo_depth),
-        read(&tracer.aov_normal),
-    );
-    let (mut a, mut ad, mut nh, mut m) = (vec![], vec![], vec![], vec![]);
+    let [accum, albedo_depth, normal, _] = read_accumulation(app);
+    let mut synthetic: Accumulation = Default::default();
     for i in 0..radiance.len() {
-        let n = accum[i][3];
-        let scale = samples / n;
+        let scale = samples / accum[i][3];
         let r = radiance[i];
-        a.push([r[0] * samples, r[1] * samples, r[2] * samples, samples]);
-        ad.push(albedo_depth[i].map(|v| v * scale));
-        nh.push(normal[i].map(|v| v * scale));
-        // Everything counts as scattered: the whole image goes through the filter.
         let l = luminance(r);
-        m.push([
+        synthetic[0].push([r[0] * samples, r[1] * samples, r[2] * samples, samples]);
+        synthetic[1].push(albedo_depth[i].map(|v| v * scale));
+        synthetic[2].push(normal[i].map(|v| v * scale));
+        synthetic[3].push([
             0.0,
             0.0,
             0.0,
             ((l * l + per_sample_variance[i]) * samples as f64) as f32,
         ]);
     }
-    for (buffer, data) in [
-        (&tracer.accum, a),
-        (&tracer.aov_albedo_depth, ad),
-        (&tracer.aov_normal, nh),
-        (&tracer.moments, m),
-    ] {
-        ctx.queue
-            .write_buffer(buffer, 0, bytemuck::cast_slice::<[f32; 4], u8>(&data));
-    }
+    write_accumulation(app, &synthetic);
 }
 
 /// A converged input passes through nearly unchanged: Mitsuba's image, presented as 131072 spp with raykin's
@@ -497,13 +507,7 @@ fn write_synthetic_accumulation(
 fn converged_input_passes_through() {
     let (ctx, _gpu) = gpu();
     let reference = mitsuba_reference();
-    let mut app = HeadlessApp::new(
-        ctx,
-        cornell(true),
-        cornell_settings(CORNELL_SIZE, 31),
-        &cornell_camera(),
-    )
-    .expect("uploads");
+    let mut app = cornell_app(ctx, true, CORNELL_SIZE, 31);
     app.accumulate(16, 64, |_| {});
     // Capped at 1: emitters are exact in a real render (their emission bypasses the filter).
     let variance: Vec<f64> = reference
@@ -541,27 +545,12 @@ fn converged_input_passes_through() {
 fn extreme_inputs_stay_finite() {
     let (ctx, _gpu) = gpu();
     let size = 16;
-    let mut app = HeadlessApp::new(
-        ctx,
-        cornell(true),
-        cornell_settings(size, 41),
-        &cornell_camera(),
-    )
-    .expect("uploads");
+    let mut app = cornell_app(ctx, true, size, 41);
     app.accumulate(1, 1, |_| {});
     let real = app.denoised_radiance();
     assert_all_finite(&real, "denoised 1-spp render");
     app.accumulate(3, 64, |_| {});
-    let tracer = &app.renderer().tracer;
-    let read = |b: &wgpu::Buffer| -> Vec<[f32; 4]> {
-        bytemuck::cast_slice(&app.ctx.read_buffer(b, b.size())).to_vec()
-    };
-    let (mut accum, mut albedo, mut normal, mut moments) = (
-        read(&tracer.accum),
-        read(&tracer.aov_albedo_depth),
-        read(&tracer.aov_normal),
-        read(&tracer.moments),
-    );
+    let [mut accum, mut albedo, mut normal, mut moments] = read_accumulation(&app);
     let big = [1e6, 1e20, 1e30, f32::MAX, f32::INFINITY];
     for (k, i) in (0..accum.len()).step_by(7).enumerate() {
         let v = big[k % big.len()];
@@ -574,16 +563,7 @@ fn extreme_inputs_stay_finite() {
             normal[i] = [0.0, 0.0, 0.0, normal[i][3]];
         }
     }
-    for (buffer, data) in [
-        (&tracer.accum, accum),
-        (&tracer.aov_albedo_depth, albedo),
-        (&tracer.aov_normal, normal),
-        (&tracer.moments, moments),
-    ] {
-        app.ctx
-            .queue
-            .write_buffer(buffer, 0, bytemuck::cast_slice::<[f32; 4], u8>(&data));
-    }
+    write_accumulation(&app, &[accum, albedo, normal, moments]);
     let denoised = app.denoised_radiance();
     assert_all_finite(&denoised, "denoised fireflies");
     let negative = denoised.iter().flatten().filter(|v| **v < 0.0).count();
@@ -598,13 +578,7 @@ fn denoise_switch_never_touches_accumulation() {
     let (ctx, _gpu) = gpu();
     let size = 16;
     let new_app = || {
-        let mut app = HeadlessApp::new(
-            ctx.clone(),
-            cornell(true),
-            cornell_settings(size, 51),
-            &cornell_camera(),
-        )
-        .expect("uploads");
+        let mut app = cornell_app(ctx.clone(), true, size, 51);
         app.settings_mut().spp_per_frame = 2;
         // The viewer's path: denoise + tone map every frame, GPU timestamps read back.
         let mut renderer = app.app.world_mut().resource_mut::<Renderer>();
@@ -704,13 +678,7 @@ fn render_command_writes_the_denoised_image() {
     let (from_cli, plain) = (read(&denoised_exr), read(&plain_exr));
 
     let (ctx, _gpu) = gpu();
-    let mut app = HeadlessApp::new(
-        ctx,
-        cornell(true),
-        cornell_settings(16, 61),
-        &cornell_camera(),
-    )
-    .expect("uploads");
+    let mut app = cornell_app(ctx, true, 16, 61);
     app.accumulate(4, 16, |_| {});
     let expected = app.denoised_radiance();
     assert!(

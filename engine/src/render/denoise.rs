@@ -3,7 +3,7 @@
 //! own output buffer, so turning it on or off never restarts accumulation, and its buffers are allocated the
 //! first time it runs at a view size.
 
-use super::path_tracer::layout_entry;
+use super::path_tracer::{buffer_entries, layout_entry};
 use crate::gpu::GpuContext;
 use bytemuck::{Pod, Zeroable};
 use serde::{Deserialize, Serialize};
@@ -196,14 +196,7 @@ impl Denoiser {
                     write,
                     &output,
                 ];
-                let mut entries: Vec<wgpu::BindGroupEntry> = buffers
-                    .iter()
-                    .enumerate()
-                    .map(|(i, b)| wgpu::BindGroupEntry {
-                        binding: i as u32,
-                        resource: b.as_entire_binding(),
-                    })
-                    .collect();
+                let mut entries = buffer_entries(&buffers);
                 entries.push(wgpu::BindGroupEntry {
                     binding: 8,
                     resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
