@@ -162,8 +162,18 @@ fn power_heuristic(a: f32, b: f32) -> f32 {
     return a2 / (a2 + b * b);
 }
 
-// Direct light from one emissive triangle picked by power, weighted against BRDF sampling.
-fn sample_direct(s: Surface, v_local: vec3<f32>, frame_basis: mat3x3<f32>, rng: ptr<function, Rng>) -> vec3<f32> {
+// A light sample for next-event estimation: the shadow ray to test and what it adds when unblocked.
+struct LightSample {
+    ray: Ray,
+    t_max: f32,
+    // Unoccluded contribution (BRDF x cos x emission x MIS weight / pdf); zero when nothing to test.
+    contribution: vec3<f32>,
+}
+
+// Direct light from one emissive triangle picked by power, weighted against BRDF sampling. The shadow ray is
+// returned, not traced, so that the path loop traces every ray at one call site (smaller kernel).
+fn sample_light(s: Surface, v_local: vec3<f32>, frame_basis: mat3x3<f32>, rng: ptr<function, Rng>) -> LightSample {
+    var none = LightSample(Ray(vec3<f32>(0.0), vec3<f32>(0.0, 0.0, 1.0)), 0.0, vec3<f32>(0.0));
     let u = rand(rng);
     var lo = 0u;
     var hi = frame.emitter_count - 1u;
@@ -179,7 +189,7 @@ fn sample_direct(s: Surface, v_local: vec3<f32>, frame_basis: mat3x3<f32>, rng: 
     let point = p[0] * (1.0 - b1 - b2) + p[1] * b1 + p[2] * b2;
     let cross_p = cross(p[1] - p[0], p[2] - p[0]);
     let area = 0.5 * length(cross_p);
-    if area <= 0.0 { return vec3<f32>(0.0); }
+    if area <= 0.0 { return none; }
     let nl = cross_p / (2.0 * area);
     let m = materials[triangles[e.triangle].w];
     let origin = offset_ray_origin(s.p, s.ng);
@@ -189,16 +199,12 @@ fn sample_direct(s: Surface, v_local: vec3<f32>, frame_basis: mat3x3<f32>, rng: 
     let dir = to_light / dist;
     let cos_l_signed = -dot(nl, dir);
     let double_sided = (m.flags & MATERIAL_DOUBLE_SIDED) != 0u;
-    if cos_l_signed <= 0.0 && !double_sided { return vec3<f32>(0.0); }
+    if cos_l_signed <= 0.0 && !double_sided { return none; }
     let cos_l = abs(cos_l_signed);
-    if cos_l <= 1e-7 || dot(dir, s.ng) <= 0.0 { return vec3<f32>(0.0); }
+    if cos_l <= 1e-7 || dot(dir, s.ng) <= 0.0 { return none; }
     let l_local = dir * frame_basis;
     let f = brdf_eval(v_local, l_local, s.brdf);
-    if all(f == vec3<f32>(0.0)) { return vec3<f32>(0.0); }
-    // Shadow ray: stop just short of the light so it cannot hit the light itself.
-    rays_traced++;
-    let blocker = trace(Ray(origin, dir), dist * (1.0 - 1e-4), true);
-    if blocker.instance != NONE { return vec3<f32>(0.0); }
+    if all(f == vec3<f32>(0.0)) { return none; }
     var emission = m.emissive;
     if m.emissive_texture != NONE {
         let inst = instances[e.instance];
@@ -208,7 +214,8 @@ fn sample_direct(s: Surface, v_local: vec3<f32>, frame_basis: mat3x3<f32>, rng: 
     let power = luminance(m.emissive) * area;
     let pdf_light = (power / frame.emitter_total_power) / area * dist2 / cos_l;
     let pdf_brdf = brdf_pdf(v_local, l_local, s.brdf);
-    return f * l_local.z * emission * power_heuristic(pdf_light, pdf_brdf) / pdf_light;
+    // Stop the shadow ray just short of the light so it cannot hit the light itself.
+    return LightSample(Ray(origin, dir), dist * (1.0 - 1e-4), f * l_local.z * emission * power_heuristic(pdf_light, pdf_brdf) / pdf_light);
 }
 
 struct PathResult {
@@ -229,9 +236,25 @@ fn trace_path(camera_ray: Ray, forward: vec3<f32>, rng: ptr<function, Rng>) -> P
     var pass_throughs = 0u;
     var last_brdf_pdf = 0.0; // 0: camera ray, emission counts in full
     let nee = (frame.flags & FRAME_NEE) != 0u && frame.emitter_count > 0u;
+    // A shadow ray waiting to be traced before the next path ray, and whether the path goes on after it.
+    var shadow = LightSample(ray, 0.0, vec3<f32>(0.0));
+    var shadow_pending = false;
+    var path_alive = true;
     loop {
         rays_traced++;
-        let hit = trace(ray, MISS, false);
+        var next = ray;
+        var t_max = MISS;
+        if shadow_pending {
+            next = shadow.ray;
+            t_max = shadow.t_max;
+        }
+        let hit = trace(next, t_max, shadow_pending);
+        if shadow_pending {
+            if hit.instance == NONE { result.radiance += shadow.contribution; }
+            shadow_pending = false;
+            if path_alive { continue; }
+            break;
+        }
         if hit.instance == NONE {
             result.radiance += throughput * environment(ray.dir);
             if depth == 0u { result.unscattered += throughput * environment(ray.dir); }
@@ -263,21 +286,29 @@ fn trace_path(camera_ray: Ray, forward: vec3<f32>, rng: ptr<function, Rng>) -> P
         let tbn = basis(s.n);
         let v_local = -ray.dir * tbn;
         if nee {
-            result.radiance += throughput * sample_direct(s, v_local, tbn, rng);
+            shadow = sample_light(s, v_local, tbn, rng);
+            shadow.contribution *= throughput;
+            shadow_pending = any(shadow.contribution != vec3<f32>(0.0));
         }
         let bs = brdf_sample(v_local, s.brdf, vec3<f32>(rand(rng), rand(rng), rand(rng)));
         let dir = tbn * bs.l;
         // A direction above the shading normal's horizon but below the geometry's would leak light.
-        if bs.pdf <= 0.0 || dot(dir, s.ng) <= 0.0 { break; }
-        throughput *= bs.weight;
-        last_brdf_pdf = bs.pdf;
-        depth++;
-        if depth >= frame.rr_depth {
-            let survive = min(max(throughput.x, max(throughput.y, throughput.z)), 0.95);
-            if rand(rng) >= survive { break; }
-            throughput /= survive;
+        path_alive = bs.pdf > 0.0 && dot(dir, s.ng) > 0.0;
+        if path_alive {
+            throughput *= bs.weight;
+            last_brdf_pdf = bs.pdf;
+            depth++;
+            if depth >= frame.rr_depth {
+                let survive = min(max(throughput.x, max(throughput.y, throughput.z)), 0.95);
+                if rand(rng) >= survive {
+                    path_alive = false;
+                } else {
+                    throughput /= survive;
+                }
+            }
+            ray = Ray(offset_ray_origin(s.p, s.ng), dir);
         }
-        ray = Ray(offset_ray_origin(s.p, s.ng), dir);
+        if !path_alive && !shadow_pending { break; }
     }
     return result;
 }

@@ -508,7 +508,7 @@ fn converged_input_passes_through() {
     let (ctx, _gpu) = gpu();
     let reference = mitsuba_reference();
     let mut app = cornell_app(ctx, true, CORNELL_SIZE, 31);
-    app.accumulate(16, 64, |_| {});
+    app.accumulate(4, 64, |_| {});
     // Capped at 1: emitters are exact in a real render (their emission bypasses the filter).
     let variance: Vec<f64> = reference
         .iter()

@@ -132,6 +132,30 @@ impl HeadlessApp {
         }
     }
 
+    /// The shading-free ray-casting pass (camera rays, plus one diffuse bounce per hit when asked) on the
+    /// current pose and camera; `None` where the adapter has no timestamp queries.
+    pub fn cast_rays(&mut self, diffuse_bounce: bool) -> Option<crate::render::RayCastTiming> {
+        if self.renderer().frames == 0 {
+            // Instances and the top-level BVH are uploaded by the first frame.
+            self.step();
+        }
+        let world = self.app.world_mut();
+        let settings = world.resource::<RenderSettings>().clone();
+        let camera = *world.resource::<CameraView>();
+        let mut renderer = world.resource_mut::<Renderer>();
+        let renderer = &mut *renderer;
+        renderer
+            .tracer
+            .resize(&self.ctx, settings.width, settings.height);
+        renderer.tracer.cast_rays(
+            &self.ctx,
+            &renderer.scene,
+            &settings,
+            &camera,
+            diffuse_bounce,
+        )
+    }
+
     pub fn renderer(&self) -> &Renderer {
         self.app.world().resource::<Renderer>()
     }

@@ -23,6 +23,7 @@ const NAMED: &[(&str, &str)] = &[
 #[derive(serde::Serialize)]
 struct Row {
     scene: String,
+    static_bvh: String,
     triangles: usize,
     width: u32,
     height: u32,
@@ -38,6 +39,10 @@ struct Row {
     primary_rays_per_s: f64,
     all_rays_per_s: f64,
     rays_per_pixel_per_frame: f64,
+    /// Shading-free ray casting (`PathTracer::cast_rays`): camera rays per second, and diffuse bounce rays per
+    /// second (the extra rays over the extra time when one bounce is added); 0 without timestamps.
+    raycast_primary_rays_per_s: f64,
+    raycast_diffuse_rays_per_s: f64,
 }
 
 #[derive(serde::Serialize)]
@@ -92,6 +97,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
                 spp_per_frame: 1,
                 max_depth: args.max_depth,
                 environment: Environment::Sky,
+                static_bvh: args.static_bvh.into(),
                 ..Default::default()
             };
             let start = Instant::now();
@@ -121,11 +127,13 @@ pub fn run(args: &BenchArgs) -> Result<()> {
                 "cpu-wall"
             };
             times.sort_by(f64::total_cmp);
+            let (raycast_primary, raycast_diffuse) = raycast_rates(&mut app, frames.clamp(1, 50));
             let total_ms: f64 = times.iter().sum();
             let memory = app.renderer().scene.memory;
             let pixels = width as f64 * height as f64;
             let row = Row {
                 scene: path.display().to_string(),
+                static_bvh: format!("{:?}", args.static_bvh).to_lowercase(),
                 triangles: scene.triangle_count(),
                 width,
                 height,
@@ -142,10 +150,12 @@ pub fn run(args: &BenchArgs) -> Result<()> {
                 primary_rays_per_s: pixels * frames as f64 / (total_ms / 1e3),
                 all_rays_per_s: rays as f64 / (total_ms / 1e3),
                 rays_per_pixel_per_frame: rays as f64 / (pixels * frames as f64),
+                raycast_primary_rays_per_s: raycast_primary,
+                raycast_diffuse_rays_per_s: raycast_diffuse,
             };
             let _ = build_ms;
             eprintln!(
-                "{} {}x{}: {:.2} ms/frame median ({:.2} p99), {:.0} M primary rays/s, {:.0} M rays/s, BVH+upload {:.0} ms, {:.1} MiB geometry+BVH",
+                "{} {}x{}: {:.2} ms/frame median ({:.2} p99), {:.0} M primary rays/s, {:.0} M rays/s, BVH+upload {:.0} ms, {:.1} MiB geometry+BVH; ray casting without shading: {:.0} M camera rays/s, {:.0} M diffuse rays/s",
                 row.scene,
                 width,
                 height,
@@ -154,7 +164,9 @@ pub fn run(args: &BenchArgs) -> Result<()> {
                 row.primary_rays_per_s / 1e6,
                 row.all_rays_per_s / 1e6,
                 row.bvh_build_and_upload_ms,
-                row.gpu_memory_geometry_bvh_mib
+                row.gpu_memory_geometry_bvh_mib,
+                row.raycast_primary_rays_per_s / 1e6,
+                row.raycast_diffuse_rays_per_s / 1e6
             );
             rows.push(row);
         }
@@ -203,6 +215,30 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         args.out.display()
     );
     Ok(())
+}
+
+/// Median ray-casting rates over `reps` runs of each pass: (camera rays/s, diffuse bounce rays/s).
+fn raycast_rates(app: &mut HeadlessApp, reps: usize) -> (f64, f64) {
+    let mut runs = |diffuse| {
+        // Warm-up: the first call builds the pipeline.
+        app.cast_rays(diffuse);
+        let mut samples: Vec<(f64, u64)> = (0..reps)
+            .filter_map(|_| app.cast_rays(diffuse))
+            .map(|t| (t.gpu_ms, t.rays))
+            .collect();
+        samples.sort_by(|a, b| a.0.total_cmp(&b.0));
+        samples.get(samples.len() / 2).copied()
+    };
+    let (Some((t0, r0)), Some((t1, r1))) = (runs(false), runs(true)) else {
+        return (0.0, 0.0);
+    };
+    let primary = r0 as f64 / (t0 / 1e3);
+    let diffuse = if t1 > t0 {
+        (r1 - r0) as f64 / ((t1 - t0) / 1e3)
+    } else {
+        0.0
+    };
+    (primary, diffuse)
 }
 
 fn git_commit() -> Option<String> {

@@ -43,6 +43,9 @@ pub struct BenchArgs {
     /// Run the crowd scene (64 CesiumMan + 32 Fox, animated) through the frame loop instead of the static scenes.
     #[arg(long)]
     pub crowd: bool,
+    /// BVH layout of static meshes.
+    #[arg(long, value_enum, default_value_t = StaticBvh::Wide)]
+    pub static_bvh: StaticBvh,
     /// Override the suite's sizes with one size.
     #[arg(long)]
     pub width: Option<u32>,
@@ -106,6 +109,24 @@ pub struct SceneArgs {
     /// Denoise the image (edge-avoiding a-trous filter guided by normal, depth and albedo).
     #[arg(long)]
     pub denoise: bool,
+    /// BVH layout of static meshes: compressed 8-wide nodes, or the refittable BVH2 deformable meshes use.
+    #[arg(long, value_enum, default_value_t = StaticBvh::Wide)]
+    pub static_bvh: StaticBvh,
+}
+
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum StaticBvh {
+    Wide,
+    Binary,
+}
+
+impl From<StaticBvh> for raykin::bvh::StaticLayout {
+    fn from(v: StaticBvh) -> Self {
+        match v {
+            StaticBvh::Wide => Self::Wide,
+            StaticBvh::Binary => Self::Binary,
+        }
+    }
 }
 
 #[derive(Args, Debug)]

@@ -48,6 +48,7 @@ pub fn settings_from(args: &SceneArgs) -> RenderSettings {
         russian_roulette: !args.no_rr,
         nee: !args.no_nee,
         denoise: args.denoise,
+        static_bvh: args.static_bvh.into(),
         ..Default::default()
     }
 }
@@ -284,6 +285,7 @@ pub fn run_default() -> Result<()> {
         animation: None,
         spp_per_dispatch: 16,
         denoise: false,
+        static_bvh: crate::cli::StaticBvh::Wide,
     };
     let camera = CameraChoice::LookAt {
         eye: glam::Vec3::new(-278.0, 273.0, 800.0),

@@ -6,6 +6,9 @@
 //! [`MeshBvh::sah_cost`] against the cost at build time tells when a refit has degraded and a rebuild is due.
 
 pub mod refit;
+pub mod wide;
+
+pub use wide::WideBvh;
 
 use bytemuck::{Pod, Zeroable};
 use glam::{Vec3, Vec3A};
@@ -282,6 +285,74 @@ impl MeshBvh {
     /// Current SAH cost over the cost at build: 1 after a build, rising as a refit degrades the tree.
     pub fn sah_ratio(&self) -> f32 {
         self.flat.sah_cost() / self.build_sah.max(f32::MIN_POSITIVE)
+    }
+}
+
+/// How static meshes' BVHs are laid out on the GPU. Deformable meshes always get a refittable BVH2.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub enum StaticLayout {
+    /// Compressed 8-wide nodes ([`WideBvh`]): fewer, smaller node fetches per ray.
+    #[default]
+    Wide,
+    /// The child-pair BVH2 deformable meshes use ([`MeshBvh`]).
+    Binary,
+}
+
+/// One mesh's bottom-level BVH, in the layout it is traced in.
+#[derive(Clone, Debug)]
+pub enum Blas {
+    /// Child-pair BVH2: refit in place when the mesh deforms.
+    Binary(MeshBvh),
+    /// Compressed wide BVH of a static mesh.
+    Wide(WideBvh),
+}
+
+impl Blas {
+    /// Builds a static mesh's tree in `layout`, or a refittable one when the mesh deforms.
+    pub fn build(
+        positions: &[Vec3],
+        triangles: &[[u32; 3]],
+        quality: BvhQuality,
+        layout: StaticLayout,
+        deformable: bool,
+    ) -> Result<Self, BvhTooDeep> {
+        Ok(match (deformable, layout) {
+            (false, StaticLayout::Wide) => {
+                Self::Wide(WideBvh::build(positions, triangles, quality)?)
+            }
+            _ => Self::Binary(MeshBvh::build(positions, triangles, quality)?),
+        })
+    }
+
+    /// Slot `i` of the mesh's GPU triangle range holds original triangle `order()[i]`.
+    pub fn order(&self) -> &[u32] {
+        match self {
+            Self::Binary(b) => &b.flat.order,
+            Self::Wide(w) => &w.order,
+        }
+    }
+
+    /// Object-space box of the mesh as the tree currently bounds it.
+    pub fn root_bounds(&self) -> (Vec3, Vec3) {
+        match self {
+            Self::Binary(b) => b.flat.root_bounds(),
+            Self::Wide(w) => w.bounds,
+        }
+    }
+
+    /// The refittable tree, for meshes that have one.
+    pub fn binary(&self) -> Option<&MeshBvh> {
+        match self {
+            Self::Binary(b) => Some(b),
+            Self::Wide(_) => None,
+        }
+    }
+
+    pub fn binary_mut(&mut self) -> Option<&mut MeshBvh> {
+        match self {
+            Self::Binary(b) => Some(b),
+            Self::Wide(_) => None,
+        }
     }
 }
 

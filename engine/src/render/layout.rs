@@ -14,6 +14,9 @@ pub const MATERIAL_ALPHA_BLEND: u32 = 4;
 
 pub const TEXTURE_NEAREST: u32 = 1 << 4;
 
+/// Set in `GpuMesh::blas_root` when the root indexes the compressed wide node buffer.
+pub const WIDE_BLAS: u32 = 1 << 31;
+
 /// An object-to-world placement of a mesh (rows of 3x4 matrices).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]

@@ -8,12 +8,13 @@ pub mod settings;
 pub mod shaders;
 
 pub use denoise::{DenoiseParams, Denoiser};
-pub use path_tracer::{Aovs, PassTimes, PathTracer};
+pub use path_tracer::{Aovs, PassTimes, PathTracer, RayCastTiming};
 pub use scene_buffers::{GpuMemory, GpuScene, InstanceInput, UploadError};
 pub use settings::{AovView, Environment, RenderSettings, Tonemapper};
 
 use crate::FrameSet;
 use crate::animation::DeformedMeshes;
+use crate::bvh::MeshBvh;
 use crate::bvh::refit::BvhStats;
 use crate::camera::CameraView;
 use crate::gpu::GpuContext;
@@ -48,7 +49,13 @@ impl Renderer {
         settings: &RenderSettings,
         binding_limit: Option<u64>,
     ) -> Result<(Self, Vec<String>), UploadError> {
-        let (gpu_scene, notes) = GpuScene::new(ctx, scene, settings.bvh_quality, binding_limit)?;
+        let (gpu_scene, notes) = GpuScene::new(
+            ctx,
+            scene,
+            settings.bvh_quality,
+            settings.static_bvh,
+            binding_limit,
+        )?;
         let tracer = PathTracer::new(ctx, settings.width, settings.height);
         Ok((
             Self {
@@ -135,7 +142,10 @@ pub fn refit_deformed(
             .rebuild_mesh(&ctx, scene, m, settings.bvh_quality)
         {
             Ok(()) => {
-                stats.sah_ratio[m] = renderer.scene.mesh_slots[m].bvh.sah_ratio();
+                stats.sah_ratio[m] = renderer.scene.mesh_slots[m]
+                    .blas
+                    .binary()
+                    .map_or(1.0, MeshBvh::sah_ratio);
                 stats.mesh_rebuilds[m] += 1;
                 stats.rebuilds += 1;
                 renderer.geometry_changed = true;

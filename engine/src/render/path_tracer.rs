@@ -38,8 +38,24 @@ pub struct PassTimes {
     pub denoise_ms: f64,
 }
 
+/// Camera rays, and optionally one diffuse bounce ray per hit, cast without shading.
+#[derive(Clone, Copy, Debug, Default, serde::Serialize)]
+pub struct RayCastTiming {
+    /// GPU time of the pass, from timestamp queries.
+    pub gpu_ms: f64,
+    pub rays: u64,
+}
+
+/// The ray-casting benchmark pass, built on first use.
+struct RayCaster {
+    pipeline: wgpu::ComputePipeline,
+    layout: wgpu::BindGroupLayout,
+    output: Option<(u64, wgpu::Buffer)>,
+}
+
 pub struct PathTracer {
     trace_pipeline: wgpu::ComputePipeline,
+    raycaster: Option<RayCaster>,
     tonemap_pipeline: wgpu::ComputePipeline,
     scene_layout: wgpu::BindGroupLayout,
     accum_layout: wgpu::BindGroupLayout,
@@ -152,7 +168,7 @@ impl PathTracer {
         let device = &ctx.device;
         let scene_entries: Vec<_> = (0..10)
             .map(|b| layout_entry(b, true))
-            .chain([uniform_entry(10)])
+            .chain([uniform_entry(10), layout_entry(11, true)])
             .collect();
         let scene_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("scene"),
@@ -260,6 +276,7 @@ impl PathTracer {
         });
         let mut tracer = Self {
             trace_pipeline,
+            raycaster: None,
             tonemap_pipeline,
             scene_layout,
             accum_layout,
@@ -363,6 +380,7 @@ impl PathTracer {
                 &scene.texture_infos,
                 &scene.emitters,
                 &self.frame_uniform,
+                &scene.wide_nodes,
             ],
         );
         self.scene_bind_group = Some((scene.generation, group.clone()));
@@ -379,46 +397,14 @@ impl PathTracer {
         spp: u32,
         tonemap: bool,
     ) {
-        let (env_mode, env_color) = match settings.environment {
-            Environment::Constant(c) => (0, c),
-            Environment::Sky => (1, [0.0; 3]),
-        };
-        let frame = GpuFrame {
-            world_from_camera: camera.world_from_camera.to_cols_array_2d(),
-            env_color,
-            tan_half_fov: (camera.yfov * 0.5).tan(),
-            width: self.width,
-            height: self.height,
-            sample_base: self.samples,
-            spp,
-            max_depth: settings.max_depth,
-            seed: settings.seed,
-            env_mode,
-            rr_depth: if settings.russian_roulette {
-                settings.rr_depth
-            } else {
-                u32::MAX
-            },
-            emitter_count: scene.emitter_count,
-            flags: if settings.nee { FRAME_NEE } else { 0 },
-            emitter_total_power: scene.emitter_total_power,
-            _pad: 0,
-        };
-        ctx.queue
-            .write_buffer(&self.frame_uniform, 0, bytemuck::bytes_of(&frame));
+        self.write_frame(ctx, scene, settings, camera, spp, settings.max_depth);
         let scene_group = self.scene_bind_group(ctx, scene);
         let mut encoder = ctx.device.create_command_encoder(&Default::default());
         encoder.clear_buffer(&self.ray_counter, 0, None);
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("path trace"),
-                timestamp_writes: self.timestamps.as_ref().map(|t| {
-                    wgpu::ComputePassTimestampWrites {
-                        query_set: &t.set,
-                        beginning_of_pass_write_index: Some(0),
-                        end_of_pass_write_index: Some(1),
-                    }
-                }),
+                timestamp_writes: self.trace_timestamps(),
             });
             pass.set_pipeline(&self.trace_pipeline);
             pass.set_bind_group(0, &scene_group, &[]);
@@ -521,6 +507,137 @@ impl PathTracer {
     /// GPU memory of the denoiser's buffers (0 until it first ran at this view size).
     pub fn denoiser_memory_bytes(&self) -> u64 {
         self.denoiser.memory_bytes()
+    }
+
+    fn trace_timestamps(&self) -> Option<wgpu::ComputePassTimestampWrites<'_>> {
+        self.timestamps
+            .as_ref()
+            .map(|t| wgpu::ComputePassTimestampWrites {
+                query_set: &t.set,
+                beginning_of_pass_write_index: Some(0),
+                end_of_pass_write_index: Some(1),
+            })
+    }
+
+    /// Casts one camera ray per pixel centre and, with `diffuse_bounce`, one cosine-distributed ray from each
+    /// hit, without shading: the traversal throughput the speed targets count. Blocks for the result; `None`
+    /// without timestamp queries. Leaves the accumulation untouched.
+    pub fn cast_rays(
+        &mut self,
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        settings: &RenderSettings,
+        camera: &CameraView,
+        diffuse_bounce: bool,
+    ) -> Option<RayCastTiming> {
+        self.timestamps.as_ref()?;
+        let pixels = self.width as u64 * self.height as u64;
+        let caster = self.raycaster.get_or_insert_with(|| {
+            let device = &ctx.device;
+            let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("raycast output"),
+                entries: &[layout_entry(0, false), layout_entry(1, false)],
+            });
+            let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some("raycast"),
+                source: wgpu::ShaderSource::Wgsl(super::shaders::raycast_source().into()),
+            });
+            let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("raycast"),
+                bind_group_layouts: &[Some(&self.scene_layout), Some(&layout)],
+                immediate_size: 0,
+            });
+            let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some("raycast"),
+                layout: Some(&pipeline_layout),
+                module: &module,
+                entry_point: Some("cast_rays"),
+                compilation_options: Default::default(),
+                cache: None,
+            });
+            RayCaster {
+                pipeline,
+                layout,
+                output: None,
+            }
+        });
+        if caster.output.as_ref().is_none_or(|(n, _)| *n != pixels) {
+            let buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("raycast distances"),
+                size: pixels.max(1) * 4,
+                usage: wgpu::BufferUsages::STORAGE,
+                mapped_at_creation: false,
+            });
+            caster.output = Some((pixels, buffer));
+        }
+        let output_group = {
+            let caster = self.raycaster.as_ref().expect("created above");
+            let (_, output) = caster.output.as_ref().expect("created above");
+            bind_group(ctx, &caster.layout, &[output, &self.ray_counter])
+        };
+        self.write_frame(ctx, scene, settings, camera, 1, u32::from(diffuse_bounce));
+        let scene_group = self.scene_bind_group(ctx, scene);
+        let mut encoder = ctx.device.create_command_encoder(&Default::default());
+        encoder.clear_buffer(&self.ray_counter, 0, None);
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("raycast"),
+                timestamp_writes: self.trace_timestamps(),
+            });
+            let caster = self.raycaster.as_ref().expect("created above");
+            pass.set_pipeline(&caster.pipeline);
+            pass.set_bind_group(0, &scene_group, &[]);
+            pass.set_bind_group(1, &output_group, &[]);
+            pass.dispatch_workgroups(self.width.div_ceil(8), self.height.div_ceil(8), 1);
+        }
+        if let Some(t) = &self.timestamps {
+            encoder.resolve_query_set(&t.set, 0..2, &t.resolve, 0);
+        }
+        self.denoised_last_dispatch = false;
+        ctx.queue.submit([encoder.finish()]);
+        let gpu_ms = self.read_pass_times(ctx)?.trace_ms;
+        Some(RayCastTiming {
+            gpu_ms,
+            rays: self.read_ray_count(ctx),
+        })
+    }
+
+    fn write_frame(
+        &self,
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        settings: &RenderSettings,
+        camera: &CameraView,
+        spp: u32,
+        max_depth: u32,
+    ) {
+        let (env_mode, env_color) = match settings.environment {
+            Environment::Constant(c) => (0, c),
+            Environment::Sky => (1, [0.0; 3]),
+        };
+        let frame = GpuFrame {
+            world_from_camera: camera.world_from_camera.to_cols_array_2d(),
+            env_color,
+            tan_half_fov: (camera.yfov * 0.5).tan(),
+            width: self.width,
+            height: self.height,
+            sample_base: self.samples,
+            spp,
+            max_depth,
+            seed: settings.seed,
+            env_mode,
+            rr_depth: if settings.russian_roulette {
+                settings.rr_depth
+            } else {
+                u32::MAX
+            },
+            emitter_count: scene.emitter_count,
+            flags: if settings.nee { FRAME_NEE } else { 0 },
+            emitter_total_power: scene.emitter_total_power,
+            _pad: 0,
+        };
+        ctx.queue
+            .write_buffer(&self.frame_uniform, 0, bytemuck::bytes_of(&frame));
     }
 
     fn encode_tonemap(

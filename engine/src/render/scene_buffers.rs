@@ -3,7 +3,7 @@
 //! a deformed mesh rewrites only its own positions/normals and BLAS nodes.
 
 use super::layout::*;
-use crate::bvh::{FlatBvh, MeshBvh};
+use crate::bvh::{Blas, FlatBvh, MeshBvh, StaticLayout};
 use crate::gpu::GpuContext;
 use crate::scene::{AlphaMode, MeshData, SceneAsset, Wrap};
 use glam::{Mat4, Vec3};
@@ -37,7 +37,7 @@ pub struct MeshSlot {
     /// Triangles in BVH order (vertex indices).
     pub gpu_triangles: Vec<[u32; 3]>,
     pub blas_node_offset: u32,
-    pub bvh: MeshBvh,
+    pub blas: Blas,
     /// Current vertex positions of a deformed mesh; `None` while it is in its rest pose.
     pub positions: Option<Vec<Vec3>>,
     /// BLAS nodes reserved for this mesh (a deformable mesh reserves room for any rebuilt tree).
@@ -47,6 +47,7 @@ pub struct MeshSlot {
 /// Byte counts of what the scene occupies on the GPU.
 #[derive(Clone, Copy, Debug, Default, serde::Serialize)]
 pub struct GpuMemory {
+    /// Child-pair BVH2 nodes and compressed wide nodes together.
     pub blas_nodes: u64,
     pub triangles: u64,
     pub vertex_pool: u64,
@@ -67,6 +68,8 @@ impl GpuMemory {
 
 pub struct GpuScene {
     pub blas_nodes: wgpu::Buffer,
+    /// Compressed wide nodes of static meshes (`GpuMesh::blas_root` has [`WIDE_BLAS`] set).
+    pub wide_nodes: wgpu::Buffer,
     pub triangles: wgpu::Buffer,
     pub vertex_pool: wgpu::Buffer,
     pub materials: wgpu::Buffer,
@@ -96,12 +99,14 @@ pub struct InstanceInput {
 }
 
 fn storage(ctx: &GpuContext, label: &str, bytes: &[u8]) -> wgpu::Buffer {
-    // wgpu rejects empty bindings: keep at least 16 bytes.
+    // wgpu rejects empty bindings and ones smaller than one element: keep at least the largest element
+    // (an instance, 112 bytes).
+    const MIN_BYTES: usize = 128;
     let padded;
-    let contents = if bytes.len() < 16 {
+    let contents = if bytes.len() < MIN_BYTES {
         padded = {
             let mut v = bytes.to_vec();
-            v.resize(16, 0);
+            v.resize(MIN_BYTES, 0);
             v
         };
         &padded[..]
@@ -253,6 +258,7 @@ impl GpuScene {
         ctx: &GpuContext,
         scene: &SceneAsset,
         quality: crate::bvh::BvhQuality,
+        layout: StaticLayout,
         binding_limit: Option<u64>,
     ) -> Result<(Self, Vec<String>), UploadError> {
         let start = std::time::Instant::now();
@@ -275,6 +281,7 @@ impl GpuScene {
 
         let mut pool = Vec::new();
         let mut blas_nodes = Vec::new();
+        let mut wide_nodes: Vec<obvhs::cwbvh::node::CwBvhNode> = Vec::new();
         let mut triangles: Vec<[u32; 4]> = Vec::new();
         let mut slots = Vec::with_capacity(scene.meshes.len());
         let mut emissive_triangles = Vec::with_capacity(scene.meshes.len());
@@ -284,40 +291,71 @@ impl GpuScene {
             .chain(std::iter::once(&crate::scene::Material::default()))
             .map(gpu_material)
             .collect();
-        for mesh in &scene.meshes {
-            let bvh =
-                MeshBvh::build(&mesh.positions, &mesh.triangles, quality).map_err(|source| {
-                    UploadError::Bvh {
-                        scene: scene.source.clone(),
-                        mesh: mesh.name.clone(),
-                        source,
-                    }
-                })?;
+        // Meshes build their trees in parallel (obvhs also parallelises within one large mesh).
+        let blases: Vec<Blas> = scene
+            .meshes
+            .par_iter()
+            .map(|mesh| {
+                Blas::build(
+                    &mesh.positions,
+                    &mesh.triangles,
+                    quality,
+                    layout,
+                    mesh.is_deformable(),
+                )
+                .map_err(|source| UploadError::Bvh {
+                    scene: scene.source.clone(),
+                    mesh: mesh.name.clone(),
+                    source,
+                })
+            })
+            .collect::<Result<_, _>>()?;
+        for (mesh, blas) in scene.meshes.iter().zip(blases) {
             let mut gpu = pack_vertices(mesh, &mut pool);
-            gpu.blas_root = blas_nodes.len() as u32;
             gpu.triangle_offset = triangles.len() as u32;
-            let ordered = order_triangles(mesh, &bvh, gpu.triangle_offset, &materials);
+            let ordered = order_triangles(mesh, blas.order(), gpu.triangle_offset, &materials);
             triangles.extend_from_slice(&ordered.packed);
             let (gpu_triangles, emissive) = (ordered.indices, ordered.emissive);
             emissive_triangles.push(emissive);
-            blas_nodes.extend_from_slice(&bvh.flat.nodes);
-            // Deformable meshes reserve the largest tree a rebuild can produce, so it rewrites in place.
-            if mesh.is_deformable() {
-                let capacity = crate::bvh::refit::node_capacity(mesh.triangles.len())
-                    .max(bvh.flat.nodes.len());
-                blas_nodes.resize(
-                    gpu.blas_root as usize + capacity,
-                    crate::bvh::GpuBvhNode::EMPTY,
-                );
+            match &blas {
+                Blas::Wide(wide) => {
+                    gpu.blas_root = wide_nodes.len() as u32 | WIDE_BLAS;
+                    wide_nodes.extend_from_slice(&wide.nodes);
+                }
+                Blas::Binary(bvh) => {
+                    gpu.blas_root = blas_nodes.len() as u32;
+                    blas_nodes.extend_from_slice(&bvh.flat.nodes);
+                    // Deformable meshes reserve the largest tree a rebuild can produce, so it rewrites in place.
+                    if mesh.is_deformable() {
+                        let capacity = crate::bvh::refit::node_capacity(mesh.triangles.len())
+                            .max(bvh.flat.nodes.len());
+                        blas_nodes.resize(
+                            gpu.blas_root as usize + capacity,
+                            crate::bvh::GpuBvhNode::EMPTY,
+                        );
+                    }
+                }
             }
-            let blas_capacity = (blas_nodes.len() - gpu.blas_root as usize) as u32;
+            let blas_capacity = match &blas {
+                Blas::Wide(w) => w.nodes.len() as u32,
+                Blas::Binary(_) => (blas_nodes.len() - gpu.blas_root as usize) as u32,
+            };
             slots.push(MeshSlot {
                 gpu,
                 gpu_triangles,
                 blas_node_offset: gpu.blas_root,
-                bvh,
+                blas,
                 positions: None,
                 blas_capacity,
+            });
+        }
+        if wide_nodes.len() as u32 >= WIDE_BLAS {
+            return Err(UploadError::OverLimit {
+                scene: scene.source.clone(),
+                what: "wide BVH node",
+                needed_mib: (wide_nodes.len() * 80) as f64 / 1048576.0,
+                limit_mib: (WIDE_BLAS as usize * 80) as f64 / 1048576.0,
+                adapter: ctx.info.name.clone(),
             });
         }
 
@@ -357,12 +395,13 @@ impl GpuScene {
 
         let meshes: Vec<GpuMesh> = slots.iter().map(|s| s.gpu).collect();
         check("BLAS node", (blas_nodes.len() * 64) as u64)?;
+        check("wide BLAS node", (wide_nodes.len() * 80) as u64)?;
         check("triangle", (triangles.len() * 16) as u64)?;
         check("vertex", (pool.len() * 4) as u64)?;
         check("texel", (texels.len() * 4) as u64)?;
 
         let memory = GpuMemory {
-            blas_nodes: (blas_nodes.len() * 64) as u64,
+            blas_nodes: (blas_nodes.len() * 64 + wide_nodes.len() * 80) as u64,
             triangles: (triangles.len() * 16) as u64,
             vertex_pool: (pool.len() * 4) as u64,
             materials: (materials.len() * 64 + texture_infos.len() * 16) as u64,
@@ -371,6 +410,7 @@ impl GpuScene {
         };
         let gpu_scene = Self {
             blas_nodes: storage(ctx, "blas nodes", bytemuck::cast_slice(&blas_nodes)),
+            wide_nodes: storage(ctx, "wide blas nodes", bytemuck::cast_slice(&wide_nodes)),
             triangles: storage(ctx, "triangles", bytemuck::cast_slice(&triangles)),
             vertex_pool: storage(ctx, "vertex pool", bytemuck::cast_slice(&pool)),
             materials: storage(ctx, "materials", bytemuck::cast_slice(&materials)),
@@ -446,11 +486,12 @@ impl GpuScene {
                         .collect();
                     words.push((gpu.tangent_offset, tangent_words));
                 }
-                let sah_ratio = crate::bvh::refit::refit_and_measure(
-                    &mut slot.bvh,
-                    &d.positions,
-                    &slot.gpu_triangles,
-                );
+                let bvh = slot
+                    .blas
+                    .binary_mut()
+                    .expect("deformable meshes have a refittable BVH");
+                let sah_ratio =
+                    crate::bvh::refit::refit_and_measure(bvh, &d.positions, &slot.gpu_triangles);
                 slot.positions = Some(d.positions.clone());
                 Update {
                     mesh: m,
@@ -470,11 +511,13 @@ impl GpuScene {
                     );
                 }
                 let slot = &self.mesh_slots[u.mesh];
-                ctx.queue.write_buffer(
-                    &self.blas_nodes,
-                    slot.gpu.blas_root as u64 * 64,
-                    bytemuck::cast_slice(&slot.bvh.flat.nodes),
-                );
+                if let Some(bvh) = slot.blas.binary() {
+                    ctx.queue.write_buffer(
+                        &self.blas_nodes,
+                        slot.gpu.blas_root as u64 * 64,
+                        bytemuck::cast_slice(&bvh.flat.nodes),
+                    );
+                }
                 (u.mesh, u.sah_ratio)
             })
             .collect()
@@ -505,7 +548,12 @@ impl GpuScene {
         }
         let mut nodes = bvh.flat.nodes.clone();
         nodes.resize(slot.blas_capacity as usize, crate::bvh::GpuBvhNode::EMPTY);
-        let ordered = order_triangles(data, &bvh, slot.gpu.triangle_offset, &self.material_data);
+        let ordered = order_triangles(
+            data,
+            &bvh.flat.order,
+            slot.gpu.triangle_offset,
+            &self.material_data,
+        );
         ctx.queue.write_buffer(
             &self.blas_nodes,
             slot.gpu.blas_root as u64 * 64,
@@ -519,7 +567,7 @@ impl GpuScene {
         self.emissive_triangles[mesh] = ordered.emissive;
         let slot = &mut self.mesh_slots[mesh];
         slot.gpu_triangles = ordered.indices;
-        slot.bvh = bvh;
+        slot.blas = Blas::Binary(bvh);
         Ok(())
     }
 
@@ -533,7 +581,7 @@ impl GpuScene {
         let boxes: Vec<(Vec3, Vec3)> = inputs
             .iter()
             .map(|i| {
-                let (lo, hi) = self.mesh_slots[i.mesh as usize].bvh.flat.root_bounds();
+                let (lo, hi) = self.mesh_slots[i.mesh as usize].blas.root_bounds();
                 transform_box(i.world, lo, hi)
             })
             .collect();
@@ -638,14 +686,14 @@ struct OrderedTriangles {
 
 fn order_triangles(
     mesh: &MeshData,
-    bvh: &MeshBvh,
+    order: &[u32],
     triangle_offset: u32,
     materials: &[GpuMaterial],
 ) -> OrderedTriangles {
-    let indices = bvh.ordered_triangles(&mesh.triangles);
+    let indices: Vec<[u32; 3]> = order.iter().map(|&t| mesh.triangles[t as usize]).collect();
     let mut packed = Vec::with_capacity(indices.len());
     let mut emissive = Vec::new();
-    for (slot, (&t, [a, b, c])) in bvh.flat.order.iter().zip(&indices).enumerate() {
+    for (slot, (&t, [a, b, c])) in order.iter().zip(&indices).enumerate() {
         let material = mesh.triangle_materials[t as usize];
         packed.push([*a, *b, *c, material]);
         if luminance(Vec3::from(materials[material as usize].emissive)) > 0.0 {

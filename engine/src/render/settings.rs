@@ -56,6 +56,8 @@ pub struct RenderSettings {
     pub denoise: bool,
     #[serde(default)]
     pub denoise_params: super::denoise::DenoiseParams,
+    /// BVH layout of static meshes (deformable meshes always refit a BVH2).
+    pub static_bvh: crate::bvh::StaticLayout,
 }
 
 impl Default for RenderSettings {
@@ -77,6 +79,7 @@ impl Default for RenderSettings {
             bvh_quality: crate::bvh::BvhQuality::Medium,
             denoise: false,
             denoise_params: Default::default(),
+            static_bvh: crate::bvh::StaticLayout::Wide,
         }
     }
 }

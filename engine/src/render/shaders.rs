@@ -7,18 +7,52 @@ pub const BRDF: &str = include_str!("../../../shaders/brdf.wgsl");
 pub const PATH_TRACE: &str = include_str!("../../../shaders/path_trace.wgsl");
 pub const TONEMAP: &str = include_str!("../../../shaders/tonemap.wgsl");
 pub const DENOISE: &str = include_str!("../../../shaders/denoise.wgsl");
+pub const RAYCAST: &str = include_str!("../../../shaders/raycast.wgsl");
 
 /// The path tracer module: shared declarations, traversal, BRDF, then the kernel.
 pub fn path_trace_source() -> String {
-    [COMMON, BVH, BRDF, PATH_TRACE].join("\n")
+    [
+        file("common.wgsl", COMMON),
+        file("bvh.wgsl", BVH),
+        file("brdf.wgsl", BRDF),
+        file("path_trace.wgsl", PATH_TRACE),
+    ]
+    .join("\n")
+}
+
+/// The shading-free ray-casting benchmark kernel: the path tracer's scene bindings and traversal.
+pub fn raycast_source() -> String {
+    [
+        file("common.wgsl", COMMON),
+        file("bvh.wgsl", BVH),
+        file("brdf.wgsl", BRDF),
+        file("raycast.wgsl", RAYCAST),
+    ]
+    .join("\n")
 }
 
 pub fn tonemap_source() -> String {
-    TONEMAP.to_string()
+    file("tonemap.wgsl", TONEMAP)
+}
+
+/// Kernel development: with `RAYKIN_SHADER_DIR` set, WGSL files found in that folder replace the built-in
+/// copies (edit a kernel and rerun without rebuilding; A/B variants in one GPU session). Unset in normal use.
+fn file(name: &str, built_in: &str) -> String {
+    let Some(dir) = std::env::var_os("RAYKIN_SHADER_DIR") else {
+        return built_in.to_string();
+    };
+    let path = std::path::Path::new(&dir).join(name);
+    match std::fs::read_to_string(&path) {
+        Ok(text) => {
+            tracing::warn!("shader {name} read from {}", path.display());
+            text
+        }
+        Err(_) => built_in.to_string(),
+    }
 }
 
 pub fn denoise_source() -> String {
-    DENOISE.to_string()
+    file("denoise.wgsl", DENOISE)
 }
 
 /// Every compute module the renderer builds, by name, for validation.
@@ -27,5 +61,6 @@ pub fn all_modules() -> Vec<(&'static str, String)> {
         ("path_trace", path_trace_source()),
         ("tonemap", tonemap_source()),
         ("denoise", denoise_source()),
+        ("raycast", raycast_source()),
     ]
 }
