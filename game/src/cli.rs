@@ -24,29 +24,38 @@ pub enum Command {
 
 #[derive(Args, Debug)]
 pub struct BenchArgs {
-    /// Scene files or named bench scenes (cornell, flight-helmet, spheres); default: all named scenes.
+    /// Named bench scenes (cornell, flight-helmet, spheres, crowd: fixed cameras) or glTF files (automatic
+    /// camera); repeatable. Default: the suite's scenes.
     #[arg(long)]
     pub scene: Vec<String>,
-    /// quick (tiny, CI) or full (1920x1080 and 2560x1440, 300 frames).
+    /// quick (tiny sizes, CI) or full (1920x1080 and 2560x1440 on a GPU; scaled down on a CPU adapter).
     #[arg(long, default_value = "quick")]
     pub suite: String,
     /// Folder of the shared glTF assets the named scenes come from.
     #[arg(long, default_value = "../shared/assets")]
     pub assets: PathBuf,
+    /// Output folder: results.json, results.csv, curves.csv, summary.md, charts/*.png.
     #[arg(long, default_value = "bench-out")]
     pub out: PathBuf,
-    /// Override the suite's frame count.
+    /// Folder of cached high-spp reference images (keyed by a hash of scene, camera, settings, size, spp
+    /// and kernel source).
+    #[arg(long, default_value = "bench-cache")]
+    pub cache: PathBuf,
+    /// Run only these parts: frames, errors, bvh, refit, scaling (repeatable; default all).
+    #[arg(long)]
+    pub parts: Vec<String>,
+    /// Override the suite's measured frame count (frame loop).
     #[arg(long)]
     pub frames: Option<usize>,
     #[arg(long, default_value_t = 6)]
     pub max_depth: u32,
-    /// Run the crowd scene (64 CesiumMan + 32 Fox, animated) through the frame loop instead of the static scenes.
+    /// Shorthand for --scene crowd (64 CesiumMan + 32 Fox, animated, through the frame loop).
     #[arg(long)]
     pub crowd: bool,
     /// BVH layout of static meshes.
     #[arg(long, value_enum, default_value_t = StaticBvh::Wide)]
     pub static_bvh: StaticBvh,
-    /// Override the suite's sizes with one size.
+    /// Override the suite's frame-loop sizes with one size.
     #[arg(long)]
     pub width: Option<u32>,
     #[arg(long)]

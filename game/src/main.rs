@@ -1,6 +1,6 @@
 //! `raykin`: path-trace animated glTF scenes. With no arguments it renders the embedded default scene.
 
-mod bench_cmd;
+mod bench;
 mod cli;
 mod render_cmd;
 
@@ -16,8 +16,7 @@ fn main() -> std::process::ExitCode {
     let cli = cli::Cli::parse();
     let result = match cli.command {
         Some(cli::Command::Render(args)) => render_cmd::run(&args),
-        Some(cli::Command::Bench(args)) if args.crowd => bench_cmd::run_crowd(&args),
-        Some(cli::Command::Bench(args)) => bench_cmd::run(&args),
+        Some(cli::Command::Bench(args)) => bench::run(&args),
         None => render_cmd::run_default(),
     };
     match result {

@@ -77,21 +77,33 @@ impl GpuBvhNode {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum BvhQuality {
     Fastest,
+    VeryFast,
     Fast,
     #[default]
     Medium,
     Slow,
+    VerySlow,
 }
 
 impl BvhQuality {
-    pub const ALL: [BvhQuality; 4] = [Self::Fastest, Self::Fast, Self::Medium, Self::Slow];
+    /// Every preset, fastest build first (the bench charts build time against trace time over these).
+    pub const ALL: [BvhQuality; 6] = [
+        Self::Fastest,
+        Self::VeryFast,
+        Self::Fast,
+        Self::Medium,
+        Self::Slow,
+        Self::VerySlow,
+    ];
 
     fn params(self) -> BvhBuildParams {
         let mut p = match self {
             Self::Fastest => BvhBuildParams::fastest_build(),
+            Self::VeryFast => BvhBuildParams::very_fast_build(),
             Self::Fast => BvhBuildParams::fast_build(),
             Self::Medium => BvhBuildParams::medium_build(),
             Self::Slow => BvhBuildParams::slow_build(),
+            Self::VerySlow => BvhBuildParams::very_slow_build(),
         };
         // Spatial splits duplicate triangles across leaves, which refit cannot maintain; leaves of at most 4
         // triangles keep the GPU's per-leaf loop short.
