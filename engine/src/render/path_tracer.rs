@@ -23,11 +23,15 @@ struct TonemapParams {
 }
 
 /// Timestamp queries: [trace begin, trace end, tonemap begin, tonemap end, denoise begin, denoise end].
+/// The denoiser's pair is resolved by every denoise (also outside a frame) at [`DENOISE_TICKS`].
 struct Timestamps {
     set: wgpu::QuerySet,
     resolve: wgpu::Buffer,
     period_ns: f32,
 }
+
+/// Byte offset of the denoiser's timestamps in the resolve buffer (resolve offsets are 256-aligned).
+const DENOISE_TICKS: u64 = wgpu::QUERY_RESOLVE_BUFFER_ALIGNMENT;
 
 /// GPU time of the last dispatch's passes, in milliseconds.
 #[derive(Clone, Copy, Debug, Default, serde::Serialize)]
@@ -268,7 +272,7 @@ impl PathTracer {
             }),
             resolve: device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("timestamp resolve"),
-                size: 48,
+                size: DENOISE_TICKS + 16,
                 usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
                 mapped_at_creation: false,
             }),
@@ -417,13 +421,7 @@ impl PathTracer {
             self.encode_display(ctx, &mut encoder, settings);
         }
         if let Some(t) = &self.timestamps {
-            // Denoising only happens with the display transform: queries 0..6 are then all written.
-            let written = match (tonemap, denoise) {
-                (_, true) => 6,
-                (true, false) => 4,
-                (false, false) => 2,
-            };
-            encoder.resolve_query_set(&t.set, 0..written, &t.resolve, 0);
+            encoder.resolve_query_set(&t.set, 0..if tonemap { 4 } else { 2 }, &t.resolve, 0);
         }
         self.denoised_last_dispatch = denoise;
         ctx.queue.submit([encoder.finish()]);
@@ -459,8 +457,13 @@ impl PathTracer {
                 beginning_of_pass_write_index: Some(4),
                 end_of_pass_write_index: Some(5),
             });
-        self.denoiser
-            .encode(ctx, encoder, &self.denoise_inputs(), params, timestamps)
+        let output = self
+            .denoiser
+            .encode(ctx, encoder, &self.denoise_inputs(), params, timestamps);
+        if let Some(t) = &self.timestamps {
+            encoder.resolve_query_set(&t.set, 4..6, &t.resolve, DENOISE_TICKS);
+        }
+        output
     }
 
     /// The display transform, denoising first when the settings ask for it.
@@ -684,18 +687,29 @@ impl PathTracer {
     /// GPU times of the last dispatch (blocks until it finished); `None` without timestamp support.
     pub fn read_pass_times(&self, ctx: &GpuContext) -> Option<PassTimes> {
         let t = self.timestamps.as_ref()?;
-        let bytes = ctx.read_buffer(&t.resolve, 48);
+        let bytes = ctx.read_buffer(&t.resolve, t.resolve.size());
         let ticks: &[u64] = bytemuck::cast_slice(&bytes);
         let ms = |a: u64, b: u64| b.saturating_sub(a) as f64 * t.period_ns as f64 * 1e-6;
+        let denoise = (DENOISE_TICKS / 8) as usize;
         Some(PassTimes {
             trace_ms: ms(ticks[0], ticks[1]),
             tonemap_ms: ms(ticks[2], ticks[3]),
             denoise_ms: if self.denoised_last_dispatch {
-                ms(ticks[4], ticks[5])
+                ms(ticks[denoise], ticks[denoise + 1])
             } else {
                 0.0
             },
         })
+    }
+
+    /// GPU time of the last denoise, in a frame or through [`Self::denoised_radiance`] (blocks until it
+    /// finished); `None` without timestamp support.
+    pub fn read_denoise_ms(&self, ctx: &GpuContext) -> Option<f64> {
+        let t = self.timestamps.as_ref()?;
+        let bytes = ctx.read_buffer(&t.resolve, t.resolve.size());
+        let ticks: &[u64] = bytemuck::cast_slice(&bytes);
+        let i = (DENOISE_TICKS / 8) as usize;
+        Some(ticks[i + 1].saturating_sub(ticks[i]) as f64 * t.period_ns as f64 * 1e-6)
     }
 
     /// Rays (camera, bounce, shadow) traced by the last dispatch (blocks until it finished).
