@@ -3,9 +3,10 @@
 # the release binary carried at rel/raykin and the Vulkan loader debs at .gl/ (see ../.library/device/README.md):
 #   for f in .gl/*.deb; do dpkg -x $f /; done; ldconfig; scripts/gpu-bench.sh $OUT
 # `raykin bench --suite full` (4 scenes incl. the animated crowd at 1920x1080 and 2560x1440, 300 frames; error vs
-# time; BVH presets; refit vs rebuild; scaling) plus one converged Cornell render. At most 7 files land in OUT
+# time; BVH presets; refit vs rebuild; scaling) plus one converged Cornell render. At most 8 files land in OUT
 # (the device tool returns 8): gpu-bench.log, results.json, results.csv, summary.md, charts.tar (charts/*.png
-# and curves.csv), cornell-1024spp.png, cornell-render.json. ASSETS must hold CornellBox, FlightHelmet,
+# and curves.csv), results-crowd-cpu.json (the crowd with CPU skinning + refit), cornell-1024spp.png,
+# cornell-render.json. ASSETS must hold CornellBox, FlightHelmet,
 # MetalRoughSpheresNoTextures, CesiumMan, Fox and DamagedHelmet (copies of ../shared/assets).
 # BENCH_ARGS adds arguments to the bench (e.g. "--parts frames --parts errors" to split the run over two calls);
 # CORNELL_RENDER=0 skips the converged render (for a dry run of this script on a CPU adapter).
@@ -25,6 +26,9 @@ work="$(mktemp -d)"
   # shellcheck disable=SC2086
   "$bin" bench --suite full --assets "$assets" --out "$work/bench" --cache "$work/cache" ${BENCH_ARGS:-}
   cp "$work/bench/results.json" "$work/bench/results.csv" "$work/bench/summary.md" "$out/" 2>/dev/null
+  # The crowd again with CPU skinning + refit (the full suite used the GPU passes), for the comparison.
+  "$bin" bench --suite full --scene crowd --parts frames --deform cpu --assets "$assets" --out "$work/crowd-cpu"
+  cp "$work/crowd-cpu/results.json" "$out/results-crowd-cpu.json" 2>/dev/null
   tar -cf "$out/charts.tar" -C "$work/bench" charts curves.csv 2>/dev/null
   if [ "${CORNELL_RENDER:-1}" = 1 ]; then
     "$bin" render "$assets/CornellBox/CornellBox.glb" --look-from=-278,273,800 --look-at=-278,273,0 --fov 39.3077 \

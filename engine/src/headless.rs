@@ -109,6 +109,17 @@ impl HeadlessApp {
         self.app.world_mut().resource_mut::<RenderSettings>()
     }
 
+    /// Drops the accumulated samples: the next frame starts from sample 0 (tests compare fresh
+    /// accumulations of the same geometry).
+    pub fn restart_accumulation(&mut self) {
+        let ctx = self.ctx.clone();
+        self.app
+            .world_mut()
+            .resource_mut::<Renderer>()
+            .tracer
+            .reset(&ctx);
+    }
+
     pub fn set_camera(&mut self, view: CameraView) {
         self.app.insert_resource(view);
     }

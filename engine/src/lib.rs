@@ -8,6 +8,7 @@ pub mod bvh;
 pub mod camera;
 pub mod frame_timing;
 pub mod gpu;
+pub mod gpu_deform;
 pub mod headless;
 pub mod image_io;
 pub mod render;

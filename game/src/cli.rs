@@ -1,6 +1,6 @@
 //! Command-line interface.
 
-use clap::{Args, Parser, Subcommand};
+use clap::{Args, Parser, Subcommand, ValueEnum};
 use std::path::PathBuf;
 
 #[derive(Parser, Debug)]
@@ -60,6 +60,28 @@ pub struct BenchArgs {
     pub width: Option<u32>,
     #[arg(long)]
     pub height: Option<u32>,
+    /// Where skinning, morphing and BVH refit run (see `render --help`).
+    #[arg(long, value_enum, default_value_t = DeformArg::Auto)]
+    pub deform: DeformArg,
+}
+
+/// `--deform`: where deformable meshes are skinned, morphed and refit.
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DeformArg {
+    /// GPU compute passes on a real GPU; the CPU on a software adapter (lavapipe), where it measured faster.
+    Auto,
+    Cpu,
+    Gpu,
+}
+
+impl From<DeformArg> for raykin::gpu_deform::DeformBackend {
+    fn from(a: DeformArg) -> Self {
+        match a {
+            DeformArg::Auto => Self::Auto,
+            DeformArg::Cpu => Self::Cpu,
+            DeformArg::Gpu => Self::Gpu,
+        }
+    }
 }
 
 /// Scene, camera and sampling options shared by the commands that render.
@@ -118,6 +140,11 @@ pub struct SceneArgs {
     /// Denoise the image (edge-avoiding a-trous filter guided by normal, depth and albedo).
     #[arg(long)]
     pub denoise: bool,
+    /// Where skinning, morphing and BVH refit run: GPU compute passes or the CPU (the reference); auto
+    /// picks the GPU on real GPUs and the CPU on a software adapter (lavapipe). The image is the same
+    /// up to float rounding.
+    #[arg(long, value_enum, default_value_t = DeformArg::Auto)]
+    pub deform: DeformArg,
     /// BVH layout of static meshes: compressed 8-wide nodes, or the refittable BVH2 deformable meshes use.
     #[arg(long, value_enum, default_value_t = StaticBvh::Wide)]
     pub static_bvh: StaticBvh,

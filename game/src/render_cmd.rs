@@ -48,6 +48,7 @@ pub fn settings_from(args: &SceneArgs) -> RenderSettings {
         russian_roulette: !args.no_rr,
         nee: !args.no_nee,
         denoise: args.denoise,
+        deform: args.deform.into(),
         static_bvh: args.static_bvh.into(),
         ..Default::default()
     }
@@ -285,6 +286,7 @@ pub fn run_default() -> Result<()> {
         animation: None,
         spp_per_dispatch: 16,
         denoise: false,
+        deform: crate::cli::DeformArg::Auto,
         static_bvh: crate::cli::StaticBvh::Wide,
     };
     let camera = CameraChoice::LookAt {

@@ -3,7 +3,10 @@
 
 mod deform;
 
-pub use deform::{DeformedMesh, DeformedMeshes, deform_mesh, deform_meshes, joint_matrices};
+pub use deform::{
+    DeformedElsewhere, DeformedMesh, DeformedMeshes, MeshPose, MeshPoses, deform_mesh,
+    deform_meshes, joint_matrices, pose_meshes,
+};
 
 use crate::FrameSet;
 use crate::scene::{
@@ -429,7 +432,7 @@ pub fn animate(
     clock.frame += 1;
 }
 
-/// Animation players (Animate set) and CPU skinning/morphing (Deform set).
+/// Animation players (Animate set); poses and CPU skinning/morphing (Deform set).
 pub struct AnimationPlugin;
 
 impl bevy_app::Plugin for AnimationPlugin {
@@ -437,11 +440,15 @@ impl bevy_app::Plugin for AnimationPlugin {
         use bevy_ecs::schedule::IntoScheduleConfigs;
         app.init_resource::<FrameClock>()
             .init_resource::<DeformedMeshes>()
+            .init_resource::<MeshPoses>()
+            .init_resource::<DeformedElsewhere>()
             .add_systems(
                 bevy_app::Update,
                 (
                     animate.in_set(FrameSet::Animate),
-                    deform_meshes.in_set(FrameSet::Deform),
+                    (pose_meshes, deform_meshes)
+                        .chain()
+                        .in_set(FrameSet::Deform),
                 ),
             );
     }

@@ -193,20 +193,31 @@ impl FlatBvh {
         cost / root_area
     }
 
-    /// Bottom-up box update after primitives moved; `prim_bounds(i)` bounds GPU primitive slot `i`.
-    pub fn refit(&mut self, prim_bounds: impl Fn(usize) -> (Vec3, Vec3)) {
+    /// Bottom-up box update after primitives moved; `prim_bounds(i)` bounds GPU primitive slot `i`. Returns
+    /// the refit tree's [`Self::sah_cost`], summed in the same sweep (every term is a box just updated).
+    pub fn refit(&mut self, prim_bounds: impl Fn(usize) -> (Vec3, Vec3)) -> f32 {
+        let half_area = |d: Vec3| {
+            let d = d.max(Vec3::ZERO);
+            d.x * d.y + d.y * d.z + d.z * d.x
+        };
+        let mut cost = 0.0;
+        let (mut root_lo, mut root_hi) = (Vec3::MAX, Vec3::MIN);
         for i in (0..self.nodes.len()).rev() {
+            // The union of the node's children, and the leaves' area x count, as `sah_cost` sums them.
+            let (mut union_lo, mut union_hi) = (Vec3::MAX, Vec3::MIN);
             for k in 0..2 {
                 let c = self.nodes[i].children[k];
                 if c.is_empty() {
                     continue;
                 }
                 let (lo, hi) = if c.is_leaf() {
-                    (c.index as usize..(c.index + c.count) as usize)
+                    let (lo, hi) = (c.index as usize..(c.index + c.count) as usize)
                         .map(&prim_bounds)
                         .fold((Vec3::MAX, Vec3::MIN), |(lo, hi), (a, b)| {
                             (lo.min(a), hi.max(b))
-                        })
+                        });
+                    cost += half_area(hi - lo) * c.count as f32;
+                    (lo, hi)
                 } else {
                     let [a, b] = self.nodes[c.index as usize].children;
                     let lo = Vec3::from(a.min).min(Vec3::from(b.min));
@@ -214,8 +225,20 @@ impl FlatBvh {
                     (lo, hi)
                 };
                 self.nodes[i].children[k].set_bounds(lo, hi);
+                union_lo = union_lo.min(lo);
+                union_hi = union_hi.max(hi);
             }
+            if union_lo.x <= union_hi.x {
+                cost += half_area(union_hi - union_lo);
+            }
+            (root_lo, root_hi) = (union_lo, union_hi);
         }
+        let root_area = if root_lo.x <= root_hi.x {
+            half_area(root_hi - root_lo)
+        } else {
+            0.0
+        };
+        cost / root_area.max(f32::MIN_POSITIVE)
     }
 
     pub fn root_bounds(&self) -> (Vec3, Vec3) {
@@ -277,12 +300,14 @@ impl MeshBvh {
         Ok(Self { flat, build_sah })
     }
 
-    /// Refits to moved vertices; `gpu_triangles` are the mesh's triangles in [`FlatBvh::order`].
-    pub fn refit(&mut self, positions: &[Vec3], gpu_triangles: &[[u32; 3]]) {
-        self.flat.refit(|i| {
+    /// Refits to moved vertices; `gpu_triangles` are the mesh's triangles in [`FlatBvh::order`]. Returns the
+    /// new [`Self::sah_ratio`].
+    pub fn refit(&mut self, positions: &[Vec3], gpu_triangles: &[[u32; 3]]) -> f32 {
+        let cost = self.flat.refit(|i| {
             let [a, b, c] = gpu_triangles[i].map(|v| positions[v as usize]);
             (a.min(b).min(c), a.max(b).max(c))
         });
+        cost / self.build_sah.max(f32::MIN_POSITIVE)
     }
 
     /// `triangles` (a mesh's, in file order) rearranged into this BVH's leaf order.

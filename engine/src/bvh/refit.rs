@@ -29,9 +29,14 @@ pub struct BvhStats {
     pub rebuilds: u64,
     /// Mesh refits since upload.
     pub refits: u64,
-    /// CPU seconds of the last frame's refits and rebuilds.
+    /// CPU seconds of the last frame's refits (CPU backend) and rebuilds (run or installed).
     pub last_refit_seconds: f64,
     pub last_rebuild_seconds: f64,
+    /// CPU seconds of the last frame's uploads of deformation results (CPU backend: vertices and nodes) or
+    /// inputs (GPU backend: joint matrices, morph weights, flags).
+    pub last_upload_seconds: f64,
+    /// CPU seconds of the last frame's top-level BVH build and instance upload (0 when nothing moved).
+    pub last_tlas_seconds: f64,
 }
 
 impl Default for BvhStats {
@@ -45,15 +50,18 @@ impl Default for BvhStats {
             refits: 0,
             last_refit_seconds: 0.0,
             last_rebuild_seconds: 0.0,
+            last_upload_seconds: 0.0,
+            last_tlas_seconds: 0.0,
         }
     }
 }
 
 impl BvhStats {
-    /// Meshes due for a rebuild this frame: ratio above the threshold, worst first, at most the per-frame cap.
-    pub fn due(&self) -> Vec<usize> {
+    /// Meshes due for a rebuild this frame among those `eligible` (each backend rebuilds its own): ratio
+    /// above the threshold, worst first, at most the per-frame cap.
+    pub fn due(&self, eligible: impl Fn(usize) -> bool) -> Vec<usize> {
         let mut due: Vec<usize> = (0..self.sah_ratio.len())
-            .filter(|&m| self.sah_ratio[m] > self.threshold)
+            .filter(|&m| self.sah_ratio[m] > self.threshold && eligible(m))
             .collect();
         due.sort_by(|&a, &b| {
             self.sah_ratio[b]
@@ -72,10 +80,9 @@ impl BvhStats {
     }
 }
 
-/// Refits `bvh` to `positions` (triangles in BVH order) and returns its SAH ratio.
+/// Refits `bvh` to `positions` (triangles in BVH order) and returns its SAH ratio (one sweep for both).
 pub fn refit_and_measure(bvh: &mut MeshBvh, positions: &[Vec3], gpu_triangles: &[[u32; 3]]) -> f32 {
-    bvh.refit(positions, gpu_triangles);
-    bvh.sah_ratio()
+    bvh.refit(positions, gpu_triangles)
 }
 
 /// Upper bound of a child-pair BVH's node count over `triangles` triangles (>= 1 triangle per leaf):

@@ -1,5 +1,9 @@
 //! The wgpu device: one adapter picked at start-up, shared by every plugin as a resource.
 
+mod timestamps;
+
+pub use timestamps::PassTimestamps;
+
 use bevy_ecs::prelude::Resource;
 use std::sync::Arc;
 pub use wgpu::DeviceType;

@@ -22,24 +22,17 @@ struct TonemapParams {
     _pad: [u32; 2],
 }
 
-/// Timestamp queries: [trace begin, trace end, tonemap begin, tonemap end, denoise begin, denoise end].
-/// The denoiser's pair is resolved by every denoise (also outside a frame) at [`DENOISE_TICKS`].
-struct Timestamps {
-    set: wgpu::QuerySet,
-    resolve: wgpu::Buffer,
-    period_ns: f32,
-}
-
-/// Byte offset of the denoiser's timestamps in the resolve buffer (resolve offsets are 256-aligned).
-const DENOISE_TICKS: u64 = wgpu::QUERY_RESOLVE_BUFFER_ALIGNMENT;
-
-/// GPU time of the last dispatch's passes, in milliseconds.
+/// GPU time of the last frame's passes, in milliseconds (0 for a pass that did not run).
 #[derive(Clone, Copy, Debug, Default, serde::Serialize)]
 pub struct PassTimes {
     pub trace_ms: f64,
     pub tonemap_ms: f64,
     /// 0 when the last dispatch did not denoise.
     pub denoise_ms: f64,
+    /// GPU skinning + morphing (`shaders/deform.wgsl`).
+    pub skin_ms: f64,
+    /// GPU BLAS refit + SAH cost (`shaders/refit.wgsl`).
+    pub refit_ms: f64,
 }
 
 /// Camera rays, and optionally one diffuse bounce ray per hit, cast without shading.
@@ -81,8 +74,11 @@ pub struct PathTracer {
     pub height: u32,
     /// Samples per pixel accumulated since the last reset.
     pub samples: u32,
-    timestamps: Option<Timestamps>,
+    /// Pairs: trace, tonemap.
+    timestamps: Option<crate::gpu::PassTimestamps>,
     denoiser: Denoiser,
+    /// One pair around the denoiser's pass, resolved by every denoise (in a frame or not).
+    denoise_timestamps: Option<crate::gpu::PassTimestamps>,
     /// The tone mapper's bindings with the denoised image as its input (made when first needed).
     denoised_tonemap_group: OnceLock<wgpu::BindGroup>,
     denoised_last_dispatch: bool,
@@ -264,20 +260,7 @@ impl PathTracer {
             &tonemap_layout,
             &[&v.accum, &v.albedo, &v.normal, &v.rgba8, &tonemap_uniform],
         );
-        let timestamps = ctx.supports_timestamps().then(|| Timestamps {
-            set: device.create_query_set(&wgpu::QuerySetDescriptor {
-                label: Some("pass timestamps"),
-                ty: wgpu::QueryType::Timestamp,
-                count: 6,
-            }),
-            resolve: device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("timestamp resolve"),
-                size: DENOISE_TICKS + 16,
-                usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
-                mapped_at_creation: false,
-            }),
-            period_ns: ctx.queue.get_timestamp_period(),
-        });
+        let timestamps = crate::gpu::PassTimestamps::new(ctx, "pass timestamps", 2);
         let mut tracer = Self {
             trace_pipeline,
             raycaster: None,
@@ -301,6 +284,7 @@ impl PathTracer {
             samples: 0,
             timestamps,
             denoiser: Denoiser::new(ctx),
+            denoise_timestamps: crate::gpu::PassTimestamps::new(ctx, "denoise timestamps", 1),
             denoised_tonemap_group: OnceLock::new(),
             denoised_last_dispatch: false,
         };
@@ -391,7 +375,9 @@ impl PathTracer {
         group
     }
 
-    /// Traces `spp` more samples per pixel into the accumulation buffers (and tone-maps if asked).
+    /// Traces `spp` more samples per pixel into the accumulation buffers (and tone-maps if asked), in one
+    /// submission after `before` (the frame's GPU deform passes).
+    #[allow(clippy::too_many_arguments)]
     pub fn dispatch(
         &mut self,
         ctx: &GpuContext,
@@ -400,6 +386,7 @@ impl PathTracer {
         camera: &CameraView,
         spp: u32,
         tonemap: bool,
+        before: Vec<wgpu::CommandBuffer>,
     ) {
         self.write_frame(ctx, scene, settings, camera, spp, settings.max_depth);
         let scene_group = self.scene_bind_group(ctx, scene);
@@ -421,10 +408,11 @@ impl PathTracer {
             self.encode_display(ctx, &mut encoder, settings);
         }
         if let Some(t) = &self.timestamps {
-            encoder.resolve_query_set(&t.set, 0..if tonemap { 4 } else { 2 }, &t.resolve, 0);
+            t.resolve(&mut encoder, if tonemap { 2 } else { 1 });
         }
         self.denoised_last_dispatch = denoise;
-        ctx.queue.submit([encoder.finish()]);
+        ctx.queue
+            .submit(before.into_iter().chain([encoder.finish()]));
     }
 
     /// Whether the display shows the denoised image (colour view with the denoiser on).
@@ -449,19 +437,12 @@ impl PathTracer {
         encoder: &mut wgpu::CommandEncoder,
         params: &DenoiseParams,
     ) -> &wgpu::Buffer {
-        let timestamps = self
-            .timestamps
-            .as_ref()
-            .map(|t| wgpu::ComputePassTimestampWrites {
-                query_set: &t.set,
-                beginning_of_pass_write_index: Some(4),
-                end_of_pass_write_index: Some(5),
-            });
+        let timestamps = self.denoise_timestamps.as_ref().map(|t| t.pass_writes(0));
         let output = self
             .denoiser
             .encode(ctx, encoder, &self.denoise_inputs(), params, timestamps);
-        if let Some(t) = &self.timestamps {
-            encoder.resolve_query_set(&t.set, 4..6, &t.resolve, DENOISE_TICKS);
+        if let Some(t) = &self.denoise_timestamps {
+            t.resolve(encoder, 1);
         }
         output
     }
@@ -513,13 +494,7 @@ impl PathTracer {
     }
 
     fn trace_timestamps(&self) -> Option<wgpu::ComputePassTimestampWrites<'_>> {
-        self.timestamps
-            .as_ref()
-            .map(|t| wgpu::ComputePassTimestampWrites {
-                query_set: &t.set,
-                beginning_of_pass_write_index: Some(0),
-                end_of_pass_write_index: Some(1),
-            })
+        self.timestamps.as_ref().map(|t| t.pass_writes(0))
     }
 
     /// Casts one camera ray per pixel centre and, with `diffuse_bounce`, one cosine-distributed ray from each
@@ -594,7 +569,7 @@ impl PathTracer {
             pass.dispatch_workgroups(self.width.div_ceil(8), self.height.div_ceil(8), 1);
         }
         if let Some(t) = &self.timestamps {
-            encoder.resolve_query_set(&t.set, 0..2, &t.resolve, 0);
+            t.resolve(&mut encoder, 1);
         }
         self.denoised_last_dispatch = false;
         ctx.queue.submit([encoder.finish()]);
@@ -663,14 +638,7 @@ impl PathTracer {
             .write_buffer(&self.tonemap_uniform, 0, bytemuck::bytes_of(&params));
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("tonemap"),
-            timestamp_writes: self
-                .timestamps
-                .as_ref()
-                .map(|t| wgpu::ComputePassTimestampWrites {
-                    query_set: &t.set,
-                    beginning_of_pass_write_index: Some(2),
-                    end_of_pass_write_index: Some(3),
-                }),
+            timestamp_writes: self.timestamps.as_ref().map(|t| t.pass_writes(1)),
         });
         pass.set_pipeline(&self.tonemap_pipeline);
         pass.set_bind_group(0, group, &[]);
@@ -686,30 +654,23 @@ impl PathTracer {
 
     /// GPU times of the last dispatch (blocks until it finished); `None` without timestamp support.
     pub fn read_pass_times(&self, ctx: &GpuContext) -> Option<PassTimes> {
-        let t = self.timestamps.as_ref()?;
-        let bytes = ctx.read_buffer(&t.resolve, t.resolve.size());
-        let ticks: &[u64] = bytemuck::cast_slice(&bytes);
-        let ms = |a: u64, b: u64| b.saturating_sub(a) as f64 * t.period_ns as f64 * 1e-6;
-        let denoise = (DENOISE_TICKS / 8) as usize;
+        let ms = self.timestamps.as_ref()?.read_ms(ctx);
         Some(PassTimes {
-            trace_ms: ms(ticks[0], ticks[1]),
-            tonemap_ms: ms(ticks[2], ticks[3]),
+            trace_ms: ms[0],
+            tonemap_ms: ms[1],
             denoise_ms: if self.denoised_last_dispatch {
-                ms(ticks[denoise], ticks[denoise + 1])
+                self.read_denoise_ms(ctx).unwrap_or(0.0)
             } else {
                 0.0
             },
+            ..Default::default()
         })
     }
 
     /// GPU time of the last denoise, in a frame or through [`Self::denoised_radiance`] (blocks until it
     /// finished); `None` without timestamp support.
     pub fn read_denoise_ms(&self, ctx: &GpuContext) -> Option<f64> {
-        let t = self.timestamps.as_ref()?;
-        let bytes = ctx.read_buffer(&t.resolve, t.resolve.size());
-        let ticks: &[u64] = bytemuck::cast_slice(&bytes);
-        let i = (DENOISE_TICKS / 8) as usize;
-        Some(ticks[i + 1].saturating_sub(ticks[i]) as f64 * t.period_ns as f64 * 1e-6)
+        Some(self.denoise_timestamps.as_ref()?.read_ms(ctx)[0])
     }
 
     /// Rays (camera, bounce, shadow) traced by the last dispatch (blocks until it finished).

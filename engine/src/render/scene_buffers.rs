@@ -42,6 +42,9 @@ pub struct MeshSlot {
     pub positions: Option<Vec<Vec3>>,
     /// BLAS nodes reserved for this mesh (a deformable mesh reserves room for any rebuilt tree).
     pub blas_capacity: u32,
+    /// Conservative bounds of a GPU-deformed mesh at its current pose (its CPU tree's boxes are stale);
+    /// the top-level BVH uses them instead of the tree's root box.
+    pub deformed_bounds: Option<(Vec3, Vec3)>,
 }
 
 /// Byte counts of what the scene occupies on the GPU.
@@ -54,12 +57,15 @@ pub struct GpuMemory {
     pub materials: u64,
     pub texels: u64,
     pub instances_and_tlas: u64,
+    /// GPU deformation: rest attributes, influences, morph deltas, per-frame matrices/weights and refit
+    /// tables of the meshes the GPU deforms (0 on the CPU backend).
+    pub deform: u64,
 }
 
 impl GpuMemory {
     /// Geometry + BVH: the figure the memory target counts (no textures).
     pub fn geometry_and_bvh(&self) -> u64 {
-        self.blas_nodes + self.triangles + self.vertex_pool + self.instances_and_tlas
+        self.blas_nodes + self.triangles + self.vertex_pool + self.instances_and_tlas + self.deform
     }
     pub fn total(&self) -> u64 {
         self.geometry_and_bvh() + self.materials + self.texels
@@ -98,7 +104,7 @@ pub struct InstanceInput {
     pub mesh: u32,
 }
 
-fn storage(ctx: &GpuContext, label: &str, bytes: &[u8]) -> wgpu::Buffer {
+pub(crate) fn storage(ctx: &GpuContext, label: &str, bytes: &[u8]) -> wgpu::Buffer {
     // wgpu rejects empty bindings and ones smaller than one element: keep at least the largest element
     // (an instance, 112 bytes).
     const MIN_BYTES: usize = 128;
@@ -347,6 +353,7 @@ impl GpuScene {
                 blas,
                 positions: None,
                 blas_capacity,
+                deformed_bounds: None,
             });
         }
         if wide_nodes.len() as u32 >= WIDE_BLAS {
@@ -407,6 +414,7 @@ impl GpuScene {
             materials: (materials.len() * 64 + texture_infos.len() * 16) as u64,
             texels: (texels.len() * 4) as u64,
             instances_and_tlas: 0,
+            deform: 0,
         };
         let gpu_scene = Self {
             blas_nodes: storage(ctx, "blas nodes", bytemuck::cast_slice(&blas_nodes)),
@@ -433,15 +441,17 @@ impl GpuScene {
     }
 
     /// Writes this frame's deformed meshes over their own vertex-pool ranges (same encodings as the initial
-    /// upload), refits their BLASes and uploads the nodes; returns each mesh's new SAH ratio. The CPU work
-    /// (encoding, refit, SAH) runs in parallel over meshes, the queue writes after it in mesh order.
+    /// upload), refits their BLASes and uploads the nodes; returns each mesh's new SAH ratio and the CPU
+    /// seconds spent on the queue writes. The CPU work (encoding, refit + SAH in one sweep) runs in parallel
+    /// over meshes, the queue writes after it in mesh order.
     pub fn apply_deformations(
         &mut self,
         ctx: &GpuContext,
         deformed: &crate::animation::DeformedMeshes,
-    ) -> Vec<(usize, f32)> {
+    ) -> (Vec<(usize, f32)>, f64) {
         struct Update {
             mesh: usize,
+            /// Encoded normals and tangents (positions are written straight from the deformed mesh).
             words: Vec<(u32, Vec<u32>)>,
             sah_ratio: f32,
         }
@@ -461,13 +471,7 @@ impl GpuScene {
                     unreachable!("filtered to deformed meshes")
                 };
                 let gpu = slot.gpu;
-                let mut words = vec![(
-                    gpu.position_offset,
-                    d.positions
-                        .iter()
-                        .flat_map(|p| p.to_array().map(f32::to_bits))
-                        .collect(),
-                )];
+                let mut words = Vec::new();
                 if let (Some(n), true) = (&d.normals, gpu.normal_offset != NONE) {
                     words.push((
                         gpu.normal_offset,
@@ -492,7 +496,11 @@ impl GpuScene {
                     .expect("deformable meshes have a refittable BVH");
                 let sah_ratio =
                     crate::bvh::refit::refit_and_measure(bvh, &d.positions, &slot.gpu_triangles);
-                slot.positions = Some(d.positions.clone());
+                // Reuses the previous frame's allocation.
+                match &mut slot.positions {
+                    Some(p) => p.clone_from(&d.positions),
+                    None => slot.positions = Some(d.positions.clone()),
+                }
                 Update {
                     mesh: m,
                     words,
@@ -500,9 +508,18 @@ impl GpuScene {
                 }
             })
             .collect();
-        updates
+        let start = std::time::Instant::now();
+        let ratios = updates
             .into_iter()
             .map(|u| {
+                let slot = &self.mesh_slots[u.mesh];
+                if let Some(d) = deformed.meshes[u.mesh].as_ref() {
+                    ctx.queue.write_buffer(
+                        &self.vertex_pool,
+                        slot.gpu.position_offset as u64 * 4,
+                        bytemuck::cast_slice(&d.positions),
+                    );
+                }
                 for (offset, words) in &u.words {
                     ctx.queue.write_buffer(
                         &self.vertex_pool,
@@ -510,7 +527,6 @@ impl GpuScene {
                         bytemuck::cast_slice(words),
                     );
                 }
-                let slot = &self.mesh_slots[u.mesh];
                 if let Some(bvh) = slot.blas.binary() {
                     ctx.queue.write_buffer(
                         &self.blas_nodes,
@@ -520,7 +536,15 @@ impl GpuScene {
                 }
                 (u.mesh, u.sah_ratio)
             })
-            .collect()
+            .collect();
+        (ratios, start.elapsed().as_secs_f64())
+    }
+
+    /// Whether a mesh has emissive triangles (next-event estimation needs their world areas on the CPU).
+    pub fn has_emitters(&self, mesh: usize) -> bool {
+        self.emissive_triangles
+            .get(mesh)
+            .is_some_and(|e| !e.is_empty())
     }
 
     /// Rebuilds a mesh's BLAS from its current positions inside its reserved node range, and rewrites its
@@ -532,10 +556,27 @@ impl GpuScene {
         mesh: usize,
         quality: crate::bvh::BvhQuality,
     ) -> Result<(), crate::bvh::BvhTooDeep> {
+        let slot = &self.mesh_slots[mesh];
+        let positions = slot
+            .positions
+            .as_deref()
+            .unwrap_or(&scene.meshes[mesh].positions);
+        let bvh = MeshBvh::build(positions, &scene.meshes[mesh].triangles, quality)?;
+        self.install_bvh(ctx, scene, mesh, bvh);
+        Ok(())
+    }
+
+    /// Replaces a deformable mesh's BLAS with `bvh` in its reserved node range and rewrites its triangle
+    /// range in the new leaf order. False (and nothing changed) when the tree does not fit the range.
+    pub fn install_bvh(
+        &mut self,
+        ctx: &GpuContext,
+        scene: &SceneAsset,
+        mesh: usize,
+        bvh: MeshBvh,
+    ) -> bool {
         let data = &scene.meshes[mesh];
         let slot = &self.mesh_slots[mesh];
-        let positions = slot.positions.as_deref().unwrap_or(&data.positions);
-        let bvh = MeshBvh::build(positions, &data.triangles, quality)?;
         if bvh.flat.nodes.len() > slot.blas_capacity as usize {
             // Cannot happen for a tree with >= 1 triangle per leaf; keep the refit tree rather than overrun.
             tracing::warn!(
@@ -544,7 +585,7 @@ impl GpuScene {
                 bvh.flat.nodes.len(),
                 slot.blas_capacity
             );
-            return Ok(());
+            return false;
         }
         let mut nodes = bvh.flat.nodes.clone();
         nodes.resize(slot.blas_capacity as usize, crate::bvh::GpuBvhNode::EMPTY);
@@ -568,7 +609,7 @@ impl GpuScene {
         let slot = &mut self.mesh_slots[mesh];
         slot.gpu_triangles = ordered.indices;
         slot.blas = Blas::Binary(bvh);
-        Ok(())
+        true
     }
 
     /// Uploads instances (in TLAS leaf order), the TLAS and the emitter list for this frame's placements.
@@ -581,7 +622,10 @@ impl GpuScene {
         let boxes: Vec<(Vec3, Vec3)> = inputs
             .iter()
             .map(|i| {
-                let (lo, hi) = self.mesh_slots[i.mesh as usize].blas.root_bounds();
+                let slot = &self.mesh_slots[i.mesh as usize];
+                let (lo, hi) = slot
+                    .deformed_bounds
+                    .unwrap_or_else(|| slot.blas.root_bounds());
                 transform_box(i.world, lo, hi)
             })
             .collect();

@@ -58,6 +58,8 @@ pub struct RenderSettings {
     pub denoise_params: super::denoise::DenoiseParams,
     /// BVH layout of static meshes (deformable meshes always refit a BVH2).
     pub static_bvh: crate::bvh::StaticLayout,
+    /// Where deformable meshes are skinned, morphed and refit (`Auto`: GPU on real GPUs).
+    pub deform: crate::gpu_deform::DeformBackend,
 }
 
 impl Default for RenderSettings {
@@ -80,6 +82,7 @@ impl Default for RenderSettings {
             denoise: false,
             denoise_params: Default::default(),
             static_bvh: crate::bvh::StaticLayout::Wide,
+            deform: crate::gpu_deform::DeformBackend::Auto,
         }
     }
 }

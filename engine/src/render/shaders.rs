@@ -8,6 +8,9 @@ pub const PATH_TRACE: &str = include_str!("../../../shaders/path_trace.wgsl");
 pub const TONEMAP: &str = include_str!("../../../shaders/tonemap.wgsl");
 pub const DENOISE: &str = include_str!("../../../shaders/denoise.wgsl");
 pub const RAYCAST: &str = include_str!("../../../shaders/raycast.wgsl");
+/// GPU skinning + morphing and the GPU BLAS refit (`crate::gpu_deform`); standalone modules.
+pub const DEFORM: &str = include_str!("../../../shaders/deform.wgsl");
+pub const REFIT: &str = include_str!("../../../shaders/refit.wgsl");
 
 /// The path tracer module: shared declarations, traversal, BRDF, then the kernel.
 pub fn path_trace_source() -> String {
@@ -33,6 +36,14 @@ pub fn raycast_source() -> String {
 
 pub fn tonemap_source() -> String {
     file("tonemap.wgsl", TONEMAP)
+}
+
+pub fn deform_source() -> String {
+    file("deform.wgsl", DEFORM)
+}
+
+pub fn refit_source() -> String {
+    file("refit.wgsl", REFIT)
 }
 
 /// Kernel development: with `RAYKIN_SHADER_DIR` set, WGSL files found in that folder replace the built-in
@@ -62,5 +73,7 @@ pub fn all_modules() -> Vec<(&'static str, String)> {
         ("tonemap", tonemap_source()),
         ("denoise", denoise_source()),
         ("raycast", raycast_source()),
+        ("deform", deform_source()),
+        ("refit", refit_source()),
     ]
 }

@@ -17,9 +17,9 @@ pub struct PassBreakdown {
     pub animate: f64,
     /// Global transforms and joint matrices.
     pub transform: f64,
-    /// Skinning and morphing.
+    /// Skinning and morphing on the CPU (and, on the GPU backend, the joint matrices it uploads).
     pub skinning: f64,
-    /// Refit of deformed BLASes plus their vertex uploads.
+    /// CPU refit of deformed BLASes plus their vertex uploads (CPU backend).
     pub refit: f64,
     /// Quality-guard rebuilds.
     pub rebuild: f64,
@@ -27,13 +27,16 @@ pub struct PassBreakdown {
     pub top_level: f64,
     pub upload: f64,
     pub encode_submit: f64,
+    /// GPU deformation passes (GPU backend): skinning + morphing, BLAS refit + SAH cost.
+    pub skinning_gpu: f64,
+    pub refit_gpu: f64,
     pub trace_and_accumulate_gpu: f64,
     pub tonemap_gpu: f64,
 }
 
 impl PassBreakdown {
     /// (label, value) in frame order, for the stacked bars.
-    pub fn parts(&self) -> [(&'static str, f64); 10] {
+    pub fn parts(&self) -> [(&'static str, f64); 12] {
         [
             ("animation", self.animate),
             ("transforms + joints", self.transform),
@@ -43,6 +46,8 @@ impl PassBreakdown {
             ("top level + instances", self.top_level),
             ("upload", self.upload),
             ("encode + submit", self.encode_submit),
+            ("skinning (GPU)", self.skinning_gpu),
+            ("refit (GPU)", self.refit_gpu),
             ("trace + accumulate (GPU)", self.trace_and_accumulate_gpu),
             ("tonemap (GPU)", self.tonemap_gpu),
         ]
@@ -77,6 +82,11 @@ pub struct FrameRow {
     pub trace_ms: Spread,
     pub passes_median_ms: PassBreakdown,
     pub animated: bool,
+    /// Where deformable meshes were skinned, morphed and refit (`--deform`, resolved for the adapter).
+    pub deform_backend: String,
+    /// Median skinning + refit per frame per 100k deformable triangles (CPU phases on the CPU backend, GPU
+    /// passes on the GPU backend; the target is <= 1 ms); 0 for static scenes.
+    pub skin_refit_ms_per_100k_tris: f64,
     pub bvh_rebuilds: u64,
     pub max_sah_ratio_last_frame: f32,
     /// Shading-free ray casting (`PathTracer::cast_rays`) on the last pose: camera rays per second, and
@@ -100,7 +110,7 @@ pub fn measure(
         .world_mut()
         .resource_mut::<raykin::render::Renderer>()
         .tonemap_each_frame = true;
-    let mut samples: Vec<[f64; 11]> = Vec::with_capacity(frames);
+    let mut samples: Vec<[f64; SAMPLE_COLUMNS]> = Vec::with_capacity(frames);
     let mut rays = 0u64;
     for f in 0..warmup + frames {
         let start = std::time::Instant::now();
@@ -124,6 +134,8 @@ pub fn measure(
         encode_submit: column(7).median,
         trace_and_accumulate_gpu: column(8).median,
         tonemap_gpu: column(9).median,
+        skinning_gpu: column(11).median,
+        refit_gpu: column(12).median,
     };
     let gpu_timed = app.renderer().last_pass_times.is_some();
     // Without timestamps the trace column holds whole-frame wall times.
@@ -140,6 +152,20 @@ pub fn measure(
     let renderer = app.renderer();
     let memory = renderer.scene.memory;
     let triangles = scene.scene.triangle_count();
+    let deformable_triangles: usize = scene
+        .scene
+        .meshes
+        .iter()
+        .filter(|m| m.is_deformable())
+        .map(|m| m.triangles.len())
+        .sum();
+    let gpu_deform = renderer.deformer.is_some();
+    let skin_refit_ms = if gpu_deform {
+        passes.skinning_gpu + passes.refit_gpu
+    } else {
+        passes.skinning + passes.refit
+    };
+    let deform_backend = format!("{:?}", renderer.deform_backend);
     let stats = app.bvh_stats();
     Ok(FrameRow {
         scene: scene.name.clone(),
@@ -166,6 +192,12 @@ pub fn measure(
         trace_ms: trace,
         passes_median_ms: passes,
         animated: scene.animated(),
+        deform_backend,
+        skin_refit_ms_per_100k_tris: if deformable_triangles > 0 {
+            skin_refit_ms / (deformable_triangles as f64 / 1e5)
+        } else {
+            0.0
+        },
         bvh_rebuilds: stats.rebuilds,
         max_sah_ratio_last_frame: stats.sah_ratio.iter().copied().fold(0.0, f32::max),
         raycast_camera_rays_per_s: raycast_camera,
@@ -197,9 +229,11 @@ fn raycast_rates(app: &mut HeadlessApp, reps: usize) -> (f64, f64) {
     (camera, diffuse)
 }
 
+const SAMPLE_COLUMNS: usize = 13;
+
 /// This frame's pass times: [animate, transform, skinning, refit, rebuild, top level, upload,
-/// encode/submit, trace GPU, tonemap GPU, frame wall].
-fn frame_sample(app: &HeadlessApp, wall_ms: f64) -> [f64; 11] {
+/// encode/submit, trace GPU, tonemap GPU, frame wall, skinning GPU, refit GPU].
+fn frame_sample(app: &HeadlessApp, wall_ms: f64) -> [f64; SAMPLE_COLUMNS] {
     let world = app.app.world();
     let t = world.resource::<raykin::frame_timing::FrameTimings>().last;
     let stats = app.bvh_stats();
@@ -207,7 +241,8 @@ fn frame_sample(app: &HeadlessApp, wall_ms: f64) -> [f64; 11] {
     let rebuild = stats.last_rebuild_seconds * 1e3;
     let gpu = app.renderer().last_pass_times;
     let (trace, tonemap) = gpu.map_or((f64::NAN, f64::NAN), |p| (p.trace_ms, p.tonemap_ms));
-    let gpu_total = gpu.map_or(0.0, |p| p.trace_ms + p.tonemap_ms);
+    let (skin_gpu, refit_gpu) = gpu.map_or((0.0, 0.0), |p| (p.skin_ms, p.refit_ms));
+    let gpu_total = gpu.map_or(0.0, |p| p.trace_ms + p.tonemap_ms + p.skin_ms + p.refit_ms);
     [
         t.animate_ms,
         t.transform_ms,
@@ -220,5 +255,7 @@ fn frame_sample(app: &HeadlessApp, wall_ms: f64) -> [f64; 11] {
         trace,
         tonemap,
         wall_ms,
+        skin_gpu,
+        refit_gpu,
     ]
 }

@@ -142,6 +142,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         spp_per_frame: 1,
         max_depth: args.max_depth,
         static_bvh: args.static_bvh.into(),
+        deform: args.deform.into(),
         ..Default::default()
     };
     let commit = std::env::var("RAYKIN_COMMIT")
@@ -197,6 +198,21 @@ pub fn run(args: &BenchArgs) -> Result<()> {
                     row.raycast_camera_rays_per_s / 1e6,
                     row.raycast_diffuse_rays_per_s / 1e6
                 );
+                if row.animated {
+                    let p = &row.passes_median_ms;
+                    eprintln!(
+                        "raykin bench: {} {width}x{height}: deform backend {}: skinning {:.2} ms CPU + {:.2} ms GPU, refit {:.2} ms CPU + {:.2} ms GPU, rebuild {:.2} ms, top level {:.2} ms: {:.2} ms skin+refit per 100k triangles",
+                        row.scene,
+                        row.deform_backend,
+                        p.skinning,
+                        p.skinning_gpu,
+                        p.refit,
+                        p.refit_gpu,
+                        p.rebuild,
+                        p.top_level,
+                        row.skin_refit_ms_per_100k_tris
+                    );
+                }
                 rows.push(row);
             }
         }
