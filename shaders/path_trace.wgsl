@@ -12,6 +12,9 @@
 // What the ray through the pixel centre hits first: instance (NONE: nothing), triangle slot, barycentrics as
 // f32 bits. Written only with FRAME_HIT_AOV, once per accumulation (a 16-byte stub is bound otherwise).
 @group(1) @binding(4) var<storage, read_write> aov_hit: array<vec4<u32>>;
+// For the denoiser: rgb: radiance that reached the camera unscattered (emission seen directly, or the
+// environment where the camera ray missed) summed; w: sum of luminance(scattered radiance)^2.
+@group(1) @binding(5) var<storage, read_write> moments: array<vec4<f32>>;
 
 var<private> rays_traced: u32;
 var<workgroup> workgroup_rays: atomic<u32>;
@@ -220,6 +223,8 @@ fn sample_light(s: Surface, v_local: vec3<f32>, frame_basis: mat3x3<f32>, rng: p
 
 struct PathResult {
     radiance: vec3<f32>,
+    // The part of `radiance` that no surface scattered (exact: the denoiser leaves it alone).
+    unscattered: vec3<f32>,
     albedo: vec3<f32>,
     normal: vec3<f32>,
     depth: f32,
@@ -227,7 +232,7 @@ struct PathResult {
 }
 
 fn trace_path(camera_ray: Ray, forward: vec3<f32>, rng: ptr<function, Rng>) -> PathResult {
-    var result = PathResult(vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0), 0.0, false);
+    var result = PathResult(vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0), 0.0, false);
     var ray = camera_ray;
     var throughput = vec3<f32>(1.0);
     var depth = 0u;
@@ -255,6 +260,7 @@ fn trace_path(camera_ray: Ray, forward: vec3<f32>, rng: ptr<function, Rng>) -> P
         }
         if hit.instance == NONE {
             result.radiance += throughput * environment(ray.dir);
+            if depth == 0u { result.unscattered += throughput * environment(ray.dir); }
             break;
         }
         let s = surface_at(hit, ray);
@@ -276,6 +282,7 @@ fn trace_path(camera_ray: Ray, forward: vec3<f32>, rng: ptr<function, Rng>) -> P
                 weight = power_heuristic(last_brdf_pdf, light_pdf(hit, s, hit.t, ray.dir));
             }
             result.radiance += throughput * s.emission * weight;
+            if depth == 0u { result.unscattered += throughput * s.emission * weight; }
         }
         if depth >= frame.max_depth { break; }
 
@@ -351,6 +358,7 @@ fn trace_pixel(gid: vec2<u32>) {
     var radiance = vec3<f32>(0.0);
     var albedo_depth = vec4<f32>(0.0);
     var normal_hits = vec4<f32>(0.0);
+    var unscattered_m2 = vec4<f32>(0.0);
     for (var s = 0u; s < frame.spp; s++) {
         var rng = rng_new(pixel, frame.sample_base + s, frame.seed);
         // Box filter: a uniform point in the pixel.
@@ -358,7 +366,12 @@ fn trace_pixel(gid: vec2<u32>) {
         let dir = camera_ray_dir(gid, jitter);
         let r = trace_path(Ray(origin, dir), forward, &rng);
         // A non-finite sample would poison the pixel forever; it is dropped (it should never happen).
-        if finite3(r.radiance) { radiance += r.radiance; }
+        if finite3(r.radiance) {
+            radiance += r.radiance;
+            // Capped so that a firefly's square cannot overflow the sum.
+            let l = min(max(luminance(r.radiance - r.unscattered), 0.0), 1e15);
+            unscattered_m2 += vec4<f32>(r.unscattered, l * l);
+        }
         if r.hit {
             albedo_depth += vec4<f32>(r.albedo, r.depth);
             normal_hits += vec4<f32>(r.normal, 1.0);
@@ -367,4 +380,5 @@ fn trace_pixel(gid: vec2<u32>) {
     accum[pixel] += vec4<f32>(radiance, f32(frame.spp));
     aov_albedo_depth[pixel] += albedo_depth;
     aov_normal[pixel] += normal_hits;
+    moments[pixel] += unscattered_m2;
 }

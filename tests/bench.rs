@@ -123,7 +123,7 @@ fn check_error_curves(results: &Value, out: &Path) {
         let cached = out.join("cache").join(format!("{scene}-{key}"));
         assert!(cached.join("half_a.exr").exists() && cached.join("half_b.exr").exists());
         let curves = s["curves"].as_array().unwrap();
-        assert_eq!(curves.len(), 7);
+        assert_eq!(curves.len(), 8);
         for c in curves {
             let name = c["name"].as_str().unwrap();
             let points = c["points"].as_array().unwrap();

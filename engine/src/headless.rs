@@ -245,11 +245,18 @@ impl HeadlessApp {
         self.renderer().tracer.read_radiance(&self.ctx)
     }
 
+    /// The current accumulation denoised with the settings' `denoise_params` (whether or not
+    /// `RenderSettings::denoise` is on): linear RGB per pixel, row-major from the top-left.
+    pub fn denoised_radiance(&self) -> Vec<[f32; 3]> {
+        let params = self.app.world().resource::<RenderSettings>().denoise_params;
+        self.renderer().tracer.denoised_radiance(&self.ctx, &params)
+    }
+
     pub fn aovs(&self) -> Aovs {
         self.renderer().tracer.read_aovs(&self.ctx)
     }
 
-    /// Tone-mapped sRGB RGBA8 of the current accumulation.
+    /// Tone-mapped sRGB RGBA8 of the current accumulation (denoised when `RenderSettings::denoise` is on).
     pub fn display_rgba8(&self) -> Vec<u8> {
         let settings = self.app.world().resource::<RenderSettings>().clone();
         let r = self.renderer();

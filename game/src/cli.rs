@@ -139,6 +139,9 @@ pub struct SceneArgs {
     /// Samples per pixel per GPU submission.
     #[arg(long, default_value_t = 16)]
     pub spp_per_dispatch: u32,
+    /// Denoise the image (edge-avoiding a-trous filter guided by normal, depth and albedo).
+    #[arg(long)]
+    pub denoise: bool,
     /// Where skinning, morphing and BVH refit run: GPU compute passes or the CPU (the reference); auto
     /// picks the GPU on real GPUs and the CPU on a software adapter (lavapipe). The image is the same
     /// up to float rounding.

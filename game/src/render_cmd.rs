@@ -48,6 +48,7 @@ pub fn settings_from(args: &SceneArgs) -> RenderSettings {
         seed: args.seed,
         russian_roulette: !args.no_rr,
         nee: !args.no_nee,
+        denoise: args.denoise,
         deform: args.deform.into(),
         static_bvh: args.static_bvh.into(),
         ..Default::default()
@@ -116,6 +117,7 @@ struct RenderReport {
     height: u32,
     spp: u32,
     max_depth: u32,
+    denoise: bool,
     triangles: usize,
     bvh_build_and_upload_s: f64,
     gpu_memory_geometry_bvh_bytes: u64,
@@ -191,7 +193,11 @@ fn render_to_file(
     bar.finish_and_clear();
     let wall = start.elapsed().as_secs_f64();
     let (w, h) = (settings.width, settings.height);
-    let radiance = app.radiance();
+    let radiance = if settings.denoise {
+        app.denoised_radiance()
+    } else {
+        app.radiance()
+    };
     if let Some(bad) = radiance.iter().flatten().find(|v| !v.is_finite()) {
         anyhow::bail!("internal error: the render has a non-finite pixel value ({bad})");
     }
@@ -220,9 +226,10 @@ fn render_to_file(
     }
     let renderer = app.renderer();
     eprintln!(
-        "raykin: wrote {} ({w}x{h}, {} spp, {:.2} s, {:.2} M samples/s)",
+        "raykin: wrote {} ({w}x{h}, {} spp{}, {:.2} s, {:.2} M samples/s)",
         out.display(),
         args.spp,
+        if settings.denoise { ", denoised" } else { "" },
         wall,
         (w as f64 * h as f64 * args.spp as f64) / wall / 1e6
     );
@@ -235,6 +242,7 @@ fn render_to_file(
             height: h,
             spp: args.spp,
             max_depth: args.max_depth,
+            denoise: settings.denoise,
             triangles: scene.triangle_count(),
             bvh_build_and_upload_s: renderer.scene.build_seconds,
             gpu_memory_geometry_bvh_bytes: renderer.scene.memory.geometry_and_bvh(),
@@ -283,6 +291,7 @@ pub fn run_default() -> Result<()> {
         time: None,
         animation: None,
         spp_per_dispatch: 16,
+        denoise: false,
         deform: crate::cli::DeformArg::Auto,
         static_bvh: crate::cli::StaticBvh::Wide,
     };

@@ -388,7 +388,12 @@ fn write_frame(
     let name = settings.frame_file(k);
     let bytes = match settings.frame.format {
         FrameFormat::Exr => {
-            let radiance = app.radiance();
+            // `--denoise`: the PNG path's display pass denoises on its own; EXR frames take the same filter.
+            let radiance = if settings.frame.render.denoise {
+                app.denoised_radiance()
+            } else {
+                app.radiance()
+            };
             if let Some(bad) = radiance.iter().flatten().find(|v| !v.is_finite()) {
                 return Err(RecordError::Render {
                     frame: k,

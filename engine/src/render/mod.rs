@@ -1,11 +1,13 @@
 //! The render plugin: GPU scene buffers, the top-level BVH each frame, and the path tracer.
 
+pub mod denoise;
 pub mod layout;
 pub mod path_tracer;
 pub mod scene_buffers;
 pub mod settings;
 pub mod shaders;
 
+pub use denoise::{DenoiseParams, Denoiser};
 pub use path_tracer::{Aovs, PassTimes, PathTracer, PrimaryHit, RayCastTiming};
 pub use scene_buffers::{GpuMemory, GpuScene, InstanceInput, UploadError};
 pub use settings::{AovView, Environment, RenderSettings, Tonemapper};

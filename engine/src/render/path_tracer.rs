@@ -1,12 +1,14 @@
 //! Pipelines and per-view buffers of the path tracer: dispatch, accumulation, tone mapping, readback, and GPU
 //! timestamps around each pass where the adapter has them.
 
+use super::denoise::{DenoiseInputs, DenoiseParams, Denoiser};
 use super::layout::*;
 use super::scene_buffers::GpuScene;
-use super::settings::{Environment, RenderSettings};
+use super::settings::{AovView, Environment, RenderSettings};
 use crate::camera::CameraView;
 use crate::gpu::GpuContext;
 use bytemuck::{Pod, Zeroable};
+use std::sync::OnceLock;
 
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
@@ -25,6 +27,8 @@ struct TonemapParams {
 pub struct PassTimes {
     pub trace_ms: f64,
     pub tonemap_ms: f64,
+    /// 0 when the last dispatch did not denoise.
+    pub denoise_ms: f64,
     /// GPU skinning + morphing (`shaders/deform.wgsl`).
     pub skin_ms: f64,
     /// GPU BLAS refit + SAH cost (`shaders/refit.wgsl`).
@@ -58,6 +62,8 @@ pub struct PathTracer {
     pub accum: wgpu::Buffer,
     pub aov_albedo_depth: wgpu::Buffer,
     pub aov_normal: wgpu::Buffer,
+    /// Unscattered radiance sum + sum of luminance(scattered)^2: what the denoiser needs beyond the AOVs.
+    pub moments: wgpu::Buffer,
     pub output_rgba8: wgpu::Buffer,
     /// Primary hit through each pixel centre (instance, triangle, barycentrics); a 16-byte stub while
     /// `hit_aov_enabled` is off, so nothing is spent on it unless asked.
@@ -74,9 +80,15 @@ pub struct PathTracer {
     pub samples: u32,
     /// Pairs: trace, tonemap.
     timestamps: Option<crate::gpu::PassTimestamps>,
+    denoiser: Denoiser,
+    /// One pair around the denoiser's pass, resolved by every denoise (in a frame or not).
+    denoise_timestamps: Option<crate::gpu::PassTimestamps>,
+    /// The tone mapper's bindings with the denoised image as its input (made when first needed).
+    denoised_tonemap_group: OnceLock<wgpu::BindGroup>,
+    denoised_last_dispatch: bool,
 }
 
-fn layout_entry(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
+pub(super) fn layout_entry(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
         binding,
         visibility: wgpu::ShaderStages::COMPUTE,
@@ -102,23 +114,27 @@ fn uniform_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
     }
 }
 
-fn bind_group(
-    ctx: &GpuContext,
-    layout: &wgpu::BindGroupLayout,
-    buffers: &[&wgpu::Buffer],
-) -> wgpu::BindGroup {
-    let entries: Vec<wgpu::BindGroupEntry> = buffers
+/// Whole-buffer bindings 0, 1, 2, ... in order.
+pub(super) fn buffer_entries<'a>(buffers: &[&'a wgpu::Buffer]) -> Vec<wgpu::BindGroupEntry<'a>> {
+    buffers
         .iter()
         .enumerate()
         .map(|(i, b)| wgpu::BindGroupEntry {
             binding: i as u32,
             resource: b.as_entire_binding(),
         })
-        .collect();
+        .collect()
+}
+
+fn bind_group(
+    ctx: &GpuContext,
+    layout: &wgpu::BindGroupLayout,
+    buffers: &[&wgpu::Buffer],
+) -> wgpu::BindGroup {
     ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
         label: None,
         layout,
-        entries: &entries,
+        entries: &buffer_entries(buffers),
     })
 }
 
@@ -126,6 +142,7 @@ struct ViewBuffers {
     accum: wgpu::Buffer,
     albedo: wgpu::Buffer,
     normal: wgpu::Buffer,
+    moments: wgpu::Buffer,
     rgba8: wgpu::Buffer,
 }
 
@@ -145,6 +162,7 @@ fn view_buffers(ctx: &GpuContext, width: u32, height: u32) -> ViewBuffers {
         accum: make("accum", 16),
         albedo: make("aov albedo", 16),
         normal: make("aov normal", 16),
+        moments: make("denoiser moments", 16),
         rgba8: make("rgba8", 4),
     }
 }
@@ -168,6 +186,7 @@ impl PathTracer {
                 layout_entry(2, false),
                 layout_entry(3, false),
                 layout_entry(4, false),
+                layout_entry(5, false),
             ],
         });
         let tonemap_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -240,7 +259,14 @@ impl PathTracer {
         let accum_bind_group = bind_group(
             ctx,
             &accum_layout,
-            &[&v.accum, &v.albedo, &v.normal, &ray_counter, &aov_hit],
+            &[
+                &v.accum,
+                &v.albedo,
+                &v.normal,
+                &ray_counter,
+                &aov_hit,
+                &v.moments,
+            ],
         );
         let tonemap_bind_group = bind_group(
             ctx,
@@ -260,6 +286,7 @@ impl PathTracer {
             accum: v.accum,
             aov_albedo_depth: v.albedo,
             aov_normal: v.normal,
+            moments: v.moments,
             output_rgba8: v.rgba8,
             aov_hit,
             hit_aov_enabled: false,
@@ -271,6 +298,10 @@ impl PathTracer {
             height,
             samples: 0,
             timestamps,
+            denoiser: Denoiser::new(ctx),
+            denoise_timestamps: crate::gpu::PassTimestamps::new(ctx, "denoise timestamps", 1),
+            denoised_tonemap_group: OnceLock::new(),
+            denoised_last_dispatch: false,
         };
         tracer.reset(ctx);
         tracer
@@ -291,6 +322,7 @@ impl PathTracer {
                 &v.normal,
                 &self.ray_counter,
                 &self.aov_hit,
+                &v.moments,
             ],
         );
         self.tonemap_bind_group = bind_group(
@@ -308,9 +340,12 @@ impl PathTracer {
             self.accum,
             self.aov_albedo_depth,
             self.aov_normal,
+            self.moments,
             self.output_rgba8,
-        ) = (v.accum, v.albedo, v.normal, v.rgba8);
+        ) = (v.accum, v.albedo, v.normal, v.moments, v.rgba8);
         (self.width, self.height) = (width, height);
+        self.denoiser.release();
+        self.denoised_tonemap_group = OnceLock::new();
         self.reset(ctx);
     }
 
@@ -331,6 +366,7 @@ impl PathTracer {
                 &self.aov_normal,
                 &self.ray_counter,
                 &self.aov_hit,
+                &self.moments,
             ],
         );
     }
@@ -338,7 +374,12 @@ impl PathTracer {
     /// Restarts accumulation (camera, scene or settings changed).
     pub fn reset(&mut self, ctx: &GpuContext) {
         let mut encoder = ctx.device.create_command_encoder(&Default::default());
-        for b in [&self.accum, &self.aov_albedo_depth, &self.aov_normal] {
+        for b in [
+            &self.accum,
+            &self.aov_albedo_depth,
+            &self.aov_normal,
+            &self.moments,
+        ] {
             encoder.clear_buffer(b, 0, None);
         }
         ctx.queue.submit([encoder.finish()]);
@@ -401,14 +442,94 @@ impl PathTracer {
             pass.dispatch_workgroups(self.width.div_ceil(8), self.height.div_ceil(8), 1);
         }
         self.samples += spp;
+        let denoise = tonemap && Self::shows_denoised(settings);
         if tonemap {
-            self.encode_tonemap(ctx, &mut encoder, settings);
+            self.encode_display(ctx, &mut encoder, settings);
         }
         if let Some(t) = &self.timestamps {
             t.resolve(&mut encoder, if tonemap { 2 } else { 1 });
         }
+        self.denoised_last_dispatch = denoise;
         ctx.queue
             .submit(before.into_iter().chain([encoder.finish()]));
+    }
+
+    /// Whether the display shows the denoised image (colour view with the denoiser on).
+    fn shows_denoised(settings: &RenderSettings) -> bool {
+        settings.denoise && settings.view == AovView::Color
+    }
+
+    fn denoise_inputs(&self) -> DenoiseInputs<'_> {
+        DenoiseInputs {
+            accum: &self.accum,
+            albedo_depth: &self.aov_albedo_depth,
+            normal_hits: &self.aov_normal,
+            moments: &self.moments,
+            width: self.width,
+            height: self.height,
+        }
+    }
+
+    fn encode_denoise(
+        &self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        params: &DenoiseParams,
+    ) -> &wgpu::Buffer {
+        let timestamps = self.denoise_timestamps.as_ref().map(|t| t.pass_writes(0));
+        let output = self
+            .denoiser
+            .encode(ctx, encoder, &self.denoise_inputs(), params, timestamps);
+        if let Some(t) = &self.denoise_timestamps {
+            t.resolve(encoder, 1);
+        }
+        output
+    }
+
+    /// The display transform, denoising first when the settings ask for it.
+    fn encode_display(
+        &self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        settings: &RenderSettings,
+    ) {
+        if !Self::shows_denoised(settings) {
+            self.encode_tonemap(ctx, encoder, settings, &self.tonemap_bind_group);
+            return;
+        }
+        let denoised = self.encode_denoise(ctx, encoder, &settings.denoise_params);
+        let group = self.denoised_tonemap_group.get_or_init(|| {
+            bind_group(
+                ctx,
+                &self.tonemap_layout,
+                &[
+                    denoised,
+                    &self.aov_albedo_depth,
+                    &self.aov_normal,
+                    &self.output_rgba8,
+                    &self.tonemap_uniform,
+                ],
+            )
+        });
+        self.encode_tonemap(ctx, encoder, settings, group);
+    }
+
+    /// Denoises the current accumulation (whatever `RenderSettings::denoise` says) and reads it back: linear
+    /// RGB per pixel, row-major from the top-left.
+    pub fn denoised_radiance(&self, ctx: &GpuContext, params: &DenoiseParams) -> Vec<[f32; 3]> {
+        let mut encoder = ctx.device.create_command_encoder(&Default::default());
+        let output = self.encode_denoise(ctx, &mut encoder, params);
+        ctx.queue.submit([encoder.finish()]);
+        let bytes = ctx.read_buffer(output, output.size());
+        bytemuck::cast_slice::<u8, [f32; 4]>(&bytes)
+            .iter()
+            .map(|p| [p[0], p[1], p[2]])
+            .collect()
+    }
+
+    /// GPU memory of the denoiser's buffers (0 until it first ran at this view size).
+    pub fn denoiser_memory_bytes(&self) -> u64 {
+        self.denoiser.memory_bytes()
     }
 
     fn trace_timestamps(&self) -> Option<wgpu::ComputePassTimestampWrites<'_>> {
@@ -489,6 +610,7 @@ impl PathTracer {
         if let Some(t) = &self.timestamps {
             t.resolve(&mut encoder, 1);
         }
+        self.denoised_last_dispatch = false;
         ctx.queue.submit([encoder.finish()]);
         let gpu_ms = self.read_pass_times(ctx)?.trace_ms;
         Some(RayCastTiming {
@@ -546,6 +668,7 @@ impl PathTracer {
         ctx: &GpuContext,
         encoder: &mut wgpu::CommandEncoder,
         settings: &RenderSettings,
+        group: &wgpu::BindGroup,
     ) {
         let params = TonemapParams {
             width: self.width,
@@ -563,14 +686,14 @@ impl PathTracer {
             timestamp_writes: self.timestamps.as_ref().map(|t| t.pass_writes(1)),
         });
         pass.set_pipeline(&self.tonemap_pipeline);
-        pass.set_bind_group(0, &self.tonemap_bind_group, &[]);
+        pass.set_bind_group(0, group, &[]);
         pass.dispatch_workgroups(self.width.div_ceil(8), self.height.div_ceil(8), 1);
     }
 
-    /// Tone-maps the current accumulation into `output_rgba8`.
+    /// Tone-maps the current accumulation (denoised if the settings say so) into `output_rgba8`.
     pub fn tonemap(&self, ctx: &GpuContext, settings: &RenderSettings) {
         let mut encoder = ctx.device.create_command_encoder(&Default::default());
-        self.encode_tonemap(ctx, &mut encoder, settings);
+        self.encode_display(ctx, &mut encoder, settings);
         ctx.queue.submit([encoder.finish()]);
     }
 
@@ -580,8 +703,19 @@ impl PathTracer {
         Some(PassTimes {
             trace_ms: ms[0],
             tonemap_ms: ms[1],
+            denoise_ms: if self.denoised_last_dispatch {
+                self.read_denoise_ms(ctx).unwrap_or(0.0)
+            } else {
+                0.0
+            },
             ..Default::default()
         })
+    }
+
+    /// GPU time of the last denoise, in a frame or through [`Self::denoised_radiance`] (blocks until it
+    /// finished); `None` without timestamp support.
+    pub fn read_denoise_ms(&self, ctx: &GpuContext) -> Option<f64> {
+        Some(self.denoise_timestamps.as_ref()?.read_ms(ctx)[0])
     }
 
     /// Rays (camera, bounce, shadow) traced by the last dispatch (blocks until it finished).

@@ -6,6 +6,7 @@ pub const BVH: &str = include_str!("../../../shaders/bvh.wgsl");
 pub const BRDF: &str = include_str!("../../../shaders/brdf.wgsl");
 pub const PATH_TRACE: &str = include_str!("../../../shaders/path_trace.wgsl");
 pub const TONEMAP: &str = include_str!("../../../shaders/tonemap.wgsl");
+pub const DENOISE: &str = include_str!("../../../shaders/denoise.wgsl");
 pub const RAYCAST: &str = include_str!("../../../shaders/raycast.wgsl");
 /// GPU skinning + morphing and the GPU BLAS refit (`crate::gpu_deform`); standalone modules.
 pub const DEFORM: &str = include_str!("../../../shaders/deform.wgsl");
@@ -61,11 +62,16 @@ fn file(name: &str, built_in: &str) -> String {
     }
 }
 
+pub fn denoise_source() -> String {
+    file("denoise.wgsl", DENOISE)
+}
+
 /// Every compute module the renderer builds, by name, for validation.
 pub fn all_modules() -> Vec<(&'static str, String)> {
     vec![
         ("path_trace", path_trace_source()),
         ("tonemap", tonemap_source()),
+        ("denoise", denoise_source()),
         ("raycast", raycast_source()),
         ("deform", deform_source()),
         ("refit", refit_source()),

@@ -16,7 +16,7 @@ use sha2::Digest;
 use std::path::Path;
 
 /// One curve of the error-vs-time charts: a name and how it changes the bench's base settings.
-/// Adding a curve is adding one line here (e.g. the denoiser: `curve("denoiser", |s| s.denoise = true)`).
+/// Adding a curve is adding one line here.
 pub struct Curve {
     pub name: &'static str,
     pub apply: fn(&mut RenderSettings),
@@ -35,6 +35,8 @@ pub const CURVES: &[Curve] = &[
     curve("max depth 3", |s| s.max_depth = s.max_depth.min(3)),
     curve("Russian roulette off", |s| s.russian_roulette = false),
     curve("NEE/MIS off (BRDF sampling only)", |s| s.nee = false),
+    // The image at each point is denoised once; its time includes that pass.
+    curve("denoised (a-trous, SVGF-style)", |s| s.denoise = true),
 ];
 
 /// Seeds of the reference halves; curves use seeds far from these.
@@ -128,6 +130,7 @@ pub fn measure(
                 .tracer
                 .reset(&gpu);
             let (mut elapsed_ms, mut run) = (0.0, Vec::new());
+            let mut denoise_times = Vec::new();
             for &target in &checkpoints {
                 while app.samples() < target {
                     let start = std::time::Instant::now();
@@ -141,12 +144,25 @@ pub fn measure(
                         }
                     }
                 }
-                let image = app.radiance();
+                let (image, denoise_ms) = if settings.denoise {
+                    let start = std::time::Instant::now();
+                    let image = app.denoised_radiance();
+                    let wall = start.elapsed().as_secs_f64() * 1e3;
+                    let gpu = app.renderer().tracer.read_denoise_ms(&app.ctx);
+                    (image, gpu.unwrap_or(wall))
+                } else {
+                    (app.radiance(), 0.0)
+                };
                 let display = tonemap(&image);
                 let err = rel_mse(&display, &reference_display);
                 let flip = flip_mean(&reference_srgb8, &srgb8(&display), w, h);
+                denoise_times.push(denoise_ms);
                 run.push([elapsed_ms, err, flip, rel_mse(&image, &r.mean)]);
             }
+            // A denoise costs the same at any spp: its median time is added to every point (one pass's
+            // jitter would otherwise outweigh the trace time between the first checkpoints).
+            let denoise_ms = median(&denoise_times);
+            run.iter_mut().for_each(|p| p[0] += denoise_ms);
             runs.push(run);
         }
         let points = checkpoints
