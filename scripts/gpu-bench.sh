@@ -2,9 +2,14 @@
 # The whole device-side GPU run in one command (issue 7). Run it on the lent GPU machine from the repo root, with
 # the release binary carried at rel/raykin and the Vulkan loader debs at .gl/ (see ../.library/device/README.md):
 #   for f in .gl/*.deb; do dpkg -x $f /; done; ldconfig; scripts/gpu-bench.sh $OUT
-# Writes OUT/gpu-bench.log, OUT/results.json / results.csv (full suite: 3 scenes x 1080p/1440p, 300 frames) and
-# OUT/crowd.json (the animated crowd through the frame loop). ASSETS must hold CornellBox, FlightHelmet,
-# MetalRoughSpheresNoTextures, CesiumMan and Fox (copies of ../shared/assets).
+# `raykin bench --suite full` (4 scenes incl. the animated crowd at 1920x1080 and 2560x1440, 300 frames; error vs
+# time; BVH presets; refit vs rebuild; scaling) plus one converged Cornell render. At most 8 files land in OUT
+# (the device tool returns 8): gpu-bench.log, results.json, results.csv, summary.md, charts.tar (charts/*.png
+# and curves.csv), results-crowd-cpu.json (the crowd with CPU skinning + refit), cornell-1024spp.png,
+# cornell-render.json. ASSETS must hold CornellBox, FlightHelmet,
+# MetalRoughSpheresNoTextures, CesiumMan, Fox and DamagedHelmet (copies of ../shared/assets).
+# BENCH_ARGS adds arguments to the bench (e.g. "--parts frames --parts errors" to split the run over two calls);
+# CORNELL_RENDER=0 skips the converged render (for a dry run of this script on a CPU adapter).
 set -uo pipefail
 out="${1:-gpu-out}"
 mkdir -p "$out"
@@ -14,10 +19,20 @@ if [ -z "${VK_DRIVER_FILES:-}" ] && [ -f /usr/local/nvidia/share/vulkan/icd.d/nv
   export VK_DRIVER_FILES=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
 fi
 export RAYKIN_COMMIT="${RAYKIN_COMMIT:-$(git rev-parse --short HEAD 2>/dev/null || echo unknown)}"
+assets="${ASSETS:-shared/assets}"
+work="$(mktemp -d)"
 {
   nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv,noheader 2>/dev/null || true
-  "$bin" bench --suite full --assets "${ASSETS:-shared/assets}" --out "$out"
-  "$bin" bench --crowd --suite full --assets "${ASSETS:-shared/assets}" --out "$out"
-  "$bin" render "${ASSETS:-shared/assets}/CornellBox/CornellBox.glb" --look-from=-278,273,800 --look-at=-278,273,0 \
-    --fov 39.3077 --env 0,0,0 --width 1024 --height 1024 --spp 1024 --out "$out/cornell-1024spp.png" --report "$out/cornell-render.json"
-} 2>&1 | tee "$out/gpu-bench.log"
+  # shellcheck disable=SC2086
+  "$bin" bench --suite full --assets "$assets" --out "$work/bench" --cache "$work/cache" ${BENCH_ARGS:-}
+  cp "$work/bench/results.json" "$work/bench/results.csv" "$work/bench/summary.md" "$out/" 2>/dev/null
+  # The crowd again with CPU skinning + refit (the full suite used the GPU passes), for the comparison.
+  "$bin" bench --suite full --scene crowd --parts frames --deform cpu --assets "$assets" --out "$work/crowd-cpu"
+  cp "$work/crowd-cpu/results.json" "$out/results-crowd-cpu.json" 2>/dev/null
+  tar -cf "$out/charts.tar" -C "$work/bench" charts curves.csv 2>/dev/null
+  if [ "${CORNELL_RENDER:-1}" = 1 ]; then
+    "$bin" render "$assets/CornellBox/CornellBox.glb" --look-from=-278,273,800 --look-at=-278,273,0 --fov 39.3077 \
+      --env 0,0,0 --width 1024 --height 1024 --spp 1024 --out "$out/cornell-1024spp.png" --report "$out/cornell-render.json"
+  fi
+} 2>&1 | grep -v "zero-area triangles dropped" | tee "$out/gpu-bench.log"
+rm -rf "$work"

@@ -8,9 +8,17 @@ const MATERIAL_DOUBLE_SIDED: u32 = 1u;
 const MATERIAL_ALPHA_MASK: u32 = 2u;
 const MATERIAL_ALPHA_BLEND: u32 = 4u;
 const FRAME_NEE: u32 = 1u;
+// Write the primary-hit AOV (the recorder's motion vectors need it; off otherwise).
+const FRAME_HIT_AOV: u32 = 2u;
 
 struct BvhChild { min: vec3<f32>, index: u32, max: vec3<f32>, count: u32 }
 struct BvhNode { a: BvhChild, b: BvhChild }
+// w0: origin of the quantisation grid (xyz, f32 bits), exponents e.x | e.y << 8 | e.z << 16 | inner-child mask << 24
+// w1: first child node, first triangle slot, child meta bytes 0-3, 4-7
+// w2..w4: quantised child planes per axis: min bytes 0-3, min 4-7, max 0-3, max 4-7 (x, y, z)
+struct WideNode { w0: vec4<u32>, w1: vec4<u32>, w2: vec4<u32>, w3: vec4<u32>, w4: vec4<u32> }
+// Set in Mesh.blas_root when the root indexes `wide_nodes`.
+const WIDE_BLAS: u32 = 0x80000000u;
 
 struct Instance {
     world_from_object: mat3x4<f32>, // rows
@@ -53,6 +61,8 @@ struct Frame {
 @group(0) @binding(8) var<storage, read> texture_infos: array<TextureInfo>;
 @group(0) @binding(9) var<storage, read> emitters: array<Emitter>;
 @group(0) @binding(10) var<uniform> frame: Frame;
+// Compressed 8-wide BVH nodes of static meshes (obvhs `CwBvhNode`, 80 bytes: engine/src/bvh/wide.rs).
+@group(0) @binding(11) var<storage, read> wide_nodes: array<WideNode>;
 
 // ---- random numbers: a PCG stream per (pixel, sample, seed) ----
 struct Rng { state: u32 }

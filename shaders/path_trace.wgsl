@@ -9,6 +9,12 @@
 @group(1) @binding(2) var<storage, read_write> aov_normal: array<vec4<f32>>;
 // Rays traced by the last dispatch (camera, bounce and shadow rays), for rays/s figures.
 @group(1) @binding(3) var<storage, read_write> ray_counter: array<atomic<u32>>;
+// What the ray through the pixel centre hits first: instance (NONE: nothing), triangle slot, barycentrics as
+// f32 bits. Written only with FRAME_HIT_AOV, once per accumulation (a 16-byte stub is bound otherwise).
+@group(1) @binding(4) var<storage, read_write> aov_hit: array<vec4<u32>>;
+// For the denoiser: rgb: radiance that reached the camera unscattered (emission seen directly, or the
+// environment where the camera ray missed) summed; w: sum of luminance(scattered radiance)^2.
+@group(1) @binding(5) var<storage, read_write> moments: array<vec4<f32>>;
 
 var<private> rays_traced: u32;
 var<workgroup> workgroup_rays: atomic<u32>;
@@ -159,8 +165,18 @@ fn power_heuristic(a: f32, b: f32) -> f32 {
     return a2 / (a2 + b * b);
 }
 
-// Direct light from one emissive triangle picked by power, weighted against BRDF sampling.
-fn sample_direct(s: Surface, v_local: vec3<f32>, frame_basis: mat3x3<f32>, rng: ptr<function, Rng>) -> vec3<f32> {
+// A light sample for next-event estimation: the shadow ray to test and what it adds when unblocked.
+struct LightSample {
+    ray: Ray,
+    t_max: f32,
+    // Unoccluded contribution (BRDF x cos x emission x MIS weight / pdf); zero when nothing to test.
+    contribution: vec3<f32>,
+}
+
+// Direct light from one emissive triangle picked by power, weighted against BRDF sampling. The shadow ray is
+// returned, not traced, so that the path loop traces every ray at one call site (smaller kernel).
+fn sample_light(s: Surface, v_local: vec3<f32>, frame_basis: mat3x3<f32>, rng: ptr<function, Rng>) -> LightSample {
+    var none = LightSample(Ray(vec3<f32>(0.0), vec3<f32>(0.0, 0.0, 1.0)), 0.0, vec3<f32>(0.0));
     let u = rand(rng);
     var lo = 0u;
     var hi = frame.emitter_count - 1u;
@@ -176,7 +192,7 @@ fn sample_direct(s: Surface, v_local: vec3<f32>, frame_basis: mat3x3<f32>, rng: 
     let point = p[0] * (1.0 - b1 - b2) + p[1] * b1 + p[2] * b2;
     let cross_p = cross(p[1] - p[0], p[2] - p[0]);
     let area = 0.5 * length(cross_p);
-    if area <= 0.0 { return vec3<f32>(0.0); }
+    if area <= 0.0 { return none; }
     let nl = cross_p / (2.0 * area);
     let m = materials[triangles[e.triangle].w];
     let origin = offset_ray_origin(s.p, s.ng);
@@ -186,16 +202,12 @@ fn sample_direct(s: Surface, v_local: vec3<f32>, frame_basis: mat3x3<f32>, rng: 
     let dir = to_light / dist;
     let cos_l_signed = -dot(nl, dir);
     let double_sided = (m.flags & MATERIAL_DOUBLE_SIDED) != 0u;
-    if cos_l_signed <= 0.0 && !double_sided { return vec3<f32>(0.0); }
+    if cos_l_signed <= 0.0 && !double_sided { return none; }
     let cos_l = abs(cos_l_signed);
-    if cos_l <= 1e-7 || dot(dir, s.ng) <= 0.0 { return vec3<f32>(0.0); }
+    if cos_l <= 1e-7 || dot(dir, s.ng) <= 0.0 { return none; }
     let l_local = dir * frame_basis;
     let f = brdf_eval(v_local, l_local, s.brdf);
-    if all(f == vec3<f32>(0.0)) { return vec3<f32>(0.0); }
-    // Shadow ray: stop just short of the light so it cannot hit the light itself.
-    rays_traced++;
-    let blocker = trace(Ray(origin, dir), dist * (1.0 - 1e-4), true);
-    if blocker.instance != NONE { return vec3<f32>(0.0); }
+    if all(f == vec3<f32>(0.0)) { return none; }
     var emission = m.emissive;
     if m.emissive_texture != NONE {
         let inst = instances[e.instance];
@@ -205,11 +217,14 @@ fn sample_direct(s: Surface, v_local: vec3<f32>, frame_basis: mat3x3<f32>, rng: 
     let power = luminance(m.emissive) * area;
     let pdf_light = (power / frame.emitter_total_power) / area * dist2 / cos_l;
     let pdf_brdf = brdf_pdf(v_local, l_local, s.brdf);
-    return f * l_local.z * emission * power_heuristic(pdf_light, pdf_brdf) / pdf_light;
+    // Stop the shadow ray just short of the light so it cannot hit the light itself.
+    return LightSample(Ray(origin, dir), dist * (1.0 - 1e-4), f * l_local.z * emission * power_heuristic(pdf_light, pdf_brdf) / pdf_light);
 }
 
 struct PathResult {
     radiance: vec3<f32>,
+    // The part of `radiance` that no surface scattered (exact: the denoiser leaves it alone).
+    unscattered: vec3<f32>,
     albedo: vec3<f32>,
     normal: vec3<f32>,
     depth: f32,
@@ -217,18 +232,35 @@ struct PathResult {
 }
 
 fn trace_path(camera_ray: Ray, forward: vec3<f32>, rng: ptr<function, Rng>) -> PathResult {
-    var result = PathResult(vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0), 0.0, false);
+    var result = PathResult(vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0), 0.0, false);
     var ray = camera_ray;
     var throughput = vec3<f32>(1.0);
     var depth = 0u;
     var pass_throughs = 0u;
     var last_brdf_pdf = 0.0; // 0: camera ray, emission counts in full
     let nee = (frame.flags & FRAME_NEE) != 0u && frame.emitter_count > 0u;
+    // A shadow ray waiting to be traced before the next path ray, and whether the path goes on after it.
+    var shadow = LightSample(ray, 0.0, vec3<f32>(0.0));
+    var shadow_pending = false;
+    var path_alive = true;
     loop {
         rays_traced++;
-        let hit = trace(ray, MISS, false);
+        var next = ray;
+        var t_max = MISS;
+        if shadow_pending {
+            next = shadow.ray;
+            t_max = shadow.t_max;
+        }
+        let hit = trace(next, t_max, shadow_pending);
+        if shadow_pending {
+            if hit.instance == NONE { result.radiance += shadow.contribution; }
+            shadow_pending = false;
+            if path_alive { continue; }
+            break;
+        }
         if hit.instance == NONE {
             result.radiance += throughput * environment(ray.dir);
+            if depth == 0u { result.unscattered += throughput * environment(ray.dir); }
             break;
         }
         let s = surface_at(hit, ray);
@@ -250,27 +282,36 @@ fn trace_path(camera_ray: Ray, forward: vec3<f32>, rng: ptr<function, Rng>) -> P
                 weight = power_heuristic(last_brdf_pdf, light_pdf(hit, s, hit.t, ray.dir));
             }
             result.radiance += throughput * s.emission * weight;
+            if depth == 0u { result.unscattered += throughput * s.emission * weight; }
         }
         if depth >= frame.max_depth { break; }
 
         let tbn = basis(s.n);
         let v_local = -ray.dir * tbn;
         if nee {
-            result.radiance += throughput * sample_direct(s, v_local, tbn, rng);
+            shadow = sample_light(s, v_local, tbn, rng);
+            shadow.contribution *= throughput;
+            shadow_pending = any(shadow.contribution != vec3<f32>(0.0));
         }
         let bs = brdf_sample(v_local, s.brdf, vec3<f32>(rand(rng), rand(rng), rand(rng)));
         let dir = tbn * bs.l;
         // A direction above the shading normal's horizon but below the geometry's would leak light.
-        if bs.pdf <= 0.0 || dot(dir, s.ng) <= 0.0 { break; }
-        throughput *= bs.weight;
-        last_brdf_pdf = bs.pdf;
-        depth++;
-        if depth >= frame.rr_depth {
-            let survive = min(max(throughput.x, max(throughput.y, throughput.z)), 0.95);
-            if rand(rng) >= survive { break; }
-            throughput /= survive;
+        path_alive = bs.pdf > 0.0 && dot(dir, s.ng) > 0.0;
+        if path_alive {
+            throughput *= bs.weight;
+            last_brdf_pdf = bs.pdf;
+            depth++;
+            if depth >= frame.rr_depth {
+                let survive = min(max(throughput.x, max(throughput.y, throughput.z)), 0.95);
+                if rand(rng) >= survive {
+                    path_alive = false;
+                } else {
+                    throughput /= survive;
+                }
+            }
+            ray = Ray(offset_ray_origin(s.p, s.ng), dir);
         }
-        ray = Ray(offset_ray_origin(s.p, s.ng), dir);
+        if !path_alive && !shadow_pending { break; }
     }
     return result;
 }
@@ -294,27 +335,43 @@ fn trace_pixels(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_in
     }
 }
 
+// Direction of the camera ray through `offset` (in pixels, 0..1 each way) of pixel `gid`.
+fn camera_ray_dir(gid: vec2<u32>, offset: vec2<f32>) -> vec3<f32> {
+    let aspect = f32(frame.width) / f32(frame.height);
+    let ndc = vec2<f32>(
+        (f32(gid.x) + offset.x) / f32(frame.width) * 2.0 - 1.0,
+        1.0 - (f32(gid.y) + offset.y) / f32(frame.height) * 2.0);
+    let d_cam = vec3<f32>(ndc.x * frame.tan_half_fov * aspect, ndc.y * frame.tan_half_fov, -1.0);
+    return normalize((frame.world_from_camera * vec4<f32>(d_cam, 0.0)).xyz);
+}
+
 fn trace_pixel(gid: vec2<u32>) {
     let pixel = gid.y * frame.width + gid.x;
     let cam = frame.world_from_camera;
     let origin = cam[3].xyz;
     let forward = -cam[2].xyz;
-    let aspect = f32(frame.width) / f32(frame.height);
+    if (frame.flags & FRAME_HIT_AOV) != 0u && frame.sample_base == 0u {
+        rays_traced++;
+        let hit = trace(Ray(origin, camera_ray_dir(gid, vec2<f32>(0.5))), MISS, false);
+        aov_hit[pixel] = vec4<u32>(hit.instance, hit.triangle, bitcast<u32>(hit.bary.x), bitcast<u32>(hit.bary.y));
+    }
     var radiance = vec3<f32>(0.0);
     var albedo_depth = vec4<f32>(0.0);
     var normal_hits = vec4<f32>(0.0);
+    var unscattered_m2 = vec4<f32>(0.0);
     for (var s = 0u; s < frame.spp; s++) {
         var rng = rng_new(pixel, frame.sample_base + s, frame.seed);
         // Box filter: a uniform point in the pixel.
         let jitter = vec2<f32>(rand(&rng), rand(&rng));
-        let ndc = vec2<f32>(
-            (f32(gid.x) + jitter.x) / f32(frame.width) * 2.0 - 1.0,
-            1.0 - (f32(gid.y) + jitter.y) / f32(frame.height) * 2.0);
-        let d_cam = vec3<f32>(ndc.x * frame.tan_half_fov * aspect, ndc.y * frame.tan_half_fov, -1.0);
-        let dir = normalize((cam * vec4<f32>(d_cam, 0.0)).xyz);
+        let dir = camera_ray_dir(gid, jitter);
         let r = trace_path(Ray(origin, dir), forward, &rng);
         // A non-finite sample would poison the pixel forever; it is dropped (it should never happen).
-        if finite3(r.radiance) { radiance += r.radiance; }
+        if finite3(r.radiance) {
+            radiance += r.radiance;
+            // Capped so that a firefly's square cannot overflow the sum.
+            let l = min(max(luminance(r.radiance - r.unscattered), 0.0), 1e15);
+            unscattered_m2 += vec4<f32>(r.unscattered, l * l);
+        }
         if r.hit {
             albedo_depth += vec4<f32>(r.albedo, r.depth);
             normal_hits += vec4<f32>(r.normal, 1.0);
@@ -323,4 +380,5 @@ fn trace_pixel(gid: vec2<u32>) {
     accum[pixel] += vec4<f32>(radiance, f32(frame.spp));
     aov_albedo_depth[pixel] += albedo_depth;
     aov_normal[pixel] += normal_hits;
+    moments[pixel] += unscattered_m2;
 }

@@ -7,6 +7,7 @@ use common::repo_root;
 
 use glam::Vec3;
 use raykin::camera::CameraChoice;
+use raykin::gpu_deform::DeformBackend;
 use raykin::headless::HeadlessApp;
 use raykin::render::{Environment, RenderSettings};
 use raykin::scene::{LoadOptions, NodeTransform, SceneAsset, load_gltf, procedural};
@@ -48,7 +49,19 @@ fn camera() -> CameraChoice {
 }
 
 fn render(scene: Arc<SceneAsset>, pose: Option<(usize, f32)>) -> Vec<[f32; 3]> {
-    let mut app = HeadlessApp::new(gpu(), scene, settings(), &camera()).unwrap();
+    render_with(scene, pose, DeformBackend::Auto)
+}
+
+fn render_with(
+    scene: Arc<SceneAsset>,
+    pose: Option<(usize, f32)>,
+    deform: DeformBackend,
+) -> Vec<[f32; 3]> {
+    let settings = RenderSettings {
+        deform,
+        ..settings()
+    };
+    let mut app = HeadlessApp::new(gpu(), scene, settings, &camera()).unwrap();
     if let Some((clip, t)) = pose {
         app.set_time(clip, t).unwrap();
     }
@@ -187,6 +200,26 @@ fn same_time_same_image_and_no_ghosting() {
     let (ghost, mean) = mean_abs_diff(&moved, &a);
     eprintln!("ghosting: mean |diff| {ghost:.6} (mean {mean:.4})");
     assert!(ghost <= 1e-3 * mean, "ghosting {ghost}");
+}
+
+/// The GPU deform + refit passes and the CPU reference give the same image (same seed), and the GPU
+/// path is as reproducible as the CPU path.
+#[test]
+fn gpu_and_cpu_deformation_render_the_same_image() {
+    let scene = cesium();
+    for t in [0.4, 1.3] {
+        let cpu = render_with(scene.clone(), Some((0, t)), DeformBackend::Cpu);
+        let gpu_a = render_with(scene.clone(), Some((0, t)), DeformBackend::Gpu);
+        let gpu_b = render_with(scene.clone(), Some((0, t)), DeformBackend::Gpu);
+        assert_eq!(gpu_a, gpu_b, "t={t}: the GPU path is deterministic");
+        let (diff, mean) = mean_abs_diff(&gpu_a, &cpu);
+        eprintln!("t={t}: GPU vs CPU deformation: mean |diff| {diff:.6} (mean {mean:.4})");
+        assert!(mean > 0.01);
+        assert!(
+            diff <= 1e-3 * mean,
+            "t={t}: mean |diff| {diff} vs mean {mean}"
+        );
+    }
 }
 
 #[test]

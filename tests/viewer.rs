@@ -343,7 +343,19 @@ quit
 fn offscreen_loop_reports_per_pass_times() {
     let dir = temp_dir("offscreen");
     let report = dir.join("report.json");
-    let command = offscreen("48x30", 12, &["--report".as_ref(), report.as_os_str()]);
+    // The denoiser on (display-side, timed as its own pass); the script ends after the 12 frames.
+    let script = dir.join("denoise.script");
+    std::fs::write(&script, "set denoise on\nwait 100\n").expect("script");
+    let command = offscreen(
+        "48x30",
+        12,
+        &[
+            "--report".as_ref(),
+            report.as_os_str(),
+            "--script".as_ref(),
+            script.as_os_str(),
+        ],
+    );
     let (log, ok) = run_with_limit(command, Duration::from_secs(300));
     assert!(ok, "{log}");
     let r = load_json(&report);
@@ -370,7 +382,7 @@ fn offscreen_loop_reports_per_pass_times() {
         assert_eq!(s["n"].as_u64(), Some(12 - warmup), "cpu {phase}");
     }
     // lavapipe has timestamp queries: the GPU passes are timed too (a few late readbacks may be missing).
-    for pass in ["trace", "tonemap", "ui_and_display"] {
+    for pass in ["trace", "tonemap", "denoise", "ui_and_display"] {
         let s = &r["gpu_ms"][pass];
         assert!(
             s["median"]
@@ -461,5 +473,50 @@ fn offscreen_memory_stays_flat() {
         end <= half + 4096,
         "resident memory grew by {} KiB over the second half of {frames} frames: {samples:?}",
         end as i64 - half as i64
+    );
+}
+
+#[test]
+fn record_button_writes_a_resumable_recording() {
+    let dir = temp_dir("record");
+    let out = dir.join("frames");
+    let script = format!(
+        "pause\nrecord {out} 3 2 30\nwait_recording\nscreenshot {shot}\nquit\n",
+        out = out.display(),
+        shot = dir.join("after.png").display()
+    );
+    let script_path = dir.join("s.script");
+    std::fs::write(&script_path, script).expect("script");
+    let command = offscreen(
+        "48x30",
+        5000,
+        &["--script".as_ref(), script_path.as_os_str()],
+    );
+    let (log, ok) = run_with_limit(command, Duration::from_secs(300));
+    assert!(ok, "{log}");
+    for k in 0..3 {
+        let frame = load_png(&out.join(format!("frame_{k:05}.png")));
+        assert_eq!(frame.dimensions(), (48, 30), "frame {k} at the view's size");
+    }
+    let manifest = load_json(&out.join("manifest.json"));
+    assert_eq!(
+        manifest["frames"].as_array().map(Vec::len),
+        Some(3),
+        "{manifest}"
+    );
+    let messages = load_json(&dir.join("after.json"))["messages"].to_string();
+    assert!(messages.contains("recorded 3 frame(s)"), "{messages}");
+    // Pressing Record again with the same settings resumes: nothing left to render.
+    let command = offscreen(
+        "48x30",
+        5000,
+        &["--script".as_ref(), script_path.as_os_str()],
+    );
+    let (log, ok) = run_with_limit(command, Duration::from_secs(300));
+    assert!(ok, "{log}");
+    let messages = load_json(&dir.join("after.json"))["messages"].to_string();
+    assert!(
+        messages.contains("recorded 0 frame(s)") && messages.contains("3 of 3 complete"),
+        "{messages}"
     );
 }

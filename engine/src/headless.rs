@@ -87,17 +87,77 @@ impl HeadlessApp {
         if !seconds.is_finite() {
             return Err(format!("time {seconds} is not a finite number of seconds"));
         }
-        let world = self.app.world_mut();
-        let roots: Vec<bevy_ecs::entity::Entity> = world
-            .query_filtered::<bevy_ecs::entity::Entity, bevy_ecs::query::With<crate::scene::SceneRoot>>()
-            .iter(world)
-            .collect();
-        for root in roots {
-            world
-                .entity_mut(root)
-                .insert(crate::animation::AnimationPlayer::paused_at(clip, seconds));
-        }
+        crate::animation::hold_at(self.app.world_mut(), clip, seconds);
         Ok(())
+    }
+
+    /// Poses the scene at `seconds` into `clip` (`None`: the file's rest pose) and places the camera as
+    /// `camera` sees it in that pose (an animated glTF camera moves with its node). Unlike
+    /// [`Self::set_time`] alone, node transforms are current when this returns.
+    pub fn pose(
+        &mut self,
+        clip: Option<usize>,
+        seconds: f32,
+        camera: &CameraChoice,
+    ) -> Result<(), String> {
+        if let Some(clip) = clip {
+            self.set_time(clip, seconds)?;
+        }
+        use bevy_ecs::system::RunSystemOnce;
+        let world = self.app.world_mut();
+        let _ = world.run_system_once(crate::animation::animate);
+        let _ = world.run_system_once(crate::scene::propagate_transforms);
+        let settings = world.resource::<RenderSettings>();
+        let aspect = settings.width as f32 / settings.height.max(1) as f32;
+        let scene = world.resource::<crate::scene::SceneAssets>().0.clone();
+        let view = resolve_camera(world, &scene, camera, aspect).map_err(|e| e.to_string())?;
+        self.set_camera(view);
+        Ok(())
+    }
+
+    /// How deformed meshes' BVHs are rebuilt ([`RebuildPolicy::PoseDetermined`] for reproducible frames).
+    pub fn set_rebuild_policy(&mut self, policy: crate::bvh::refit::RebuildPolicy) {
+        self.app
+            .world_mut()
+            .resource_mut::<crate::bvh::refit::BvhStats>()
+            .policy = policy;
+    }
+
+    /// Drops the accumulated samples: the next [`Self::step`] starts a new image (sample index 0).
+    pub fn restart_accumulation(&mut self) {
+        let ctx = self.ctx.clone();
+        self.app
+            .world_mut()
+            .resource_mut::<Renderer>()
+            .tracer
+            .reset(&ctx);
+    }
+
+    /// Records the primary hit through each pixel centre from the next accumulation on ([`Self::primary_hits`]).
+    pub fn set_hit_aov(&mut self, enabled: bool) {
+        let ctx = self.ctx.clone();
+        self.app
+            .world_mut()
+            .resource_mut::<Renderer>()
+            .tracer
+            .set_hit_aov(&ctx, enabled);
+    }
+
+    /// The primary hit through each pixel centre (empty unless [`Self::set_hit_aov`] is on).
+    pub fn primary_hits(&self) -> Vec<crate::render::PrimaryHit> {
+        self.renderer().tracer.read_hits(&self.ctx)
+    }
+
+    pub fn camera(&self) -> CameraView {
+        *self.app.world().resource::<CameraView>()
+    }
+
+    pub fn scene(&self) -> Arc<SceneAsset> {
+        self.app
+            .world()
+            .resource::<crate::scene::SceneAssets>()
+            .0
+            .clone()
     }
 
     /// BVH refit quality and rebuild counters.
@@ -120,6 +180,20 @@ impl HeadlessApp {
 
     /// Accumulates `spp` samples per pixel in frames of at most `chunk` samples; `progress(done)` after each.
     pub fn accumulate(&mut self, spp: u32, chunk: u32, mut progress: impl FnMut(u32)) {
+        self.accumulate_while(spp, chunk, |done| {
+            progress(done);
+            true
+        });
+    }
+
+    /// Like [`Self::accumulate`], but stops early after a chunk for which `progress(done)` returns false;
+    /// returns the samples per pixel traced.
+    pub fn accumulate_while(
+        &mut self,
+        spp: u32,
+        chunk: u32,
+        mut progress: impl FnMut(u32) -> bool,
+    ) -> u32 {
         let mut done = 0;
         while done < spp {
             let n = chunk.clamp(1, spp - done);
@@ -128,8 +202,35 @@ impl HeadlessApp {
             done += n;
             // Waiting per chunk keeps the GPU queue short (and lavapipe's memory flat).
             self.ctx.wait_idle();
-            progress(done);
+            if !progress(done) {
+                break;
+            }
         }
+        done
+    }
+
+    /// The shading-free ray-casting pass (camera rays, plus one diffuse bounce per hit when asked) on the
+    /// current pose and camera; `None` where the adapter has no timestamp queries.
+    pub fn cast_rays(&mut self, diffuse_bounce: bool) -> Option<crate::render::RayCastTiming> {
+        if self.renderer().frames == 0 {
+            // Instances and the top-level BVH are uploaded by the first frame.
+            self.step();
+        }
+        let world = self.app.world_mut();
+        let settings = world.resource::<RenderSettings>().clone();
+        let camera = *world.resource::<CameraView>();
+        let mut renderer = world.resource_mut::<Renderer>();
+        let renderer = &mut *renderer;
+        renderer
+            .tracer
+            .resize(&self.ctx, settings.width, settings.height);
+        renderer.tracer.cast_rays(
+            &self.ctx,
+            &renderer.scene,
+            &settings,
+            &camera,
+            diffuse_bounce,
+        )
     }
 
     pub fn renderer(&self) -> &Renderer {
@@ -144,11 +245,18 @@ impl HeadlessApp {
         self.renderer().tracer.read_radiance(&self.ctx)
     }
 
+    /// The current accumulation denoised with the settings' `denoise_params` (whether or not
+    /// `RenderSettings::denoise` is on): linear RGB per pixel, row-major from the top-left.
+    pub fn denoised_radiance(&self) -> Vec<[f32; 3]> {
+        let params = self.app.world().resource::<RenderSettings>().denoise_params;
+        self.renderer().tracer.denoised_radiance(&self.ctx, &params)
+    }
+
     pub fn aovs(&self) -> Aovs {
         self.renderer().tracer.read_aovs(&self.ctx)
     }
 
-    /// Tone-mapped sRGB RGBA8 of the current accumulation.
+    /// Tone-mapped sRGB RGBA8 of the current accumulation (denoised when `RenderSettings::denoise` is on).
     pub fn display_rgba8(&self) -> Vec<u8> {
         let settings = self.app.world().resource::<RenderSettings>().clone();
         let r = self.renderer();

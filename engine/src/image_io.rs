@@ -18,19 +18,35 @@ fn err(path: &Path, reason: impl ToString) -> ImageError {
 
 /// Writes linear RGB as a float EXR.
 pub fn write_exr(path: &Path, width: u32, height: u32, rgb: &[[f32; 3]]) -> Result<(), ImageError> {
-    let data: Vec<f32> = rgb.iter().flatten().copied().collect();
-    let img = image::Rgb32FImage::from_raw(width, height, data)
-        .ok_or_else(|| err(path, "pixel count does not match the size"))?;
-    image::DynamicImage::ImageRgb32F(img)
-        .save_with_format(path, image::ImageFormat::OpenExr)
-        .map_err(|e| err(path, e))
+    let bytes = encode_exr(width, height, rgb).map_err(|reason| err(path, reason))?;
+    std::fs::write(path, bytes).map_err(|e| err(path, e))
 }
 
 pub fn write_png(path: &Path, width: u32, height: u32, rgba8: &[u8]) -> Result<(), ImageError> {
+    let bytes = encode_png(width, height, rgba8).map_err(|reason| err(path, reason))?;
+    std::fs::write(path, bytes).map_err(|e| err(path, e))
+}
+
+/// Linear RGB as the bytes of a float EXR file.
+pub fn encode_exr(width: u32, height: u32, rgb: &[[f32; 3]]) -> Result<Vec<u8>, String> {
+    let data: Vec<f32> = rgb.iter().flatten().copied().collect();
+    let img = image::Rgb32FImage::from_raw(width, height, data)
+        .ok_or("pixel count does not match the size")?;
+    let mut bytes = std::io::Cursor::new(Vec::new());
+    image::DynamicImage::ImageRgb32F(img)
+        .write_to(&mut bytes, image::ImageFormat::OpenExr)
+        .map_err(|e| e.to_string())?;
+    Ok(bytes.into_inner())
+}
+
+/// sRGB RGBA8 as the bytes of a PNG file.
+pub fn encode_png(width: u32, height: u32, rgba8: &[u8]) -> Result<Vec<u8>, String> {
     let img = image::RgbaImage::from_raw(width, height, rgba8.to_vec())
-        .ok_or_else(|| err(path, "pixel count does not match the size"))?;
-    img.save_with_format(path, image::ImageFormat::Png)
-        .map_err(|e| err(path, e))
+        .ok_or("pixel count does not match the size")?;
+    let mut bytes = std::io::Cursor::new(Vec::new());
+    img.write_to(&mut bytes, image::ImageFormat::Png)
+        .map_err(|e| e.to_string())?;
+    Ok(bytes.into_inner())
 }
 
 /// Reads an EXR (or any float image) as linear RGB.
@@ -40,7 +56,12 @@ pub fn read_exr(path: &Path) -> Result<(u32, u32, Vec<[f32; 3]>), ImageError> {
     Ok((w, h, img.pixels().map(|p| p.0).collect()))
 }
 
-/// Writes `image` to `path` atomically: a temporary file in the same folder, then a rename.
+/// Marks the temporary files of [`write_atomically`]: `.NAME.PID.partial`, hidden, in the target's folder.
+pub const PARTIAL_SUFFIX: &str = ".partial";
+
+/// Writes `path` atomically: `write` fills a temporary file in the same folder (named per process, so
+/// concurrent writers never share one), then a rename replaces `path`. On failure the temporary file is
+/// removed and `path` is untouched: no reader ever sees a truncated file.
 pub fn write_atomically(
     path: &Path,
     write: impl FnOnce(&Path) -> Result<(), ImageError>,
@@ -49,11 +70,23 @@ pub fn write_atomically(
         .file_name()
         .ok_or_else(|| err(path, "no file name"))?
         .to_string_lossy();
-    let ext = path
-        .extension()
-        .map(|e| e.to_string_lossy().to_string())
-        .unwrap_or_default();
-    let tmp = path.with_file_name(format!(".{file_name}.partial.{ext}"));
-    write(&tmp)?;
-    std::fs::rename(&tmp, path).map_err(|e| err(path, e))
+    let tmp = path.with_file_name(format!(
+        ".{file_name}.{}{PARTIAL_SUFFIX}",
+        std::process::id()
+    ));
+    let result = write(&tmp).and_then(|()| std::fs::rename(&tmp, path).map_err(|e| err(path, e)));
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result
+}
+
+/// Writes `bytes` to `path` atomically and durably (flushed to the device before the rename).
+pub fn write_bytes_atomically(path: &Path, bytes: &[u8]) -> Result<(), ImageError> {
+    write_atomically(path, |tmp| {
+        use std::io::Write;
+        let mut file = std::fs::File::create(tmp).map_err(|e| err(path, e))?;
+        file.write_all(bytes).map_err(|e| err(path, e))?;
+        file.sync_all().map_err(|e| err(path, e))
+    })
 }

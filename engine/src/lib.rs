@@ -9,8 +9,11 @@ pub mod camera;
 pub mod editor;
 pub mod frame_timing;
 pub mod gpu;
+pub mod gpu_deform;
 pub mod headless;
 pub mod image_io;
+pub mod motion;
+pub mod record;
 pub mod render;
 pub mod scene;
 

@@ -1,6 +1,6 @@
 //! Command-line interface.
 
-use clap::{Args, Parser, Subcommand};
+use clap::{Args, Parser, Subcommand, ValueEnum};
 use std::path::PathBuf;
 
 #[derive(Parser, Debug)]
@@ -18,6 +18,8 @@ pub struct Cli {
 pub enum Command {
     /// Render one image of a scene, headless.
     Render(RenderArgs),
+    /// Record an animation as a frame sequence: deterministic, resumable, shardable (--range, --merge).
+    Record(RecordArgs),
     /// Measure frame times, rays per second, BVH build time and GPU memory.
     Bench(BenchArgs),
     /// Open the interactive viewer and editor (or run its frame loop offscreen).
@@ -93,30 +95,64 @@ pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
 
 #[derive(Args, Debug)]
 pub struct BenchArgs {
-    /// Scene files or named bench scenes (cornell, flight-helmet, spheres); default: all named scenes.
+    /// Named bench scenes (cornell, flight-helmet, spheres, crowd: fixed cameras) or glTF files (automatic
+    /// camera); repeatable. Default: the suite's scenes.
     #[arg(long)]
     pub scene: Vec<String>,
-    /// quick (tiny, CI) or full (1920x1080 and 2560x1440, 300 frames).
+    /// quick (tiny sizes, CI) or full (1920x1080 and 2560x1440 on a GPU; scaled down on a CPU adapter).
     #[arg(long, default_value = "quick")]
     pub suite: String,
     /// Folder of the shared glTF assets the named scenes come from.
     #[arg(long, default_value = "../shared/assets")]
     pub assets: PathBuf,
+    /// Output folder: results.json, results.csv, curves.csv, summary.md, charts/*.png.
     #[arg(long, default_value = "bench-out")]
     pub out: PathBuf,
-    /// Override the suite's frame count.
+    /// Folder of cached high-spp reference images (keyed by a hash of scene, camera, settings, size, spp
+    /// and kernel source).
+    #[arg(long, default_value = "bench-cache")]
+    pub cache: PathBuf,
+    /// Run only these parts: frames, errors, bvh, refit, scaling (repeatable; default all).
+    #[arg(long)]
+    pub parts: Vec<String>,
+    /// Override the suite's measured frame count (frame loop).
     #[arg(long)]
     pub frames: Option<usize>,
     #[arg(long, default_value_t = 6)]
     pub max_depth: u32,
-    /// Run the crowd scene (64 CesiumMan + 32 Fox, animated) through the frame loop instead of the static scenes.
+    /// Shorthand for --scene crowd (64 CesiumMan + 32 Fox, animated, through the frame loop).
     #[arg(long)]
     pub crowd: bool,
-    /// Override the suite's sizes with one size.
+    /// BVH layout of static meshes.
+    #[arg(long, value_enum, default_value_t = StaticBvh::Wide)]
+    pub static_bvh: StaticBvh,
+    /// Override the suite's frame-loop sizes with one size.
     #[arg(long)]
     pub width: Option<u32>,
     #[arg(long)]
     pub height: Option<u32>,
+    /// Where skinning, morphing and BVH refit run (see `render --help`).
+    #[arg(long, value_enum, default_value_t = DeformArg::Auto)]
+    pub deform: DeformArg,
+}
+
+/// `--deform`: where deformable meshes are skinned, morphed and refit.
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DeformArg {
+    /// GPU compute passes on a real GPU; the CPU on a software adapter (lavapipe), where it measured faster.
+    Auto,
+    Cpu,
+    Gpu,
+}
+
+impl From<DeformArg> for raykin::gpu_deform::DeformBackend {
+    fn from(a: DeformArg) -> Self {
+        match a {
+            DeformArg::Auto => Self::Auto,
+            DeformArg::Cpu => Self::Cpu,
+            DeformArg::Gpu => Self::Gpu,
+        }
+    }
 }
 
 /// Scene, camera and sampling options shared by the commands that render.
@@ -172,6 +208,32 @@ pub struct SceneArgs {
     /// Samples per pixel per GPU submission.
     #[arg(long, default_value_t = 16)]
     pub spp_per_dispatch: u32,
+    /// Denoise the image (edge-avoiding a-trous filter guided by normal, depth and albedo).
+    #[arg(long)]
+    pub denoise: bool,
+    /// Where skinning, morphing and BVH refit run: GPU compute passes or the CPU (the reference); auto
+    /// picks the GPU on real GPUs and the CPU on a software adapter (lavapipe). The image is the same
+    /// up to float rounding.
+    #[arg(long, value_enum, default_value_t = DeformArg::Auto)]
+    pub deform: DeformArg,
+    /// BVH layout of static meshes: compressed 8-wide nodes, or the refittable BVH2 deformable meshes use.
+    #[arg(long, value_enum, default_value_t = StaticBvh::Wide)]
+    pub static_bvh: StaticBvh,
+}
+
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum StaticBvh {
+    Wide,
+    Binary,
+}
+
+impl From<StaticBvh> for raykin::bvh::StaticLayout {
+    fn from(v: StaticBvh) -> Self {
+        match v {
+            StaticBvh::Wide => Self::Wide,
+            StaticBvh::Binary => Self::Binary,
+        }
+    }
 }
 
 #[derive(Args, Debug)]
@@ -187,6 +249,54 @@ pub struct RenderArgs {
     /// Write a JSON report (adapter, timings, memory) to this file.
     #[arg(long)]
     pub report: Option<PathBuf>,
+}
+
+#[derive(Args, Debug)]
+#[command(mut_arg("scene", |a| a.required(false).required_unless_present("merge")))]
+#[command(
+    after_help = "Frame k is the pose at START + k/FPS with its own seed from (--seed, k); re-running the \
+same command resumes. docs/RECORDING.md: files, manifest, motion vectors, Slurm arrays."
+)]
+pub struct RecordArgs {
+    #[command(flatten)]
+    pub scene: Option<SceneArgs>,
+    /// Output folder: frame_00000.png|exr, AOVs (frame_00000.NAME.exr), manifest.json.
+    #[arg(long, required_unless_present = "merge")]
+    pub out: Option<PathBuf>,
+    /// Frames per second of the recording (frame k is the pose at START + k/FPS).
+    #[arg(long, default_value_t = 30.0)]
+    pub fps: f32,
+    /// T0: seconds into the clip of frame 0.
+    #[arg(long, default_value_t = 0.0)]
+    pub start: f32,
+    /// T1: the frames cover [START, END) (default: the clip's end).
+    #[arg(long, conflicts_with = "frames")]
+    pub end: Option<f32>,
+    /// Number of frames instead of --end (required for a scene without animations).
+    #[arg(long)]
+    pub frames: Option<u32>,
+    /// Render only frames A..B (A to B-1; also A..=B, A.., ..B), e.g. one task of a Slurm array.
+    #[arg(long, value_parser = raykin::record::parse_range)]
+    pub range: Option<(Option<u32>, Option<u32>)>,
+    /// Sample each frame for this long instead of a fixed --spp (frames are then not bit-reproducible).
+    #[arg(long, conflicts_with = "spp")]
+    pub time_budget_ms: Option<f64>,
+    /// png (tone-mapped sRGB) or exr (linear radiance).
+    #[arg(long, default_value = "png")]
+    pub format: raykin::record::FrameFormat,
+    /// Extra linear EXR images per frame, comma-separated: albedo,normal,depth,motion.
+    #[arg(long, value_delimiter = ',')]
+    pub aovs: Vec<raykin::record::Aov>,
+    /// Start a new recording in a folder that holds another one (its manifests are set aside, frames
+    /// overwritten).
+    #[arg(long)]
+    pub force: bool,
+    /// Encode the PNG frames into this video with ffmpeg once every frame is complete.
+    #[arg(long)]
+    pub video: Option<PathBuf>,
+    /// Fold the part manifests of --range runs in this folder into manifest.json and report missing frames.
+    #[arg(long, conflicts_with_all = ["out", "range", "force"])]
+    pub merge: Option<PathBuf>,
 }
 
 pub fn parse_vec3(s: &str) -> Result<glam::Vec3, String> {

@@ -1,8 +1,9 @@
 //! `raykin`: path-trace animated glTF scenes. With no arguments it opens the viewer on the embedded default
 //! scene when a display is present, else renders that scene to out/default.png.
 
-mod bench_cmd;
+mod bench;
 mod cli;
+mod record_cmd;
 mod render_cmd;
 mod view;
 
@@ -18,8 +19,9 @@ fn main() -> std::process::ExitCode {
     let cli = cli::Cli::parse();
     let result = match cli.command {
         Some(cli::Command::Render(args)) => render_cmd::run(&args),
-        Some(cli::Command::Bench(args)) if args.crowd => bench_cmd::run_crowd(&args),
-        Some(cli::Command::Bench(args)) => bench_cmd::run(&args),
+        // The recorder has its own exit statuses (interrupted: 130).
+        Some(cli::Command::Record(args)) => return record_cmd::main(&args),
+        Some(cli::Command::Bench(args)) => bench::run(&args),
         Some(cli::Command::View(args)) => view::run(&args),
         None if view::display_present() => view::run_default(),
         None => render_cmd::run_default(),

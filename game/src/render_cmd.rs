@@ -6,6 +6,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use raykin::camera::CameraChoice;
 use raykin::gpu::GpuContext;
 use raykin::headless::HeadlessApp;
+use raykin::record::CameraSpec;
 use raykin::render::{Environment, RenderSettings};
 use raykin::scene::{LoadOptions, SceneAsset};
 use std::path::{Path, PathBuf};
@@ -68,6 +69,9 @@ pub fn settings_from(args: &SceneArgs) -> RenderSettings {
         seed: args.seed,
         russian_roulette: !args.no_rr,
         nee: !args.no_nee,
+        denoise: args.denoise,
+        deform: args.deform.into(),
+        static_bvh: args.static_bvh.into(),
         ..Default::default()
     }
 }
@@ -96,14 +100,19 @@ pub fn pose_from(scene: &SceneAsset, args: &SceneArgs) -> Result<Option<(usize, 
 }
 
 pub fn camera_from(args: &SceneArgs) -> CameraChoice {
+    camera_spec(args).choice()
+}
+
+/// `--camera I` or `--look-from/--look-at/--fov`, in the form a recording's manifest stores.
+pub fn camera_spec(args: &SceneArgs) -> CameraSpec {
     match (args.look_from, args.look_at, args.camera) {
-        (Some(eye), Some(target), _) => CameraChoice::LookAt {
-            eye,
-            target,
-            yfov: args.fov.to_radians(),
+        (Some(eye), Some(target), _) => CameraSpec::LookAt {
+            eye: eye.to_array(),
+            target: target.to_array(),
+            yfov_degrees: args.fov,
         },
-        (_, _, Some(i)) => CameraChoice::Index(i),
-        _ => CameraChoice::Auto,
+        (_, _, Some(i)) => CameraSpec::Index(i),
+        _ => CameraSpec::Auto,
     }
 }
 
@@ -129,6 +138,7 @@ struct RenderReport {
     height: u32,
     spp: u32,
     max_depth: u32,
+    denoise: bool,
     triangles: usize,
     bvh_build_and_upload_s: f64,
     gpu_memory_geometry_bvh_bytes: u64,
@@ -204,7 +214,11 @@ fn render_to_file(
     bar.finish_and_clear();
     let wall = start.elapsed().as_secs_f64();
     let (w, h) = (settings.width, settings.height);
-    let radiance = app.radiance();
+    let radiance = if settings.denoise {
+        app.denoised_radiance()
+    } else {
+        app.radiance()
+    };
     if let Some(bad) = radiance.iter().flatten().find(|v| !v.is_finite()) {
         anyhow::bail!("internal error: the render has a non-finite pixel value ({bad})");
     }
@@ -233,9 +247,10 @@ fn render_to_file(
     }
     let renderer = app.renderer();
     eprintln!(
-        "raykin: wrote {} ({w}x{h}, {} spp, {:.2} s, {:.2} M samples/s)",
+        "raykin: wrote {} ({w}x{h}, {} spp{}, {:.2} s, {:.2} M samples/s)",
         out.display(),
         args.spp,
+        if settings.denoise { ", denoised" } else { "" },
         wall,
         (w as f64 * h as f64 * args.spp as f64) / wall / 1e6
     );
@@ -248,6 +263,7 @@ fn render_to_file(
             height: h,
             spp: args.spp,
             max_depth: args.max_depth,
+            denoise: settings.denoise,
             triangles: scene.triangle_count(),
             bvh_build_and_upload_s: renderer.scene.build_seconds,
             gpu_memory_geometry_bvh_bytes: renderer.scene.memory.geometry_and_bvh(),
@@ -290,6 +306,9 @@ pub fn run_default() -> Result<()> {
         time: None,
         animation: None,
         spp_per_dispatch: 16,
+        denoise: false,
+        deform: crate::cli::DeformArg::Auto,
+        static_bvh: crate::cli::StaticBvh::Wide,
     };
     let camera = embedded_camera();
     let out = Path::new("out/default.png");

@@ -23,8 +23,6 @@ pub struct DeformedMesh {
     pub positions: Vec<Vec3>,
     pub normals: Option<Vec<Vec3>>,
     pub tangents: Option<Vec<Vec4>>,
-    /// The inputs that produced it (joint matrices and weights), to skip unchanged poses.
-    pose_key: Vec<f32>,
 }
 
 /// Current deformation of every deformable mesh (each belongs to exactly one node instance, see
@@ -38,6 +36,34 @@ pub struct DeformedMeshes {
     pub last_seconds: f64,
     pub last_vertices: usize,
 }
+
+/// The inputs of one deformable mesh's deformation: what the CPU and the GPU deformer both consume.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct MeshPose {
+    /// `global(joint) x inverseBindMatrix` per joint, and the skinned node's world matrix (the fallback for
+    /// vertices without usable weights); `None` for a morph-only mesh.
+    pub skin: Option<(Vec<Mat4>, Mat4)>,
+    pub weights: Vec<f32>,
+}
+
+/// The current pose of every deformable mesh (by mesh index) and the meshes whose pose changed this
+/// frame: the one place that decides what needs deforming, on either backend.
+#[derive(Resource, Default, Debug)]
+pub struct MeshPoses {
+    pub poses: Vec<Option<MeshPose>>,
+    pub changed: Vec<usize>,
+}
+
+impl MeshPoses {
+    /// Forgets every pose, so the next frame deforms every deformable mesh (a backend switch).
+    pub fn invalidate(&mut self) {
+        self.poses.iter_mut().for_each(|p| *p = None);
+    }
+}
+
+/// By mesh index: meshes another deformer handles (the GPU pass, `gpu_deform`); the CPU skips them.
+#[derive(Resource, Default, Debug, Clone, PartialEq)]
+pub struct DeformedElsewhere(pub Vec<bool>);
 
 /// `global(joint_j) x inverseBindMatrix_j` for each joint of `skin`, from node world matrices by node index.
 pub fn joint_matrices(
@@ -155,12 +181,11 @@ pub fn deform_mesh(
         positions,
         normals,
         tangents,
-        pose_key: Vec::new(),
     }
 }
 
-/// What the deform system reads of a mesh node.
-type DeformInputs = (
+/// What the pose system reads of a mesh node.
+type PoseInputs = (
     &'static MeshInstance,
     &'static SceneNode,
     &'static GlobalTransform,
@@ -168,31 +193,21 @@ type DeformInputs = (
     Option<&'static MorphWeights>,
 );
 
-/// Deforms every deformable mesh whose joints or morph weights changed since its last deformation.
-pub fn deform_meshes(
+/// Joint matrices and morph weights of every deformable mesh; lists the meshes whose pose changed.
+pub fn pose_meshes(
     assets: Res<SceneAssets>,
-    mut out: ResMut<DeformedMeshes>,
-    meshes: Query<DeformInputs>,
+    mut poses: ResMut<MeshPoses>,
+    meshes: Query<PoseInputs>,
     roots: Query<&SceneNodes>,
     globals: Query<&GlobalTransform>,
 ) {
-    let start = std::time::Instant::now();
     let scene = &assets.0;
-    // Consumers (the BVH refit) read this frame's list in a later set of the same frame.
-    out.changed.clear();
-    if out.meshes.len() < scene.meshes.len() {
-        out.meshes.resize(scene.meshes.len(), None);
+    let poses = &mut *poses;
+    // Consumers (the deformers, the BVH refit) read this frame's list later in the same frame.
+    poses.changed.clear();
+    if poses.poses.len() < scene.meshes.len() {
+        poses.poses.resize(scene.meshes.len(), None);
     }
-    // Gather each changed mesh's inputs serially (cheap, borrows the ECS), then deform them in parallel:
-    // every deformable mesh belongs to one instance, so the jobs are independent.
-    struct Job<'a> {
-        mesh: usize,
-        data: &'a MeshData,
-        skin: Option<(Vec<Mat4>, Mat4)>,
-        weights: &'a [f32],
-        key: Vec<f32>,
-    }
-    let mut jobs: Vec<Job> = Vec::new();
     for (instance, node, world, skinned, weights) in &meshes {
         let Some(mesh) = scene.meshes.get(instance.mesh) else {
             continue;
@@ -200,45 +215,54 @@ pub fn deform_meshes(
         if !mesh.is_deformable() {
             continue;
         }
-        let joints = skinned.and_then(|s| {
+        let skin = skinned.and_then(|s| {
             let nodes = roots.get(node.root).ok()?;
-            Some(joint_matrices(scene, s.skin, |j| {
+            let joints = joint_matrices(scene, s.skin, |j| {
                 nodes
                     .0
                     .get(j)
                     .and_then(|&e| globals.get(e).ok())
                     .map(|g| g.0)
-            }))
+            });
+            Some((joints, world.0))
         });
-        let weights: &[f32] = weights.map_or(&[][..], |w| w.0.as_slice());
-        let mut key: Vec<f32> =
-            Vec::with_capacity(joints.as_ref().map_or(0, |j| j.len() * 16 + 16) + weights.len());
-        if let Some(j) = &joints {
-            key.extend(j.iter().flat_map(|m| m.to_cols_array()));
-            key.extend(world.0.to_cols_array());
+        let pose = MeshPose {
+            skin,
+            weights: weights.map_or_else(Vec::new, |w| w.0.clone()),
+        };
+        let slot = &mut poses.poses[instance.mesh];
+        if slot.as_ref() != Some(&pose) {
+            *slot = Some(pose);
+            poses.changed.push(instance.mesh);
         }
-        key.extend_from_slice(weights);
-        if out.meshes[instance.mesh]
-            .as_ref()
-            .is_some_and(|d| d.pose_key == key)
-        {
-            continue;
-        }
-        jobs.push(Job {
-            mesh: instance.mesh,
-            data: mesh,
-            skin: joints.map(|j| (j, world.0)),
-            weights,
-            key,
-        });
     }
+}
+
+/// Deforms on the CPU every mesh whose pose changed (except those deformed elsewhere), in parallel over
+/// meshes: every deformable mesh belongs to one node instance, so the jobs are independent.
+pub fn deform_meshes(
+    assets: Res<SceneAssets>,
+    poses: Res<MeshPoses>,
+    elsewhere: Res<DeformedElsewhere>,
+    mut out: ResMut<DeformedMeshes>,
+) {
+    let start = std::time::Instant::now();
+    let scene = &assets.0;
+    out.changed.clear();
+    if out.meshes.len() < scene.meshes.len() {
+        out.meshes.resize(scene.meshes.len(), None);
+    }
+    let jobs: Vec<(usize, &MeshPose)> = poses
+        .changed
+        .iter()
+        .filter(|&&m| !elsewhere.0.get(m).copied().unwrap_or(false))
+        .filter_map(|&m| Some((m, poses.poses[m].as_ref()?)))
+        .collect();
     let results: Vec<(usize, DeformedMesh)> = jobs
         .into_par_iter()
-        .map(|job| {
-            let skin = job.skin.as_ref().map(|(j, w)| (j.as_slice(), *w));
-            let mut d = deform_mesh(job.data, skin, job.weights);
-            d.pose_key = job.key;
-            (job.mesh, d)
+        .map(|(m, pose)| {
+            let skin = pose.skin.as_ref().map(|(j, w)| (j.as_slice(), *w));
+            (m, deform_mesh(&scene.meshes[m], skin, &pose.weights))
         })
         .collect();
     let mut vertices = 0;

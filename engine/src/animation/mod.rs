@@ -3,7 +3,10 @@
 
 mod deform;
 
-pub use deform::{DeformedMesh, DeformedMeshes, deform_mesh, deform_meshes, joint_matrices};
+pub use deform::{
+    DeformedElsewhere, DeformedMesh, DeformedMeshes, MeshPose, MeshPoses, deform_mesh,
+    deform_meshes, joint_matrices, pose_meshes,
+};
 
 use crate::FrameSet;
 use crate::scene::{
@@ -373,6 +376,20 @@ pub fn find_clip(scene: &crate::scene::SceneAsset, name_or_index: &str) -> Resul
     }
 }
 
+/// Holds every spawned scene copy at `seconds` into `clip` (a paused player on each scene root): the next
+/// animation pass poses exactly that time, whatever ran before.
+pub fn hold_at(world: &mut World, clip: usize, seconds: f32) {
+    let roots: Vec<Entity> = world
+        .query_filtered::<Entity, With<crate::scene::SceneRoot>>()
+        .iter(world)
+        .collect();
+    for root in roots {
+        world
+            .entity_mut(root)
+            .insert(AnimationPlayer::paused_at(clip, seconds));
+    }
+}
+
 /// Adds `(node, player)` pairs to a spawned scene copy whose root is `root` (see [`crate::scene::crowd_scene`]).
 pub fn attach_players(world: &mut World, root: Entity, players: &[(usize, AnimationPlayer)]) {
     let Some(nodes) = world.get::<SceneNodes>(root).map(|n| n.0.clone()) else {
@@ -429,7 +446,7 @@ pub fn animate(
     clock.frame += 1;
 }
 
-/// Animation players (Animate set) and CPU skinning/morphing (Deform set).
+/// Animation players (Animate set); poses and CPU skinning/morphing (Deform set).
 pub struct AnimationPlugin;
 
 impl bevy_app::Plugin for AnimationPlugin {
@@ -437,11 +454,15 @@ impl bevy_app::Plugin for AnimationPlugin {
         use bevy_ecs::schedule::IntoScheduleConfigs;
         app.init_resource::<FrameClock>()
             .init_resource::<DeformedMeshes>()
+            .init_resource::<MeshPoses>()
+            .init_resource::<DeformedElsewhere>()
             .add_systems(
                 bevy_app::Update,
                 (
                     animate.in_set(FrameSet::Animate),
-                    deform_meshes.in_set(FrameSet::Deform),
+                    (pose_meshes, deform_meshes)
+                        .chain()
+                        .in_set(FrameSet::Deform),
                 ),
             );
     }

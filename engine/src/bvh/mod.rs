@@ -6,6 +6,9 @@
 //! [`MeshBvh::sah_cost`] against the cost at build time tells when a refit has degraded and a rebuild is due.
 
 pub mod refit;
+pub mod wide;
+
+pub use wide::WideBvh;
 
 use bytemuck::{Pod, Zeroable};
 use glam::{Vec3, Vec3A};
@@ -74,21 +77,33 @@ impl GpuBvhNode {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum BvhQuality {
     Fastest,
+    VeryFast,
     Fast,
     #[default]
     Medium,
     Slow,
+    VerySlow,
 }
 
 impl BvhQuality {
-    pub const ALL: [BvhQuality; 4] = [Self::Fastest, Self::Fast, Self::Medium, Self::Slow];
+    /// Every preset, fastest build first (the bench charts build time against trace time over these).
+    pub const ALL: [BvhQuality; 6] = [
+        Self::Fastest,
+        Self::VeryFast,
+        Self::Fast,
+        Self::Medium,
+        Self::Slow,
+        Self::VerySlow,
+    ];
 
     fn params(self) -> BvhBuildParams {
         let mut p = match self {
             Self::Fastest => BvhBuildParams::fastest_build(),
+            Self::VeryFast => BvhBuildParams::very_fast_build(),
             Self::Fast => BvhBuildParams::fast_build(),
             Self::Medium => BvhBuildParams::medium_build(),
             Self::Slow => BvhBuildParams::slow_build(),
+            Self::VerySlow => BvhBuildParams::very_slow_build(),
         };
         // Spatial splits duplicate triangles across leaves, which refit cannot maintain; leaves of at most 4
         // triangles keep the GPU's per-leaf loop short.
@@ -178,20 +193,31 @@ impl FlatBvh {
         cost / root_area
     }
 
-    /// Bottom-up box update after primitives moved; `prim_bounds(i)` bounds GPU primitive slot `i`.
-    pub fn refit(&mut self, prim_bounds: impl Fn(usize) -> (Vec3, Vec3)) {
+    /// Bottom-up box update after primitives moved; `prim_bounds(i)` bounds GPU primitive slot `i`. Returns
+    /// the refit tree's [`Self::sah_cost`], summed in the same sweep (every term is a box just updated).
+    pub fn refit(&mut self, prim_bounds: impl Fn(usize) -> (Vec3, Vec3)) -> f32 {
+        let half_area = |d: Vec3| {
+            let d = d.max(Vec3::ZERO);
+            d.x * d.y + d.y * d.z + d.z * d.x
+        };
+        let mut cost = 0.0;
+        let (mut root_lo, mut root_hi) = (Vec3::MAX, Vec3::MIN);
         for i in (0..self.nodes.len()).rev() {
+            // The union of the node's children, and the leaves' area x count, as `sah_cost` sums them.
+            let (mut union_lo, mut union_hi) = (Vec3::MAX, Vec3::MIN);
             for k in 0..2 {
                 let c = self.nodes[i].children[k];
                 if c.is_empty() {
                     continue;
                 }
                 let (lo, hi) = if c.is_leaf() {
-                    (c.index as usize..(c.index + c.count) as usize)
+                    let (lo, hi) = (c.index as usize..(c.index + c.count) as usize)
                         .map(&prim_bounds)
                         .fold((Vec3::MAX, Vec3::MIN), |(lo, hi), (a, b)| {
                             (lo.min(a), hi.max(b))
-                        })
+                        });
+                    cost += half_area(hi - lo) * c.count as f32;
+                    (lo, hi)
                 } else {
                     let [a, b] = self.nodes[c.index as usize].children;
                     let lo = Vec3::from(a.min).min(Vec3::from(b.min));
@@ -199,57 +225,20 @@ impl FlatBvh {
                     (lo, hi)
                 };
                 self.nodes[i].children[k].set_bounds(lo, hi);
+                union_lo = union_lo.min(lo);
+                union_hi = union_hi.max(hi);
             }
+            if union_lo.x <= union_hi.x {
+                cost += half_area(union_hi - union_lo);
+            }
+            (root_lo, root_hi) = (union_lo, union_hi);
         }
-    }
-
-    /// Closest-hit traversal on the CPU (picking): visits the leaves a ray enters, nearer boxes first.
-    /// `hit_leaf(first_slot, count, t_max)` tests a leaf's primitive slots and returns the nearest hit below
-    /// `t_max`, if any; the result is the nearest over all leaves (or `None`).
-    pub fn closest_hit(
-        &self,
-        origin: Vec3,
-        dir: Vec3,
-        mut t_max: f32,
-        mut hit_leaf: impl FnMut(u32, u32, f32) -> Option<f32>,
-    ) -> Option<f32> {
-        let inv = dir.recip();
-        let entry = |c: &GpuBvhChild| -> Option<f32> {
-            if c.is_empty() {
-                return None;
-            }
-            let t0 = (Vec3::from(c.min) - origin) * inv;
-            let t1 = (Vec3::from(c.max) - origin) * inv;
-            let near = t0.min(t1).max_element().max(0.0);
-            let far = t0.max(t1).min_element();
-            // NaN (a zero direction component on a box face) fails the comparison: treated as a miss.
-            (near <= far).then_some(near)
+        let root_area = if root_lo.x <= root_hi.x {
+            half_area(root_hi - root_lo)
+        } else {
+            0.0
         };
-        let mut best = None;
-        let mut stack = vec![0u32];
-        while let Some(node) = stack.pop() {
-            let Some(node) = self.nodes.get(node as usize) else {
-                continue;
-            };
-            let mut hits: Vec<(f32, &GpuBvhChild)> = node
-                .children
-                .iter()
-                .filter_map(|c| entry(c).filter(|&t| t < t_max).map(|t| (t, c)))
-                .collect();
-            // Far child pushed first so the near one is popped (and may shrink t_max) first.
-            hits.sort_by(|a, b| b.0.total_cmp(&a.0));
-            for (_, c) in hits {
-                if c.is_leaf() {
-                    if let Some(t) = hit_leaf(c.index, c.count, t_max) {
-                        t_max = t;
-                        best = Some(t);
-                    }
-                } else {
-                    stack.push(c.index);
-                }
-            }
-        }
-        best
+        cost / root_area.max(f32::MIN_POSITIVE)
     }
 
     pub fn root_bounds(&self) -> (Vec3, Vec3) {
@@ -311,12 +300,14 @@ impl MeshBvh {
         Ok(Self { flat, build_sah })
     }
 
-    /// Refits to moved vertices; `gpu_triangles` are the mesh's triangles in [`FlatBvh::order`].
-    pub fn refit(&mut self, positions: &[Vec3], gpu_triangles: &[[u32; 3]]) {
-        self.flat.refit(|i| {
+    /// Refits to moved vertices; `gpu_triangles` are the mesh's triangles in [`FlatBvh::order`]. Returns the
+    /// new [`Self::sah_ratio`].
+    pub fn refit(&mut self, positions: &[Vec3], gpu_triangles: &[[u32; 3]]) -> f32 {
+        let cost = self.flat.refit(|i| {
             let [a, b, c] = gpu_triangles[i].map(|v| positions[v as usize]);
             (a.min(b).min(c), a.max(b).max(c))
         });
+        cost / self.build_sah.max(f32::MIN_POSITIVE)
     }
 
     /// `triangles` (a mesh's, in file order) rearranged into this BVH's leaf order.
@@ -331,6 +322,74 @@ impl MeshBvh {
     /// Current SAH cost over the cost at build: 1 after a build, rising as a refit degrades the tree.
     pub fn sah_ratio(&self) -> f32 {
         self.flat.sah_cost() / self.build_sah.max(f32::MIN_POSITIVE)
+    }
+}
+
+/// How static meshes' BVHs are laid out on the GPU. Deformable meshes always get a refittable BVH2.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub enum StaticLayout {
+    /// Compressed 8-wide nodes ([`WideBvh`]): fewer, smaller node fetches per ray.
+    #[default]
+    Wide,
+    /// The child-pair BVH2 deformable meshes use ([`MeshBvh`]).
+    Binary,
+}
+
+/// One mesh's bottom-level BVH, in the layout it is traced in.
+#[derive(Clone, Debug)]
+pub enum Blas {
+    /// Child-pair BVH2: refit in place when the mesh deforms.
+    Binary(MeshBvh),
+    /// Compressed wide BVH of a static mesh.
+    Wide(WideBvh),
+}
+
+impl Blas {
+    /// Builds a static mesh's tree in `layout`, or a refittable one when the mesh deforms.
+    pub fn build(
+        positions: &[Vec3],
+        triangles: &[[u32; 3]],
+        quality: BvhQuality,
+        layout: StaticLayout,
+        deformable: bool,
+    ) -> Result<Self, BvhTooDeep> {
+        Ok(match (deformable, layout) {
+            (false, StaticLayout::Wide) => {
+                Self::Wide(WideBvh::build(positions, triangles, quality)?)
+            }
+            _ => Self::Binary(MeshBvh::build(positions, triangles, quality)?),
+        })
+    }
+
+    /// Slot `i` of the mesh's GPU triangle range holds original triangle `order()[i]`.
+    pub fn order(&self) -> &[u32] {
+        match self {
+            Self::Binary(b) => &b.flat.order,
+            Self::Wide(w) => &w.order,
+        }
+    }
+
+    /// Object-space box of the mesh as the tree currently bounds it.
+    pub fn root_bounds(&self) -> (Vec3, Vec3) {
+        match self {
+            Self::Binary(b) => b.flat.root_bounds(),
+            Self::Wide(w) => w.bounds,
+        }
+    }
+
+    /// The refittable tree, for meshes that have one.
+    pub fn binary(&self) -> Option<&MeshBvh> {
+        match self {
+            Self::Binary(b) => Some(b),
+            Self::Wide(_) => None,
+        }
+    }
+
+    pub fn binary_mut(&mut self) -> Option<&mut MeshBvh> {
+        match self {
+            Self::Binary(b) => Some(b),
+            Self::Wide(_) => None,
+        }
     }
 }
 

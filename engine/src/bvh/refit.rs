@@ -8,6 +8,10 @@
 //! upload). At most [`BvhStats::max_rebuilds_per_frame`] rebuilds run per frame, the worst ratios
 //! first, so a crowd crossing the threshold together spreads its rebuilds over frames instead of hitching;
 //! meshes that wait keep a correct (only slower) refit tree. docs/ANIMATION.md has the measurements.
+//!
+//! That schedule makes a mesh's tree depend on the poses seen before (which frame rebuilt it). A recording
+//! needs frame k to re-render alone bit-identically, so [`RebuildPolicy::PoseDetermined`] makes the tree a
+//! function of the current pose only: each pose starts again from the tree built at upload.
 
 use super::MeshBvh;
 use bevy_ecs::prelude::Resource;
@@ -16,10 +20,23 @@ use glam::Vec3;
 /// SAH-ratio above which a refit BVH is rebuilt (chosen from measured ratio curves, docs/ANIMATION.md).
 pub const DEFAULT_REBUILD_THRESHOLD: f32 = 1.5;
 
+/// When deformed meshes' BVHs are rebuilt.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum RebuildPolicy {
+    /// Refit the current tree each frame; rebuild at most [`BvhStats::max_rebuilds_per_frame`] meshes past
+    /// the threshold, worst first (no frame hitch). The tree depends on the history of poses.
+    #[default]
+    Amortised,
+    /// Each new pose refits the tree built at upload, and every mesh past the threshold is rebuilt in the
+    /// same frame: the tree, and so the image, depends only on the current pose (recordings).
+    PoseDetermined,
+}
+
 /// Refit quality and rebuild counters, for the editor and benches.
 #[derive(Resource, Clone, Debug)]
 pub struct BvhStats {
     pub threshold: f32,
+    pub policy: RebuildPolicy,
     pub max_rebuilds_per_frame: usize,
     /// Current SAH cost over cost at build, per mesh (1 for static meshes).
     pub sah_ratio: Vec<f32>,
@@ -29,15 +46,21 @@ pub struct BvhStats {
     pub rebuilds: u64,
     /// Mesh refits since upload.
     pub refits: u64,
-    /// CPU seconds of the last frame's refits and rebuilds.
+    /// CPU seconds of the last frame's refits (CPU backend) and rebuilds (run or installed).
     pub last_refit_seconds: f64,
     pub last_rebuild_seconds: f64,
+    /// CPU seconds of the last frame's uploads of deformation results (CPU backend: vertices and nodes) or
+    /// inputs (GPU backend: joint matrices, morph weights, flags).
+    pub last_upload_seconds: f64,
+    /// CPU seconds of the last frame's top-level BVH build and instance upload (0 when nothing moved).
+    pub last_tlas_seconds: f64,
 }
 
 impl Default for BvhStats {
     fn default() -> Self {
         Self {
             threshold: DEFAULT_REBUILD_THRESHOLD,
+            policy: RebuildPolicy::Amortised,
             max_rebuilds_per_frame: 1,
             sah_ratio: Vec::new(),
             mesh_rebuilds: Vec::new(),
@@ -45,22 +68,28 @@ impl Default for BvhStats {
             refits: 0,
             last_refit_seconds: 0.0,
             last_rebuild_seconds: 0.0,
+            last_upload_seconds: 0.0,
+            last_tlas_seconds: 0.0,
         }
     }
 }
 
 impl BvhStats {
-    /// Meshes due for a rebuild this frame: ratio above the threshold, worst first, at most the per-frame cap.
-    pub fn due(&self) -> Vec<usize> {
+    /// Meshes due for a rebuild this frame among those `eligible` (each backend rebuilds its own): ratio
+    /// above the threshold, worst first, at most the per-frame cap (no cap under
+    /// [`RebuildPolicy::PoseDetermined`]).
+    pub fn due(&self, eligible: impl Fn(usize) -> bool) -> Vec<usize> {
         let mut due: Vec<usize> = (0..self.sah_ratio.len())
-            .filter(|&m| self.sah_ratio[m] > self.threshold)
+            .filter(|&m| self.sah_ratio[m] > self.threshold && eligible(m))
             .collect();
         due.sort_by(|&a, &b| {
             self.sah_ratio[b]
                 .total_cmp(&self.sah_ratio[a])
                 .then(a.cmp(&b))
         });
-        due.truncate(self.max_rebuilds_per_frame);
+        if self.policy == RebuildPolicy::Amortised {
+            due.truncate(self.max_rebuilds_per_frame);
+        }
         due
     }
 
@@ -72,10 +101,9 @@ impl BvhStats {
     }
 }
 
-/// Refits `bvh` to `positions` (triangles in BVH order) and returns its SAH ratio.
+/// Refits `bvh` to `positions` (triangles in BVH order) and returns its SAH ratio (one sweep for both).
 pub fn refit_and_measure(bvh: &mut MeshBvh, positions: &[Vec3], gpu_triangles: &[[u32; 3]]) -> f32 {
-    bvh.refit(positions, gpu_triangles);
-    bvh.sah_ratio()
+    bvh.refit(positions, gpu_triangles)
 }
 
 /// Upper bound of a child-pair BVH's node count over `triangles` triangles (>= 1 triangle per leaf):

@@ -47,14 +47,16 @@ pub enum EditorAction {
     SaveAs(PathBuf),
     /// Write the displayed image (PNG) and the linear radiance (EXR) beside it.
     Screenshot(PathBuf),
-    /// Start the recorder with the panel's settings (see [`RecordRequest`]).
-    Record(RecordRequest),
+    /// Start a recording with the panel's settings (see [`RecordStart`]).
+    Record(RecordStart),
+    /// Stop the recording in progress (frames already written stay; re-running resumes).
+    StopRecording,
     Quit,
 }
 
-/// The record panel's settings, handed to the recorder (issue 5) by the host.
+/// The record panel's settings when Record is pressed; the host turns them into a `raykin::record` job.
 #[derive(Clone, Debug, PartialEq)]
-pub struct RecordRequest {
+pub struct RecordStart {
     pub out_dir: PathBuf,
     /// Clip of the first animation player, if any.
     pub clip: Option<usize>,
@@ -62,8 +64,11 @@ pub struct RecordRequest {
     pub start: f32,
     pub frames: u32,
     pub spp: u32,
+    /// The view's render settings (size, depth, environment, ...).
     pub settings: RenderSettings,
     pub camera: CameraView,
+    /// The scene camera looked through, if any (recorded following its node).
+    pub scene_camera: Option<usize>,
 }
 
 /// Editor state that is not scene data.
@@ -83,10 +88,11 @@ pub struct EditorState {
     /// Stop tracing at this many samples per pixel (0: never stop).
     pub sample_limit: u32,
     pub vsync: bool,
-    /// Set by the host once the recorder (engine/src/record, issue 5) is wired to [`EditorAction::Record`];
-    /// until then the record section is not shown.
-    pub recorder_available: bool,
+    /// The scene can be recorded (it came from a file, whose hash the recording's manifest keeps).
+    pub can_record: bool,
     pub record: RecordSettings,
+    /// Progress of the recording in progress, shown in the record section (`None`: none runs).
+    pub recording: Option<String>,
     /// The loaded scene came from one glTF file, so File > Save as can write it back.
     pub can_save: bool,
     pub show_panel: bool,
@@ -114,7 +120,8 @@ impl Default for EditorState {
             image_rect_px: None,
             sample_limit: 0,
             vsync: true,
-            recorder_available: false,
+            can_record: false,
+            recording: None,
             record: RecordSettings {
                 out_dir: "recording".into(),
                 fps: 30.0,
@@ -169,6 +176,7 @@ impl bevy_app::Plugin for EditorPlugin {
             .init_resource::<ViewerStats>()
             .add_plugins(crate::camera::CameraControllerPlugin);
         let world = app.world_mut();
+        crate::render::pick::enable_picking(world);
         let scene = world.resource::<SceneAssets>().0.clone();
         if world.get_resource::<CameraRig>().is_none()
             && let Some(view) = world.get_resource::<CameraView>().copied()
@@ -333,12 +341,9 @@ fn side_panel(
     egui::CollapsingHeader::new("Stats")
         .default_open(true)
         .show(ui, |ui| stats_panel::show(ui, world));
-    // RECORD HOOK (issue 5): shown once the host sets `recorder_available` and handles EditorAction::Record.
-    if state.recorder_available {
-        egui::CollapsingHeader::new("Record")
-            .default_open(false)
-            .show(ui, |ui| record_section(ui, world, state, actions));
-    }
+    egui::CollapsingHeader::new("Record")
+        .default_open(false)
+        .show(ui, |ui| record_section(ui, world, state, actions));
 }
 
 fn camera_section(ui: &mut egui::Ui, world: &mut World, state: &EditorState) {
@@ -439,6 +444,17 @@ fn record_section(
     state: &mut EditorState,
     actions: &mut Vec<EditorAction>,
 ) {
+    if let Some(progress) = &state.recording {
+        ui.label(progress.as_str());
+        if ui.button("Stop").clicked() {
+            actions.push(EditorAction::StopRecording);
+        }
+        return;
+    }
+    if !state.can_record {
+        ui.label("Only scenes opened from a .gltf/.glb file can be recorded.");
+        return;
+    }
     let r = &mut state.record;
     egui::Grid::new("record").num_columns(2).show(ui, |ui| {
         ui.label("folder");
@@ -461,21 +477,38 @@ fn record_section(
         ui.add(egui::DragValue::new(&mut r.spp).range(1..=65536));
         ui.end_row();
     });
+    ui.add(
+        egui::Label::new(
+            "Frames are rendered at the view's size and settings from the current camera (raykin record: resumable, \
+             same files as the CLI).",
+        )
+        .wrap(),
+    );
     if ui.button("Record").clicked() {
-        let clip = world
-            .query::<&AnimationPlayer>()
-            .iter(world)
-            .next()
-            .map(|p| p.clip);
-        actions.push(EditorAction::Record(RecordRequest {
-            out_dir: r.out_dir.clone().into(),
-            clip,
-            fps: r.fps,
-            start: r.start,
-            frames: r.frames,
-            spp: r.spp,
-            settings: world.resource::<RenderSettings>().clone(),
-            camera: *world.resource::<CameraView>(),
-        }));
+        actions.push(EditorAction::Record(record_start(world, r)));
+    }
+}
+
+/// What Record starts: the panel's `settings` with the world's clip, camera and render settings.
+pub fn record_start(world: &mut World, settings: &RecordSettings) -> RecordStart {
+    let clip = world
+        .query::<&AnimationPlayer>()
+        .iter(world)
+        .next()
+        .map(|p| p.clip);
+    let scene_camera = match world.get_resource::<CameraRig>().map(|r| r.mode) {
+        Some(CameraMode::Scene(i)) => Some(i),
+        _ => None,
+    };
+    RecordStart {
+        out_dir: settings.out_dir.clone().into(),
+        clip,
+        fps: settings.fps,
+        start: settings.start,
+        frames: settings.frames,
+        spp: settings.spp,
+        settings: world.resource::<RenderSettings>().clone(),
+        camera: *world.resource::<CameraView>(),
+        scene_camera,
     }
 }

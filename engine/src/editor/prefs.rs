@@ -19,6 +19,7 @@ pub struct ViewerPrefs {
     pub view: AovView,
     pub nee: bool,
     pub russian_roulette: bool,
+    pub denoise: bool,
     pub render_scale: f32,
     /// 0: keep accumulating.
     pub sample_limit: u32,
@@ -43,6 +44,7 @@ impl Default for ViewerPrefs {
             view: render.view,
             nee: render.nee,
             russian_roulette: render.russian_roulette,
+            denoise: render.denoise,
             render_scale: 1.0,
             sample_limit: 0,
             vsync: true,
@@ -125,6 +127,7 @@ impl ViewerPrefs {
             s.view = self.view;
             s.nee = self.nee;
             s.russian_roulette = self.russian_roulette;
+            s.denoise = self.denoise;
         }
         if let Some(mut e) = world.get_resource_mut::<EditorState>() {
             e.render_scale = self.render_scale.clamp(0.05, 1.0);
@@ -152,6 +155,7 @@ impl ViewerPrefs {
             self.view = s.view;
             self.nee = s.nee;
             self.russian_roulette = s.russian_roulette;
+            self.denoise = s.denoise;
         }
         if let Some(e) = world.get_resource::<EditorState>() {
             self.render_scale = e.render_scale;

@@ -89,7 +89,23 @@ pub fn show(ui: &mut egui::Ui, world: &mut World, state: &mut EditorState) {
                 );
                 ui.end_row();
             }
-            // DENOISER HOOK (denoiser issue): the lead adds the denoiser on/off control here at merge.
+            // Display-side: toggling it keeps the accumulated samples.
+            ui.label("denoise");
+            ui.checkbox(&mut s.denoise, "");
+            ui.end_row();
+            if s.denoise {
+                let p = &mut s.denoise_params;
+                ui.label("  iterations");
+                ui.add(egui::DragValue::new(&mut p.iterations).range(1..=8));
+                ui.end_row();
+                ui.label("  sigma luminance");
+                ui.add(
+                    egui::DragValue::new(&mut p.sigma_luminance)
+                        .speed(0.05)
+                        .range(0.0..=100.0),
+                );
+                ui.end_row();
+            }
             ui.label("next-event estimation");
             ui.checkbox(&mut s.nee, "");
             ui.end_row();

@@ -49,9 +49,14 @@ pub fn show(ui: &mut egui::Ui, world: &mut World) {
         match stats.last_gpu.and_then(|g| g.passes) {
             Some(p) => ui.add(
                 egui::Label::new(format!(
-                    "trace {:.2}, tonemap {:.3}{}{}",
+                    "trace {:.2}, tonemap {:.3}{}{}{}",
                     p.trace_ms,
                     p.tonemap_ms,
+                    if p.denoise_ms > 0.0 {
+                        format!(", denoise {:.3}", p.denoise_ms)
+                    } else {
+                        String::new()
+                    },
                     stats
                         .ui_gpu_ms
                         .map_or(String::new(), |u| format!(", UI {u:.3}")),

@@ -98,10 +98,8 @@ pub fn show(ui: &mut egui::Ui, world: &mut World, state: &mut EditorState) {
         let local = (pos - rect.min) / rect.size();
         let hit = crate::render::pick::pick_pixel(
             world,
-            local.x * size.0 as f32,
-            local.y * size.1 as f32,
-            size.0,
-            size.1,
+            (local.x * size.0 as f32) as u32,
+            (local.y * size.1 as f32) as u32,
         );
         match hit {
             Some(hit) => {
@@ -166,7 +164,9 @@ fn bounds_below(world: &World, entity: Entity) -> Option<(Vec3, Vec3)> {
             world.get::<GlobalTransform>(e),
         ) && let Some(slot) = renderer.scene.mesh_slots.get(mesh.mesh)
         {
-            let (a, b) = slot.bvh.flat.root_bounds();
+            let (a, b) = slot
+                .deformed_bounds
+                .unwrap_or_else(|| slot.blas.root_bounds());
             let m = if world.get::<SkinnedMesh>(e).is_some() {
                 glam::Mat4::IDENTITY
             } else {

@@ -1,6 +1,9 @@
 //! The wgpu device: one adapter picked at start-up, shared by every plugin as a resource.
 
 pub mod readback;
+mod timestamps;
+
+pub use timestamps::PassTimestamps;
 
 use bevy_ecs::prelude::Resource;
 use std::sync::Arc;
@@ -113,6 +116,11 @@ impl GpuContext {
 
     /// Copies `size` bytes of `src` to the CPU (blocking).
     pub fn read_buffer(&self, src: &wgpu::Buffer, size: u64) -> Vec<u8> {
+        self.read_buffer_range(src, 0, size)
+    }
+
+    /// Copies `size` bytes of `src` from `offset` to the CPU (blocking).
+    pub fn read_buffer_range(&self, src: &wgpu::Buffer, offset: u64, size: u64) -> Vec<u8> {
         let staging = self.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("readback"),
             size,
@@ -120,7 +128,7 @@ impl GpuContext {
             mapped_at_creation: false,
         });
         let mut encoder = self.device.create_command_encoder(&Default::default());
-        encoder.copy_buffer_to_buffer(src, 0, &staging, 0, size);
+        encoder.copy_buffer_to_buffer(src, offset, &staging, 0, size);
         self.queue.submit([encoder.finish()]);
         let slice = staging.slice(..);
         slice.map_async(wgpu::MapMode::Read, |_| {});

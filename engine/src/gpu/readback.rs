@@ -51,22 +51,22 @@ impl AsyncReadback {
         Self { slots, size }
     }
 
-    /// Records copies of `sources` (buffer, byte count), packed one after another, into a free slot tagged
-    /// `tag`; false when every slot is still in flight (the frame goes unreported).
+    /// Records copies of `sources` (buffer, offset in the slot, byte count; each from the buffer's start)
+    /// into a free slot tagged `tag`; false when every slot is still in flight (the frame goes unreported).
     pub fn encode(
         &mut self,
         encoder: &mut wgpu::CommandEncoder,
-        sources: &[(&wgpu::Buffer, u64)],
+        sources: &[(&wgpu::Buffer, u64, u64)],
         tag: u64,
     ) -> bool {
         let Some(slot) = self.slots.iter_mut().find(|s| s.state == SlotState::Free) else {
             return false;
         };
-        let mut offset = 0;
-        for (buffer, bytes) in sources {
+        // Parts no source fills this time read as zero, not as an earlier frame's data.
+        encoder.clear_buffer(&slot.buffer, 0, None);
+        for (buffer, offset, bytes) in sources {
             debug_assert!(offset + bytes <= self.size, "readback slot too small");
-            encoder.copy_buffer_to_buffer(buffer, 0, &slot.buffer, offset, *bytes);
-            offset += bytes;
+            encoder.copy_buffer_to_buffer(buffer, 0, &slot.buffer, *offset, *bytes);
         }
         slot.state = SlotState::Encoded;
         slot.tag = tag;

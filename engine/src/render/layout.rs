@@ -14,6 +14,9 @@ pub const MATERIAL_ALPHA_BLEND: u32 = 4;
 
 pub const TEXTURE_NEAREST: u32 = 1 << 4;
 
+/// Set in `GpuMesh::blas_root` when the root indexes the compressed wide node buffer.
+pub const WIDE_BLAS: u32 = 1 << 31;
+
 /// An object-to-world placement of a mesh (rows of 3x4 matrices).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
@@ -116,7 +119,7 @@ pub struct GpuFrame {
     /// Path depth from which Russian roulette may end a path (u32::MAX: never).
     pub rr_depth: u32,
     pub emitter_count: u32,
-    /// Bit 0: next-event estimation on.
+    /// Bit 0: next-event estimation on; bit 1: write the primary-hit AOV.
     pub flags: u32,
     /// Sum over emitters of luminance(emissive) x world area: the normaliser of emitter selection.
     pub emitter_total_power: f32,
@@ -124,6 +127,8 @@ pub struct GpuFrame {
 }
 
 pub const FRAME_NEE: u32 = 1;
+/// Bit 1: write the primary-hit AOV (first dispatch after a reset only).
+pub const FRAME_HIT_AOV: u32 = 2;
 
 /// Octahedral encoding of a unit vector into two snorm16 values (WGSL `unpack2x16snorm` decodes it).
 pub fn oct_encode(v: Vec3) -> u32 {

@@ -1,12 +1,14 @@
 //! Pipelines and per-view buffers of the path tracer: dispatch, accumulation, tone mapping, readback, and GPU
 //! timestamps around each pass where the adapter has them.
 
+use super::denoise::{DenoiseInputs, DenoiseParams, Denoiser};
 use super::layout::*;
 use super::scene_buffers::GpuScene;
-use super::settings::{Environment, RenderSettings};
+use super::settings::{AovView, Environment, RenderSettings};
 use crate::camera::CameraView;
 use crate::gpu::GpuContext;
 use bytemuck::{Pod, Zeroable};
+use std::sync::OnceLock;
 
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
@@ -20,18 +22,17 @@ struct TonemapParams {
     _pad: [u32; 2],
 }
 
-/// Timestamp queries: [trace begin, trace end, tonemap begin, tonemap end].
-struct Timestamps {
-    set: wgpu::QuerySet,
-    resolve: wgpu::Buffer,
-    period_ns: f32,
-}
-
-/// GPU time of the last dispatch's passes, in milliseconds.
+/// GPU time of the last frame's passes, in milliseconds (0 for a pass that did not run).
 #[derive(Clone, Copy, Debug, Default, serde::Serialize)]
 pub struct PassTimes {
     pub trace_ms: f64,
     pub tonemap_ms: f64,
+    /// 0 when the last dispatch did not denoise.
+    pub denoise_ms: f64,
+    /// GPU skinning + morphing (`shaders/deform.wgsl`).
+    pub skin_ms: f64,
+    /// GPU BLAS refit + SAH cost (`shaders/refit.wgsl`).
+    pub refit_ms: f64,
 }
 
 /// What one dispatch cost on the GPU, read back without blocking (see [`PathTracer::enable_async_stats`]).
@@ -45,11 +46,27 @@ pub struct GpuFrameStats {
     pub rays: u64,
 }
 
-/// Bytes of one statistics readback: 4 resolved timestamps, then the ray counter.
-const STATS_BYTES: u64 = 48;
+/// Bytes of one statistics readback: trace + tonemap timestamps, denoise timestamps, ray counter.
+const STATS_BYTES: u64 = 64;
+
+/// Camera rays, and optionally one diffuse bounce ray per hit, cast without shading.
+#[derive(Clone, Copy, Debug, Default, serde::Serialize)]
+pub struct RayCastTiming {
+    /// GPU time of the pass, from timestamp queries.
+    pub gpu_ms: f64,
+    pub rays: u64,
+}
+
+/// The ray-casting benchmark pass, built on first use.
+struct RayCaster {
+    pipeline: wgpu::ComputePipeline,
+    layout: wgpu::BindGroupLayout,
+    output: Option<(u64, wgpu::Buffer)>,
+}
 
 pub struct PathTracer {
     trace_pipeline: wgpu::ComputePipeline,
+    raycaster: Option<RayCaster>,
     tonemap_pipeline: wgpu::ComputePipeline,
     scene_layout: wgpu::BindGroupLayout,
     accum_layout: wgpu::BindGroupLayout,
@@ -59,7 +76,13 @@ pub struct PathTracer {
     pub accum: wgpu::Buffer,
     pub aov_albedo_depth: wgpu::Buffer,
     pub aov_normal: wgpu::Buffer,
+    /// Unscattered radiance sum + sum of luminance(scattered)^2: what the denoiser needs beyond the AOVs.
+    pub moments: wgpu::Buffer,
     pub output_rgba8: wgpu::Buffer,
+    /// Primary hit through each pixel centre (instance, triangle, barycentrics); a 16-byte stub while
+    /// `hit_aov_enabled` is off, so nothing is spent on it unless asked.
+    pub aov_hit: wgpu::Buffer,
+    hit_aov_enabled: bool,
     /// Rays traced by the last dispatch.
     ray_counter: wgpu::Buffer,
     scene_bind_group: Option<(u64, wgpu::BindGroup)>,
@@ -69,7 +92,14 @@ pub struct PathTracer {
     pub height: u32,
     /// Samples per pixel accumulated since the last reset.
     pub samples: u32,
-    timestamps: Option<Timestamps>,
+    /// Pairs: trace, tonemap.
+    timestamps: Option<crate::gpu::PassTimestamps>,
+    denoiser: Denoiser,
+    /// One pair around the denoiser's pass, resolved by every denoise (in a frame or not).
+    denoise_timestamps: Option<crate::gpu::PassTimestamps>,
+    /// The tone mapper's bindings with the denoised image as its input (made when first needed).
+    denoised_tonemap_group: OnceLock<wgpu::BindGroup>,
+    denoised_last_dispatch: bool,
     /// Identifies the per-view buffers (unique across tracers; changes on resize), so displays rebind them.
     pub view_generation: u64,
     dispatches: u64,
@@ -81,7 +111,7 @@ fn next_view_id() -> u64 {
     NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
 }
 
-fn layout_entry(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
+pub(super) fn layout_entry(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
         binding,
         visibility: wgpu::ShaderStages::COMPUTE,
@@ -107,23 +137,27 @@ fn uniform_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
     }
 }
 
-fn bind_group(
-    ctx: &GpuContext,
-    layout: &wgpu::BindGroupLayout,
-    buffers: &[&wgpu::Buffer],
-) -> wgpu::BindGroup {
-    let entries: Vec<wgpu::BindGroupEntry> = buffers
+/// Whole-buffer bindings 0, 1, 2, ... in order.
+pub(super) fn buffer_entries<'a>(buffers: &[&'a wgpu::Buffer]) -> Vec<wgpu::BindGroupEntry<'a>> {
+    buffers
         .iter()
         .enumerate()
         .map(|(i, b)| wgpu::BindGroupEntry {
             binding: i as u32,
             resource: b.as_entire_binding(),
         })
-        .collect();
+        .collect()
+}
+
+fn bind_group(
+    ctx: &GpuContext,
+    layout: &wgpu::BindGroupLayout,
+    buffers: &[&wgpu::Buffer],
+) -> wgpu::BindGroup {
     ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
         label: None,
         layout,
-        entries: &entries,
+        entries: &buffer_entries(buffers),
     })
 }
 
@@ -131,6 +165,7 @@ struct ViewBuffers {
     accum: wgpu::Buffer,
     albedo: wgpu::Buffer,
     normal: wgpu::Buffer,
+    moments: wgpu::Buffer,
     rgba8: wgpu::Buffer,
 }
 
@@ -150,6 +185,7 @@ fn view_buffers(ctx: &GpuContext, width: u32, height: u32) -> ViewBuffers {
         accum: make("accum", 16),
         albedo: make("aov albedo", 16),
         normal: make("aov normal", 16),
+        moments: make("denoiser moments", 16),
         rgba8: make("rgba8", 4),
     }
 }
@@ -159,7 +195,7 @@ impl PathTracer {
         let device = &ctx.device;
         let scene_entries: Vec<_> = (0..10)
             .map(|b| layout_entry(b, true))
-            .chain([uniform_entry(10)])
+            .chain([uniform_entry(10), layout_entry(11, true)])
             .collect();
         let scene_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("scene"),
@@ -172,6 +208,8 @@ impl PathTracer {
                 layout_entry(1, false),
                 layout_entry(2, false),
                 layout_entry(3, false),
+                layout_entry(4, false),
+                layout_entry(5, false),
             ],
         });
         let tonemap_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -240,32 +278,28 @@ impl PathTracer {
                 | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
+        let aov_hit = hit_buffer(ctx, width, height, false);
         let accum_bind_group = bind_group(
             ctx,
             &accum_layout,
-            &[&v.accum, &v.albedo, &v.normal, &ray_counter],
+            &[
+                &v.accum,
+                &v.albedo,
+                &v.normal,
+                &ray_counter,
+                &aov_hit,
+                &v.moments,
+            ],
         );
         let tonemap_bind_group = bind_group(
             ctx,
             &tonemap_layout,
             &[&v.accum, &v.albedo, &v.normal, &v.rgba8, &tonemap_uniform],
         );
-        let timestamps = ctx.supports_timestamps().then(|| Timestamps {
-            set: device.create_query_set(&wgpu::QuerySetDescriptor {
-                label: Some("pass timestamps"),
-                ty: wgpu::QueryType::Timestamp,
-                count: 4,
-            }),
-            resolve: device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("timestamp resolve"),
-                size: 32,
-                usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
-                mapped_at_creation: false,
-            }),
-            period_ns: ctx.queue.get_timestamp_period(),
-        });
+        let timestamps = crate::gpu::PassTimestamps::new(ctx, "pass timestamps", 2);
         let mut tracer = Self {
             trace_pipeline,
+            raycaster: None,
             tonemap_pipeline,
             scene_layout,
             accum_layout,
@@ -275,7 +309,10 @@ impl PathTracer {
             accum: v.accum,
             aov_albedo_depth: v.albedo,
             aov_normal: v.normal,
+            moments: v.moments,
             output_rgba8: v.rgba8,
+            aov_hit,
+            hit_aov_enabled: false,
             ray_counter,
             scene_bind_group: None,
             accum_bind_group,
@@ -284,6 +321,10 @@ impl PathTracer {
             height,
             samples: 0,
             timestamps,
+            denoiser: Denoiser::new(ctx),
+            denoise_timestamps: crate::gpu::PassTimestamps::new(ctx, "denoise timestamps", 1),
+            denoised_tonemap_group: OnceLock::new(),
+            denoised_last_dispatch: false,
             view_generation: next_view_id(),
             dispatches: 0,
             async_stats: None,
@@ -297,10 +338,18 @@ impl PathTracer {
             return;
         }
         let v = view_buffers(ctx, width, height);
+        self.aov_hit = hit_buffer(ctx, width, height, self.hit_aov_enabled);
         self.accum_bind_group = bind_group(
             ctx,
             &self.accum_layout,
-            &[&v.accum, &v.albedo, &v.normal, &self.ray_counter],
+            &[
+                &v.accum,
+                &v.albedo,
+                &v.normal,
+                &self.ray_counter,
+                &self.aov_hit,
+                &v.moments,
+            ],
         );
         self.tonemap_bind_group = bind_group(
             ctx,
@@ -317,17 +366,47 @@ impl PathTracer {
             self.accum,
             self.aov_albedo_depth,
             self.aov_normal,
+            self.moments,
             self.output_rgba8,
-        ) = (v.accum, v.albedo, v.normal, v.rgba8);
+        ) = (v.accum, v.albedo, v.normal, v.moments, v.rgba8);
         (self.width, self.height) = (width, height);
         self.view_generation = next_view_id();
+        self.denoiser.release();
+        self.denoised_tonemap_group = OnceLock::new();
         self.reset(ctx);
+    }
+
+    /// Turns the primary-hit AOV on or off (allocating its buffer only while on); takes effect at the next
+    /// accumulation restart.
+    pub fn set_hit_aov(&mut self, ctx: &GpuContext, enabled: bool) {
+        if enabled == self.hit_aov_enabled {
+            return;
+        }
+        self.hit_aov_enabled = enabled;
+        self.aov_hit = hit_buffer(ctx, self.width, self.height, enabled);
+        self.accum_bind_group = bind_group(
+            ctx,
+            &self.accum_layout,
+            &[
+                &self.accum,
+                &self.aov_albedo_depth,
+                &self.aov_normal,
+                &self.ray_counter,
+                &self.aov_hit,
+                &self.moments,
+            ],
+        );
     }
 
     /// Restarts accumulation (camera, scene or settings changed).
     pub fn reset(&mut self, ctx: &GpuContext) {
         let mut encoder = ctx.device.create_command_encoder(&Default::default());
-        for b in [&self.accum, &self.aov_albedo_depth, &self.aov_normal] {
+        for b in [
+            &self.accum,
+            &self.aov_albedo_depth,
+            &self.aov_normal,
+            &self.moments,
+        ] {
             encoder.clear_buffer(b, 0, None);
         }
         ctx.queue.submit([encoder.finish()]);
@@ -355,13 +434,16 @@ impl PathTracer {
                 &scene.texture_infos,
                 &scene.emitters,
                 &self.frame_uniform,
+                &scene.wide_nodes,
             ],
         );
         self.scene_bind_group = Some((scene.generation, group.clone()));
         group
     }
 
-    /// Traces `spp` more samples per pixel into the accumulation buffers (and tone-maps if asked).
+    /// Traces `spp` more samples per pixel into the accumulation buffers (and tone-maps if asked), in one
+    /// submission after `before` (the frame's GPU deform passes).
+    #[allow(clippy::too_many_arguments)]
     pub fn dispatch(
         &mut self,
         ctx: &GpuContext,
@@ -370,47 +452,16 @@ impl PathTracer {
         camera: &CameraView,
         spp: u32,
         tonemap: bool,
+        before: Vec<wgpu::CommandBuffer>,
     ) {
-        let (env_mode, env_color) = match settings.environment {
-            Environment::Constant(c) => (0, c),
-            Environment::Sky => (1, [0.0; 3]),
-        };
-        let frame = GpuFrame {
-            world_from_camera: camera.world_from_camera.to_cols_array_2d(),
-            env_color,
-            tan_half_fov: (camera.yfov * 0.5).tan(),
-            width: self.width,
-            height: self.height,
-            sample_base: self.samples,
-            spp,
-            max_depth: settings.max_depth,
-            seed: settings.seed,
-            env_mode,
-            rr_depth: if settings.russian_roulette {
-                settings.rr_depth
-            } else {
-                u32::MAX
-            },
-            emitter_count: scene.emitter_count,
-            flags: if settings.nee { FRAME_NEE } else { 0 },
-            emitter_total_power: scene.emitter_total_power,
-            _pad: 0,
-        };
-        ctx.queue
-            .write_buffer(&self.frame_uniform, 0, bytemuck::bytes_of(&frame));
+        self.write_frame(ctx, scene, settings, camera, spp, settings.max_depth);
         let scene_group = self.scene_bind_group(ctx, scene);
         let mut encoder = ctx.device.create_command_encoder(&Default::default());
         encoder.clear_buffer(&self.ray_counter, 0, None);
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("path trace"),
-                timestamp_writes: self.timestamps.as_ref().map(|t| {
-                    wgpu::ComputePassTimestampWrites {
-                        query_set: &t.set,
-                        beginning_of_pass_write_index: Some(0),
-                        end_of_pass_write_index: Some(1),
-                    }
-                }),
+                timestamp_writes: self.trace_timestamps(),
             });
             pass.set_pipeline(&self.trace_pipeline);
             pass.set_bind_group(0, &scene_group, &[]);
@@ -418,21 +469,29 @@ impl PathTracer {
             pass.dispatch_workgroups(self.width.div_ceil(8), self.height.div_ceil(8), 1);
         }
         self.samples += spp;
+        let denoise = tonemap && Self::shows_denoised(settings);
         if tonemap {
-            self.encode_tonemap(ctx, &mut encoder, settings);
+            self.encode_display(ctx, &mut encoder, settings);
         }
         if let Some(t) = &self.timestamps {
-            encoder.resolve_query_set(&t.set, 0..if tonemap { 4 } else { 2 }, &t.resolve, 0);
+            t.resolve(&mut encoder, if tonemap { 2 } else { 1 });
         }
+        self.denoised_last_dispatch = denoise;
         self.dispatches += 1;
         if let Some(stats) = &mut self.async_stats {
-            let mut sources = vec![(&self.ray_counter, 4)];
+            let mut sources = Vec::new();
+            // Fixed offsets: timestamps at 0 (32 bytes), denoise at 32 (16), rays at 48 (4).
             if let Some(t) = &self.timestamps {
-                sources.insert(0, (&t.resolve, 32));
+                sources.push((t.resolve_buffer(), 0, 32));
             }
+            if let (true, Some(t)) = (denoise, &self.denoise_timestamps) {
+                sources.push((t.resolve_buffer(), 32, 16));
+            }
+            sources.push((&self.ray_counter, 48, 4));
             stats.encode(&mut encoder, &sources, self.dispatches);
         }
-        ctx.queue.submit([encoder.finish()]);
+        ctx.queue
+            .submit(before.into_iter().chain([encoder.finish()]));
         if let Some(stats) = &mut self.async_stats {
             stats.after_submit();
         }
@@ -456,29 +515,21 @@ impl PathTracer {
         let Some(stats) = &mut self.async_stats else {
             return Vec::new();
         };
-        let period_ns = self.timestamps.as_ref().map(|t| t.period_ns as f64);
+        let timestamps = self.timestamps.as_ref();
         stats
             .poll(ctx)
             .into_iter()
             .map(|(dispatch, bytes)| {
-                let word = |i: usize| {
-                    u64::from_le_bytes(bytes[i * 8..i * 8 + 8].try_into().unwrap_or_default())
-                };
-                let (passes, rays_at) = match period_ns {
-                    Some(period) => {
-                        let ms = |a: u64, b: u64| b.saturating_sub(a) as f64 * period * 1e-6;
-                        (
-                            Some(PassTimes {
-                                trace_ms: ms(word(0), word(1)),
-                                tonemap_ms: ms(word(2), word(3)),
-                            }),
-                            32,
-                        )
+                let passes = timestamps.map(|t| {
+                    let ms = t.ms_from_bytes(&bytes[..48]);
+                    PassTimes {
+                        trace_ms: ms[0],
+                        tonemap_ms: ms[1],
+                        denoise_ms: ms[2],
+                        ..Default::default()
                     }
-                    None => (None, 0),
-                };
-                let rays =
-                    u32::from_le_bytes(bytes[rays_at..rays_at + 4].try_into().unwrap_or_default());
+                });
+                let rays = u32::from_le_bytes(bytes[48..52].try_into().unwrap_or_default());
                 GpuFrameStats {
                     dispatch,
                     passes,
@@ -488,11 +539,232 @@ impl PathTracer {
             .collect()
     }
 
+    /// The primary hit through pixel (`x`, `y`) as of the current accumulation's first frame (blocks);
+    /// `None` while the hit AOV is off or outside the image.
+    pub fn read_hit(&self, ctx: &GpuContext, x: u32, y: u32) -> Option<PrimaryHit> {
+        if !self.hit_aov_enabled || x >= self.width || y >= self.height {
+            return None;
+        }
+        let offset = (y as u64 * self.width as u64 + x as u64) * 16;
+        let bytes = ctx.read_buffer_range(&self.aov_hit, offset, 16);
+        Some(primary_hit(bytemuck::cast_slice::<u8, [u32; 4]>(&bytes)[0]))
+    }
+
+    /// Whether the display shows the denoised image (colour view with the denoiser on).
+    fn shows_denoised(settings: &RenderSettings) -> bool {
+        settings.denoise && settings.view == AovView::Color
+    }
+
+    fn denoise_inputs(&self) -> DenoiseInputs<'_> {
+        DenoiseInputs {
+            accum: &self.accum,
+            albedo_depth: &self.aov_albedo_depth,
+            normal_hits: &self.aov_normal,
+            moments: &self.moments,
+            width: self.width,
+            height: self.height,
+        }
+    }
+
+    fn encode_denoise(
+        &self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        params: &DenoiseParams,
+    ) -> &wgpu::Buffer {
+        let timestamps = self.denoise_timestamps.as_ref().map(|t| t.pass_writes(0));
+        let output = self
+            .denoiser
+            .encode(ctx, encoder, &self.denoise_inputs(), params, timestamps);
+        if let Some(t) = &self.denoise_timestamps {
+            t.resolve(encoder, 1);
+        }
+        output
+    }
+
+    /// The display transform, denoising first when the settings ask for it.
+    fn encode_display(
+        &self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        settings: &RenderSettings,
+    ) {
+        if !Self::shows_denoised(settings) {
+            self.encode_tonemap(ctx, encoder, settings, &self.tonemap_bind_group);
+            return;
+        }
+        let denoised = self.encode_denoise(ctx, encoder, &settings.denoise_params);
+        let group = self.denoised_tonemap_group.get_or_init(|| {
+            bind_group(
+                ctx,
+                &self.tonemap_layout,
+                &[
+                    denoised,
+                    &self.aov_albedo_depth,
+                    &self.aov_normal,
+                    &self.output_rgba8,
+                    &self.tonemap_uniform,
+                ],
+            )
+        });
+        self.encode_tonemap(ctx, encoder, settings, group);
+    }
+
+    /// Denoises the current accumulation (whatever `RenderSettings::denoise` says) and reads it back: linear
+    /// RGB per pixel, row-major from the top-left.
+    pub fn denoised_radiance(&self, ctx: &GpuContext, params: &DenoiseParams) -> Vec<[f32; 3]> {
+        let mut encoder = ctx.device.create_command_encoder(&Default::default());
+        let output = self.encode_denoise(ctx, &mut encoder, params);
+        ctx.queue.submit([encoder.finish()]);
+        let bytes = ctx.read_buffer(output, output.size());
+        bytemuck::cast_slice::<u8, [f32; 4]>(&bytes)
+            .iter()
+            .map(|p| [p[0], p[1], p[2]])
+            .collect()
+    }
+
+    /// GPU memory of the denoiser's buffers (0 until it first ran at this view size).
+    pub fn denoiser_memory_bytes(&self) -> u64 {
+        self.denoiser.memory_bytes()
+    }
+
+    fn trace_timestamps(&self) -> Option<wgpu::ComputePassTimestampWrites<'_>> {
+        self.timestamps.as_ref().map(|t| t.pass_writes(0))
+    }
+
+    /// Casts one camera ray per pixel centre and, with `diffuse_bounce`, one cosine-distributed ray from each
+    /// hit, without shading: the traversal throughput the speed targets count. Blocks for the result; `None`
+    /// without timestamp queries. Leaves the accumulation untouched.
+    pub fn cast_rays(
+        &mut self,
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        settings: &RenderSettings,
+        camera: &CameraView,
+        diffuse_bounce: bool,
+    ) -> Option<RayCastTiming> {
+        self.timestamps.as_ref()?;
+        let pixels = self.width as u64 * self.height as u64;
+        let caster = self.raycaster.get_or_insert_with(|| {
+            let device = &ctx.device;
+            let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("raycast output"),
+                entries: &[layout_entry(0, false), layout_entry(1, false)],
+            });
+            let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some("raycast"),
+                source: wgpu::ShaderSource::Wgsl(super::shaders::raycast_source().into()),
+            });
+            let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("raycast"),
+                bind_group_layouts: &[Some(&self.scene_layout), Some(&layout)],
+                immediate_size: 0,
+            });
+            let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some("raycast"),
+                layout: Some(&pipeline_layout),
+                module: &module,
+                entry_point: Some("cast_rays"),
+                compilation_options: Default::default(),
+                cache: None,
+            });
+            RayCaster {
+                pipeline,
+                layout,
+                output: None,
+            }
+        });
+        if caster.output.as_ref().is_none_or(|(n, _)| *n != pixels) {
+            let buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("raycast distances"),
+                size: pixels.max(1) * 4,
+                usage: wgpu::BufferUsages::STORAGE,
+                mapped_at_creation: false,
+            });
+            caster.output = Some((pixels, buffer));
+        }
+        let output_group = {
+            let caster = self.raycaster.as_ref().expect("created above");
+            let (_, output) = caster.output.as_ref().expect("created above");
+            bind_group(ctx, &caster.layout, &[output, &self.ray_counter])
+        };
+        self.write_frame(ctx, scene, settings, camera, 1, u32::from(diffuse_bounce));
+        let scene_group = self.scene_bind_group(ctx, scene);
+        let mut encoder = ctx.device.create_command_encoder(&Default::default());
+        encoder.clear_buffer(&self.ray_counter, 0, None);
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("raycast"),
+                timestamp_writes: self.trace_timestamps(),
+            });
+            let caster = self.raycaster.as_ref().expect("created above");
+            pass.set_pipeline(&caster.pipeline);
+            pass.set_bind_group(0, &scene_group, &[]);
+            pass.set_bind_group(1, &output_group, &[]);
+            pass.dispatch_workgroups(self.width.div_ceil(8), self.height.div_ceil(8), 1);
+        }
+        if let Some(t) = &self.timestamps {
+            t.resolve(&mut encoder, 1);
+        }
+        self.denoised_last_dispatch = false;
+        ctx.queue.submit([encoder.finish()]);
+        let gpu_ms = self.read_pass_times(ctx)?.trace_ms;
+        Some(RayCastTiming {
+            gpu_ms,
+            rays: self.read_ray_count(ctx),
+        })
+    }
+
+    fn write_frame(
+        &self,
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        settings: &RenderSettings,
+        camera: &CameraView,
+        spp: u32,
+        max_depth: u32,
+    ) {
+        let (env_mode, env_color) = match settings.environment {
+            Environment::Constant(c) => (0, c),
+            Environment::Sky => (1, [0.0; 3]),
+        };
+        let frame = GpuFrame {
+            world_from_camera: camera.world_from_camera.to_cols_array_2d(),
+            env_color,
+            tan_half_fov: (camera.yfov * 0.5).tan(),
+            width: self.width,
+            height: self.height,
+            sample_base: self.samples,
+            spp,
+            max_depth,
+            seed: settings.seed,
+            env_mode,
+            rr_depth: if settings.russian_roulette {
+                settings.rr_depth
+            } else {
+                u32::MAX
+            },
+            emitter_count: scene.emitter_count,
+            // The primary-hit AOV is written by the first dispatch of an accumulation (the path kernel).
+            flags: if settings.nee { FRAME_NEE } else { 0 }
+                | if self.hit_aov_enabled && self.samples == 0 {
+                    FRAME_HIT_AOV
+                } else {
+                    0
+                },
+            emitter_total_power: scene.emitter_total_power,
+            _pad: 0,
+        };
+        ctx.queue
+            .write_buffer(&self.frame_uniform, 0, bytemuck::bytes_of(&frame));
+    }
+
     fn encode_tonemap(
         &self,
         ctx: &GpuContext,
         encoder: &mut wgpu::CommandEncoder,
         settings: &RenderSettings,
+        group: &wgpu::BindGroup,
     ) {
         let params = TonemapParams {
             width: self.width,
@@ -507,37 +779,39 @@ impl PathTracer {
             .write_buffer(&self.tonemap_uniform, 0, bytemuck::bytes_of(&params));
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("tonemap"),
-            timestamp_writes: self
-                .timestamps
-                .as_ref()
-                .map(|t| wgpu::ComputePassTimestampWrites {
-                    query_set: &t.set,
-                    beginning_of_pass_write_index: Some(2),
-                    end_of_pass_write_index: Some(3),
-                }),
+            timestamp_writes: self.timestamps.as_ref().map(|t| t.pass_writes(1)),
         });
         pass.set_pipeline(&self.tonemap_pipeline);
-        pass.set_bind_group(0, &self.tonemap_bind_group, &[]);
+        pass.set_bind_group(0, group, &[]);
         pass.dispatch_workgroups(self.width.div_ceil(8), self.height.div_ceil(8), 1);
     }
 
-    /// Tone-maps the current accumulation into `output_rgba8`.
+    /// Tone-maps the current accumulation (denoised if the settings say so) into `output_rgba8`.
     pub fn tonemap(&self, ctx: &GpuContext, settings: &RenderSettings) {
         let mut encoder = ctx.device.create_command_encoder(&Default::default());
-        self.encode_tonemap(ctx, &mut encoder, settings);
+        self.encode_display(ctx, &mut encoder, settings);
         ctx.queue.submit([encoder.finish()]);
     }
 
     /// GPU times of the last dispatch (blocks until it finished); `None` without timestamp support.
     pub fn read_pass_times(&self, ctx: &GpuContext) -> Option<PassTimes> {
-        let t = self.timestamps.as_ref()?;
-        let bytes = ctx.read_buffer(&t.resolve, 32);
-        let ticks: &[u64] = bytemuck::cast_slice(&bytes);
-        let ms = |a: u64, b: u64| b.saturating_sub(a) as f64 * t.period_ns as f64 * 1e-6;
+        let ms = self.timestamps.as_ref()?.read_ms(ctx);
         Some(PassTimes {
-            trace_ms: ms(ticks[0], ticks[1]),
-            tonemap_ms: ms(ticks[2], ticks[3]),
+            trace_ms: ms[0],
+            tonemap_ms: ms[1],
+            denoise_ms: if self.denoised_last_dispatch {
+                self.read_denoise_ms(ctx).unwrap_or(0.0)
+            } else {
+                0.0
+            },
+            ..Default::default()
         })
+    }
+
+    /// GPU time of the last denoise, in a frame or through [`Self::denoised_radiance`] (blocks until it
+    /// finished); `None` without timestamp support.
+    pub fn read_denoise_ms(&self, ctx: &GpuContext) -> Option<f64> {
+        Some(self.denoise_timestamps.as_ref()?.read_ms(ctx)[0])
     }
 
     /// Rays (camera, bounce, shadow) traced by the last dispatch (blocks until it finished).
@@ -584,6 +858,52 @@ impl PathTracer {
     pub fn read_rgba8(&self, ctx: &GpuContext) -> Vec<u8> {
         ctx.read_buffer(&self.output_rgba8, self.output_rgba8.size())
     }
+
+    /// The primary hit through each pixel centre, row-major (empty while the hit AOV is off).
+    pub fn read_hits(&self, ctx: &GpuContext) -> Vec<PrimaryHit> {
+        if !self.hit_aov_enabled {
+            return Vec::new();
+        }
+        let bytes = ctx.read_buffer(&self.aov_hit, self.aov_hit.size());
+        bytemuck::cast_slice::<u8, [u32; 4]>(&bytes)
+            .iter()
+            .map(|h| primary_hit(*h))
+            .collect()
+    }
+}
+
+/// Decodes one texel of the hit AOV.
+fn primary_hit(h: [u32; 4]) -> PrimaryHit {
+    PrimaryHit {
+        instance: (h[0] != NONE).then_some(h[0]),
+        triangle: h[1],
+        barycentrics: [f32::from_bits(h[2]), f32::from_bits(h[3])],
+    }
+}
+
+/// The first surface the ray through a pixel centre hits.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PrimaryHit {
+    /// Index into the GPU instance buffer (TLAS leaf order); `None` where the ray left the scene.
+    pub instance: Option<u32>,
+    /// Slot in the GPU triangle buffer (the mesh's triangle offset included).
+    pub triangle: u32,
+    /// Weights of the triangle's second and third vertices.
+    pub barycentrics: [f32; 2],
+}
+
+fn hit_buffer(ctx: &GpuContext, width: u32, height: u32, enabled: bool) -> wgpu::Buffer {
+    let size = if enabled {
+        (width as u64 * height as u64).max(1) * 16
+    } else {
+        16
+    };
+    ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("aov primary hit"),
+        size,
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+        mapped_at_creation: false,
+    })
 }
 
 #[derive(Clone, Debug, Default)]

@@ -1,13 +1,14 @@
-//! Picking: which entity, mesh and material a pixel shows. A ray cast on the CPU through the same BVHs and
-//! current (deformed) positions the GPU traces, so a click selects what is on screen, also mid-animation.
+//! Picking: which entity, mesh and material a pixel shows. The path tracer's primary-hit AOV (written by the
+//! GPU at the first sample of each accumulation) is read back for the clicked pixel, so a pick selects exactly
+//! what is on screen: GPU-deformed poses, compressed wide BVHs and alpha-masked cut-outs included, where a CPU
+//! ray cast would see stale trees.
 
 use super::Renderer;
-use crate::camera::CameraView;
-use crate::scene::{GlobalTransform, MeshInstance, SceneAssets, SkinnedMesh};
+use crate::gpu::GpuContext;
+use crate::scene::{MeshInstance, SceneAssets};
 use bevy_ecs::prelude::*;
-use glam::{Mat4, Vec3};
 
-/// What a picking ray hit first.
+/// What the ray through a pixel centre hit first.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PickHit {
     pub entity: Entity,
@@ -16,113 +17,39 @@ pub struct PickHit {
     pub triangle: usize,
     /// Index into the scene's materials; `None` for glTF's default material.
     pub material: Option<usize>,
-    /// Distance along the (unit) ray.
-    pub distance: f32,
-    pub position: Vec3,
+    /// Weights of the triangle's second and third vertices at the hit.
+    pub barycentrics: [f32; 2],
 }
 
-/// Casts the ray through pixel (`x`, `y`) (image pixels from the top-left, fractional allowed) of a
-/// `width` x `height` view from the world's [`CameraView`].
-pub fn pick_pixel(world: &mut World, x: f32, y: f32, width: u32, height: u32) -> Option<PickHit> {
-    let view = *world.get_resource::<CameraView>()?;
-    let (origin, dir) = view.ray_through(x, y, width, height);
-    pick_ray(world, origin, dir)
+/// Turns the primary-hit AOV on: picking reads it. It is written from the next accumulation restart on.
+pub fn enable_picking(world: &mut World) {
+    let Some(ctx) = world.get_resource::<GpuContext>().cloned() else {
+        return;
+    };
+    if let Some(mut renderer) = world.get_resource_mut::<Renderer>() {
+        renderer.tracer.set_hit_aov(&ctx, true);
+        renderer.restart_accumulation = true;
+    }
 }
 
-/// The nearest mesh-instance hit along a world-space ray (unit direction); both triangle faces count.
-pub fn pick_ray(world: &mut World, origin: Vec3, dir: Vec3) -> Option<PickHit> {
-    let scene = world.get_resource::<SceneAssets>()?.0.clone();
-    let mut instances = world.query::<(
-        Entity,
-        &GlobalTransform,
-        &MeshInstance,
-        Option<&SkinnedMesh>,
-    )>();
-    let candidates: Vec<(Entity, Mat4, usize)> = instances
-        .iter(world)
-        .map(|(e, g, m, skinned)| {
-            // Skinned vertices are already in world space (as for the GPU instances).
-            (
-                e,
-                if skinned.is_some() {
-                    Mat4::IDENTITY
-                } else {
-                    g.0
-                },
-                m.mesh,
-            )
-        })
-        .collect();
+/// The hit through pixel (`x`, `y`) of the current image (pixels from the top-left); `None` where the ray
+/// left the scene, outside the image, or when picking is not enabled. Blocks for a 16-byte readback.
+pub fn pick_pixel(world: &World, x: u32, y: u32) -> Option<PickHit> {
     let renderer = world.get_resource::<Renderer>()?;
-    let mut best: Option<PickHit> = None;
-    for (entity, world_from_object, mesh) in candidates {
-        let (Some(slot), Some(data)) =
-            (renderer.scene.mesh_slots.get(mesh), scene.meshes.get(mesh))
-        else {
-            continue;
-        };
-        let object_from_world = world_from_object.inverse();
-        if !object_from_world.is_finite() {
-            continue;
-        }
-        let o = object_from_world.transform_point3(origin);
-        // Not normalised: t along it equals world distance along the unit world ray.
-        let d = object_from_world.transform_vector3(dir);
-        let positions = slot.positions.as_deref().unwrap_or(&data.positions);
-        let t_max = best.map_or(f32::INFINITY, |b| b.distance);
-        let mut nearest_slot = None;
-        let t = slot
-            .bvh
-            .flat
-            .closest_hit(o, d, t_max, |first, count, t_max| {
-                let mut found = None;
-                let mut limit = t_max;
-                for s in first..first + count {
-                    let [a, b, c] = slot.gpu_triangles[s as usize].map(|v| positions[v as usize]);
-                    if let Some(t) = ray_triangle(o, d, a, b, c).filter(|&t| t < limit) {
-                        limit = t;
-                        found = Some(t);
-                        nearest_slot = Some(s as usize);
-                    }
-                }
-                found
-            });
-        if let (Some(t), Some(s)) = (t, nearest_slot) {
-            let triangle = slot.bvh.flat.order[s] as usize;
-            let material = data.triangle_materials[triangle] as usize;
-            best = Some(PickHit {
-                entity,
-                mesh,
-                triangle,
-                material: (material < scene.materials.len()).then_some(material),
-                distance: t,
-                position: origin + dir * t,
-            });
-        }
-    }
-    best
-}
-
-/// Moeller-Trumbore, both faces; the hit distance in units of `dir`.
-pub fn ray_triangle(o: Vec3, d: Vec3, a: Vec3, b: Vec3, c: Vec3) -> Option<f32> {
-    let e1 = b - a;
-    let e2 = c - a;
-    let p = d.cross(e2);
-    let det = e1.dot(p);
-    if det.abs() < 1e-12 {
-        return None;
-    }
-    let inv = 1.0 / det;
-    let s = o - a;
-    let u = s.dot(p) * inv;
-    if !(0.0..=1.0).contains(&u) {
-        return None;
-    }
-    let q = s.cross(e1);
-    let v = d.dot(q) * inv;
-    if v < 0.0 || u + v > 1.0 {
-        return None;
-    }
-    let t = e2.dot(q) * inv;
-    (t > 0.0 && t.is_finite()).then_some(t)
+    let ctx = world.get_resource::<GpuContext>()?;
+    let scene = &world.get_resource::<SceneAssets>()?.0;
+    let hit = renderer.tracer.read_hit(ctx, x, y)?;
+    let entity = *renderer.instance_entities.get(hit.instance? as usize)?;
+    let mesh = world.get::<MeshInstance>(entity)?.mesh;
+    let slot = renderer.scene.mesh_slots.get(mesh)?;
+    let local = hit.triangle.checked_sub(slot.gpu.triangle_offset)? as usize;
+    let triangle = *slot.blas.order().get(local)? as usize;
+    let material = *scene.meshes.get(mesh)?.triangle_materials.get(triangle)? as usize;
+    Some(PickHit {
+        entity,
+        mesh,
+        triangle,
+        material: (material < scene.materials.len()).then_some(material),
+        barycentrics: hit.barycentrics,
+    })
 }

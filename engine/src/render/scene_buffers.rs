@@ -3,7 +3,8 @@
 //! a deformed mesh rewrites only its own positions/normals and BLAS nodes.
 
 use super::layout::*;
-use crate::bvh::{FlatBvh, MeshBvh};
+use crate::bvh::refit::RebuildPolicy;
+use crate::bvh::{Blas, FlatBvh, MeshBvh, StaticLayout};
 use crate::gpu::GpuContext;
 use crate::scene::{AlphaMode, MeshData, SceneAsset, Wrap};
 use glam::{Mat4, Vec3};
@@ -37,28 +38,75 @@ pub struct MeshSlot {
     /// Triangles in BVH order (vertex indices).
     pub gpu_triangles: Vec<[u32; 3]>,
     pub blas_node_offset: u32,
-    pub bvh: MeshBvh,
+    pub blas: Blas,
     /// Current vertex positions of a deformed mesh; `None` while it is in its rest pose.
     pub positions: Option<Vec<Vec3>>,
     /// BLAS nodes reserved for this mesh (a deformable mesh reserves room for any rebuilt tree).
     pub blas_capacity: u32,
+    /// Conservative bounds of a GPU-deformed mesh at its current pose (its CPU tree's boxes are stale);
+    /// the top-level BVH uses them instead of the tree's root box.
+    pub deformed_bounds: Option<(Vec3, Vec3)>,
+    /// The tree was rebuilt since upload (its topology and triangle order are no longer the upload's).
+    pub rebuilt: bool,
+    /// The tree built at upload, kept once [`RebuildPolicy::PoseDetermined`] first needs it.
+    upload_bvh: Option<MeshBvh>,
+}
+
+impl MeshSlot {
+    /// Puts back the tree built at upload (keeping a copy the first time); returns the upload triangle order
+    /// to write when the current tree was a rebuilt one. The tree's bounds are stale until the next refit.
+    fn restore_upload_tree(
+        &mut self,
+        mesh: &MeshData,
+        materials: &[GpuMaterial],
+        quality: crate::bvh::BvhQuality,
+    ) -> Option<OrderedTriangles> {
+        if self.upload_bvh.is_none() {
+            // Until the first rebuild the current tree has the upload topology; after one, the same
+            // deterministic build over the rest positions gives it back.
+            let upload = if self.rebuilt {
+                MeshBvh::build(&mesh.positions, &mesh.triangles, quality).ok()?
+            } else {
+                self.blas.binary()?.clone()
+            };
+            self.upload_bvh = Some(upload);
+        }
+        if !self.rebuilt {
+            return None;
+        }
+        let upload = self.upload_bvh.clone()?;
+        let ordered = order_triangles(
+            mesh,
+            &upload.flat.order,
+            self.gpu.triangle_offset,
+            materials,
+        );
+        self.blas = Blas::Binary(upload);
+        self.gpu_triangles = ordered.indices.clone();
+        self.rebuilt = false;
+        Some(ordered)
+    }
 }
 
 /// Byte counts of what the scene occupies on the GPU.
 #[derive(Clone, Copy, Debug, Default, serde::Serialize)]
 pub struct GpuMemory {
+    /// Child-pair BVH2 nodes and compressed wide nodes together.
     pub blas_nodes: u64,
     pub triangles: u64,
     pub vertex_pool: u64,
     pub materials: u64,
     pub texels: u64,
     pub instances_and_tlas: u64,
+    /// GPU deformation: rest attributes, influences, morph deltas, per-frame matrices/weights and refit
+    /// tables of the meshes the GPU deforms (0 on the CPU backend).
+    pub deform: u64,
 }
 
 impl GpuMemory {
     /// Geometry + BVH: the figure the memory target counts (no textures).
     pub fn geometry_and_bvh(&self) -> u64 {
-        self.blas_nodes + self.triangles + self.vertex_pool + self.instances_and_tlas
+        self.blas_nodes + self.triangles + self.vertex_pool + self.instances_and_tlas + self.deform
     }
     pub fn total(&self) -> u64 {
         self.geometry_and_bvh() + self.materials + self.texels
@@ -67,6 +115,8 @@ impl GpuMemory {
 
 pub struct GpuScene {
     pub blas_nodes: wgpu::Buffer,
+    /// Compressed wide nodes of static meshes (`GpuMesh::blas_root` has [`WIDE_BLAS`] set).
+    pub wide_nodes: wgpu::Buffer,
     pub triangles: wgpu::Buffer,
     pub vertex_pool: wgpu::Buffer,
     pub materials: wgpu::Buffer,
@@ -81,12 +131,16 @@ pub struct GpuScene {
     pub memory: GpuMemory,
     pub emitter_count: u32,
     pub emitter_total_power: f32,
+    /// For each GPU instance (TLAS leaf order), its index in the last [`Self::update_instances`] input.
+    pub instance_order: Vec<u32>,
     /// Emissive triangles per mesh (triangle slot, material), for building the emitter list.
     emissive_triangles: Vec<Vec<(u32, u32)>>,
     /// Instances as last uploaded (TLAS leaf order): material edits rebuild the emitter list from them.
     uploaded_instances: Vec<GpuInstance>,
     /// Bumped whenever buffers are recreated, so bind groups are rebuilt.
     pub generation: u64,
+    /// Build quality of the upload (rebuilds of the upload tree use it).
+    bvh_quality: crate::bvh::BvhQuality,
     pub build_seconds: f64,
 }
 
@@ -97,13 +151,15 @@ pub struct InstanceInput {
     pub mesh: u32,
 }
 
-fn storage(ctx: &GpuContext, label: &str, bytes: &[u8]) -> wgpu::Buffer {
-    // wgpu rejects empty bindings: keep at least 16 bytes.
+pub(crate) fn storage(ctx: &GpuContext, label: &str, bytes: &[u8]) -> wgpu::Buffer {
+    // wgpu rejects empty bindings and ones smaller than one element: keep at least the largest element
+    // (an instance, 112 bytes).
+    const MIN_BYTES: usize = 128;
     let padded;
-    let contents = if bytes.len() < 16 {
+    let contents = if bytes.len() < MIN_BYTES {
         padded = {
             let mut v = bytes.to_vec();
-            v.resize(16, 0);
+            v.resize(MIN_BYTES, 0);
             v
         };
         &padded[..]
@@ -255,6 +311,7 @@ impl GpuScene {
         ctx: &GpuContext,
         scene: &SceneAsset,
         quality: crate::bvh::BvhQuality,
+        layout: StaticLayout,
         binding_limit: Option<u64>,
     ) -> Result<(Self, Vec<String>), UploadError> {
         let start = std::time::Instant::now();
@@ -277,6 +334,7 @@ impl GpuScene {
 
         let mut pool = Vec::new();
         let mut blas_nodes = Vec::new();
+        let mut wide_nodes: Vec<obvhs::cwbvh::node::CwBvhNode> = Vec::new();
         let mut triangles: Vec<[u32; 4]> = Vec::new();
         let mut slots = Vec::with_capacity(scene.meshes.len());
         let mut emissive_triangles = Vec::with_capacity(scene.meshes.len());
@@ -286,40 +344,74 @@ impl GpuScene {
             .chain(std::iter::once(&crate::scene::Material::default()))
             .map(gpu_material)
             .collect();
-        for mesh in &scene.meshes {
-            let bvh =
-                MeshBvh::build(&mesh.positions, &mesh.triangles, quality).map_err(|source| {
-                    UploadError::Bvh {
-                        scene: scene.source.clone(),
-                        mesh: mesh.name.clone(),
-                        source,
-                    }
-                })?;
+        // Meshes build their trees in parallel (obvhs also parallelises within one large mesh).
+        let blases: Vec<Blas> = scene
+            .meshes
+            .par_iter()
+            .map(|mesh| {
+                Blas::build(
+                    &mesh.positions,
+                    &mesh.triangles,
+                    quality,
+                    layout,
+                    mesh.is_deformable(),
+                )
+                .map_err(|source| UploadError::Bvh {
+                    scene: scene.source.clone(),
+                    mesh: mesh.name.clone(),
+                    source,
+                })
+            })
+            .collect::<Result<_, _>>()?;
+        for (mesh, blas) in scene.meshes.iter().zip(blases) {
             let mut gpu = pack_vertices(mesh, &mut pool);
-            gpu.blas_root = blas_nodes.len() as u32;
             gpu.triangle_offset = triangles.len() as u32;
-            let ordered = order_triangles(mesh, &bvh, gpu.triangle_offset, &materials);
+            let ordered = order_triangles(mesh, blas.order(), gpu.triangle_offset, &materials);
             triangles.extend_from_slice(&ordered.packed);
             let (gpu_triangles, emissive) = (ordered.indices, ordered.emissive);
             emissive_triangles.push(emissive);
-            blas_nodes.extend_from_slice(&bvh.flat.nodes);
-            // Deformable meshes reserve the largest tree a rebuild can produce, so it rewrites in place.
-            if mesh.is_deformable() {
-                let capacity = crate::bvh::refit::node_capacity(mesh.triangles.len())
-                    .max(bvh.flat.nodes.len());
-                blas_nodes.resize(
-                    gpu.blas_root as usize + capacity,
-                    crate::bvh::GpuBvhNode::EMPTY,
-                );
+            match &blas {
+                Blas::Wide(wide) => {
+                    gpu.blas_root = wide_nodes.len() as u32 | WIDE_BLAS;
+                    wide_nodes.extend_from_slice(&wide.nodes);
+                }
+                Blas::Binary(bvh) => {
+                    gpu.blas_root = blas_nodes.len() as u32;
+                    blas_nodes.extend_from_slice(&bvh.flat.nodes);
+                    // Deformable meshes reserve the largest tree a rebuild can produce, so it rewrites in place.
+                    if mesh.is_deformable() {
+                        let capacity = crate::bvh::refit::node_capacity(mesh.triangles.len())
+                            .max(bvh.flat.nodes.len());
+                        blas_nodes.resize(
+                            gpu.blas_root as usize + capacity,
+                            crate::bvh::GpuBvhNode::EMPTY,
+                        );
+                    }
+                }
             }
-            let blas_capacity = (blas_nodes.len() - gpu.blas_root as usize) as u32;
+            let blas_capacity = match &blas {
+                Blas::Wide(w) => w.nodes.len() as u32,
+                Blas::Binary(_) => (blas_nodes.len() - gpu.blas_root as usize) as u32,
+            };
             slots.push(MeshSlot {
                 gpu,
                 gpu_triangles,
                 blas_node_offset: gpu.blas_root,
-                bvh,
+                blas,
                 positions: None,
                 blas_capacity,
+                deformed_bounds: None,
+                rebuilt: false,
+                upload_bvh: None,
+            });
+        }
+        if wide_nodes.len() as u32 >= WIDE_BLAS {
+            return Err(UploadError::OverLimit {
+                scene: scene.source.clone(),
+                what: "wide BVH node",
+                needed_mib: (wide_nodes.len() * 80) as f64 / 1048576.0,
+                limit_mib: (WIDE_BLAS as usize * 80) as f64 / 1048576.0,
+                adapter: ctx.info.name.clone(),
             });
         }
 
@@ -359,20 +451,23 @@ impl GpuScene {
 
         let meshes: Vec<GpuMesh> = slots.iter().map(|s| s.gpu).collect();
         check("BLAS node", (blas_nodes.len() * 64) as u64)?;
+        check("wide BLAS node", (wide_nodes.len() * 80) as u64)?;
         check("triangle", (triangles.len() * 16) as u64)?;
         check("vertex", (pool.len() * 4) as u64)?;
         check("texel", (texels.len() * 4) as u64)?;
 
         let memory = GpuMemory {
-            blas_nodes: (blas_nodes.len() * 64) as u64,
+            blas_nodes: (blas_nodes.len() * 64 + wide_nodes.len() * 80) as u64,
             triangles: (triangles.len() * 16) as u64,
             vertex_pool: (pool.len() * 4) as u64,
             materials: (materials.len() * 64 + texture_infos.len() * 16) as u64,
             texels: (texels.len() * 4) as u64,
             instances_and_tlas: 0,
+            deform: 0,
         };
         let gpu_scene = Self {
             blas_nodes: storage(ctx, "blas nodes", bytemuck::cast_slice(&blas_nodes)),
+            wide_nodes: storage(ctx, "wide blas nodes", bytemuck::cast_slice(&wide_nodes)),
             triangles: storage(ctx, "triangles", bytemuck::cast_slice(&triangles)),
             vertex_pool: storage(ctx, "vertex pool", bytemuck::cast_slice(&pool)),
             materials: storage(ctx, "materials", bytemuck::cast_slice(&materials)),
@@ -387,27 +482,38 @@ impl GpuScene {
             memory,
             emitter_count: 0,
             emitter_total_power: 0.0,
+            instance_order: Vec::new(),
             emissive_triangles,
             uploaded_instances: Vec::new(),
             generation: 1,
+            bvh_quality: quality,
             build_seconds: start.elapsed().as_secs_f64(),
         };
         Ok((gpu_scene, notes))
     }
 
     /// Writes this frame's deformed meshes over their own vertex-pool ranges (same encodings as the initial
-    /// upload), refits their BLASes and uploads the nodes; returns each mesh's new SAH ratio. The CPU work
-    /// (encoding, refit, SAH) runs in parallel over meshes, the queue writes after it in mesh order.
+    /// upload), refits their BLASes and uploads the nodes; returns each mesh's new SAH ratio and the CPU
+    /// seconds spent on the queue writes. The CPU work (encoding, refit + SAH in one sweep) runs in parallel
+    /// over meshes, the queue writes after it in mesh order. Under [`RebuildPolicy::PoseDetermined`] a
+    /// rebuilt mesh first goes back to its upload tree and triangle order, so the refit result depends on
+    /// this pose alone.
     pub fn apply_deformations(
         &mut self,
         ctx: &GpuContext,
+        scene: &SceneAsset,
         deformed: &crate::animation::DeformedMeshes,
-    ) -> Vec<(usize, f32)> {
+        policy: RebuildPolicy,
+    ) -> (Vec<(usize, f32)>, f64) {
         struct Update {
             mesh: usize,
+            /// Encoded normals and tangents (positions are written straight from the deformed mesh).
             words: Vec<(u32, Vec<u32>)>,
             sah_ratio: f32,
+            /// The triangle order went back to the upload tree's.
+            restored: Option<OrderedTriangles>,
         }
+        let (materials, quality) = (&self.material_data, self.bvh_quality);
         let mut changed = vec![false; self.mesh_slots.len()];
         for &m in &deformed.changed {
             if deformed.meshes.get(m).is_some_and(Option::is_some) && m < changed.len() {
@@ -424,13 +530,7 @@ impl GpuScene {
                     unreachable!("filtered to deformed meshes")
                 };
                 let gpu = slot.gpu;
-                let mut words = vec![(
-                    gpu.position_offset,
-                    d.positions
-                        .iter()
-                        .flat_map(|p| p.to_array().map(f32::to_bits))
-                        .collect(),
-                )];
+                let mut words = Vec::new();
                 if let (Some(n), true) = (&d.normals, gpu.normal_offset != NONE) {
                     words.push((
                         gpu.normal_offset,
@@ -449,22 +549,49 @@ impl GpuScene {
                         .collect();
                     words.push((gpu.tangent_offset, tangent_words));
                 }
-                let sah_ratio = crate::bvh::refit::refit_and_measure(
-                    &mut slot.bvh,
-                    &d.positions,
-                    &slot.gpu_triangles,
-                );
-                slot.positions = Some(d.positions.clone());
+                let restored = (policy == RebuildPolicy::PoseDetermined)
+                    .then(|| slot.restore_upload_tree(&scene.meshes[m], materials, quality))
+                    .flatten();
+                let bvh = slot
+                    .blas
+                    .binary_mut()
+                    .expect("deformable meshes have a refittable BVH");
+                let sah_ratio =
+                    crate::bvh::refit::refit_and_measure(bvh, &d.positions, &slot.gpu_triangles);
+                // Reuses the previous frame's allocation.
+                match &mut slot.positions {
+                    Some(p) => p.clone_from(&d.positions),
+                    None => slot.positions = Some(d.positions.clone()),
+                }
                 Update {
                     mesh: m,
                     words,
                     sah_ratio,
+                    restored,
                 }
             })
             .collect();
-        updates
+        let start = std::time::Instant::now();
+        let ratios = updates
             .into_iter()
             .map(|u| {
+                if let Some(ordered) = u.restored {
+                    let offset = self.mesh_slots[u.mesh].gpu.triangle_offset;
+                    ctx.queue.write_buffer(
+                        &self.triangles,
+                        offset as u64 * 16,
+                        bytemuck::cast_slice(&ordered.packed),
+                    );
+                    self.emissive_triangles[u.mesh] = ordered.emissive;
+                }
+                let slot = &self.mesh_slots[u.mesh];
+                if let Some(d) = deformed.meshes[u.mesh].as_ref() {
+                    ctx.queue.write_buffer(
+                        &self.vertex_pool,
+                        slot.gpu.position_offset as u64 * 4,
+                        bytemuck::cast_slice(&d.positions),
+                    );
+                }
                 for (offset, words) in &u.words {
                     ctx.queue.write_buffer(
                         &self.vertex_pool,
@@ -472,15 +599,24 @@ impl GpuScene {
                         bytemuck::cast_slice(words),
                     );
                 }
-                let slot = &self.mesh_slots[u.mesh];
-                ctx.queue.write_buffer(
-                    &self.blas_nodes,
-                    slot.gpu.blas_root as u64 * 64,
-                    bytemuck::cast_slice(&slot.bvh.flat.nodes),
-                );
+                if let Some(bvh) = slot.blas.binary() {
+                    ctx.queue.write_buffer(
+                        &self.blas_nodes,
+                        slot.gpu.blas_root as u64 * 64,
+                        bytemuck::cast_slice(&bvh.flat.nodes),
+                    );
+                }
                 (u.mesh, u.sah_ratio)
             })
-            .collect()
+            .collect();
+        (ratios, start.elapsed().as_secs_f64())
+    }
+
+    /// Whether a mesh has emissive triangles (next-event estimation needs their world areas on the CPU).
+    pub fn has_emitters(&self, mesh: usize) -> bool {
+        self.emissive_triangles
+            .get(mesh)
+            .is_some_and(|e| !e.is_empty())
     }
 
     /// Rebuilds a mesh's BLAS from its current positions inside its reserved node range, and rewrites its
@@ -492,10 +628,27 @@ impl GpuScene {
         mesh: usize,
         quality: crate::bvh::BvhQuality,
     ) -> Result<(), crate::bvh::BvhTooDeep> {
+        let slot = &self.mesh_slots[mesh];
+        let positions = slot
+            .positions
+            .as_deref()
+            .unwrap_or(&scene.meshes[mesh].positions);
+        let bvh = MeshBvh::build(positions, &scene.meshes[mesh].triangles, quality)?;
+        self.install_bvh(ctx, scene, mesh, bvh);
+        Ok(())
+    }
+
+    /// Replaces a deformable mesh's BLAS with `bvh` in its reserved node range and rewrites its triangle
+    /// range in the new leaf order. False (and nothing changed) when the tree does not fit the range.
+    pub fn install_bvh(
+        &mut self,
+        ctx: &GpuContext,
+        scene: &SceneAsset,
+        mesh: usize,
+        bvh: MeshBvh,
+    ) -> bool {
         let data = &scene.meshes[mesh];
         let slot = &self.mesh_slots[mesh];
-        let positions = slot.positions.as_deref().unwrap_or(&data.positions);
-        let bvh = MeshBvh::build(positions, &data.triangles, quality)?;
         if bvh.flat.nodes.len() > slot.blas_capacity as usize {
             // Cannot happen for a tree with >= 1 triangle per leaf; keep the refit tree rather than overrun.
             tracing::warn!(
@@ -504,11 +657,16 @@ impl GpuScene {
                 bvh.flat.nodes.len(),
                 slot.blas_capacity
             );
-            return Ok(());
+            return false;
         }
         let mut nodes = bvh.flat.nodes.clone();
         nodes.resize(slot.blas_capacity as usize, crate::bvh::GpuBvhNode::EMPTY);
-        let ordered = order_triangles(data, &bvh, slot.gpu.triangle_offset, &self.material_data);
+        let ordered = order_triangles(
+            data,
+            &bvh.flat.order,
+            slot.gpu.triangle_offset,
+            &self.material_data,
+        );
         ctx.queue.write_buffer(
             &self.blas_nodes,
             slot.gpu.blas_root as u64 * 64,
@@ -522,8 +680,9 @@ impl GpuScene {
         self.emissive_triangles[mesh] = ordered.emissive;
         let slot = &mut self.mesh_slots[mesh];
         slot.gpu_triangles = ordered.indices;
-        slot.bvh = bvh;
-        Ok(())
+        slot.blas = Blas::Binary(bvh);
+        slot.rebuilt = true;
+        true
     }
 
     /// Uploads instances (in TLAS leaf order), the TLAS and the emitter list for this frame's placements.
@@ -536,7 +695,10 @@ impl GpuScene {
         let boxes: Vec<(Vec3, Vec3)> = inputs
             .iter()
             .map(|i| {
-                let (lo, hi) = self.mesh_slots[i.mesh as usize].bvh.flat.root_bounds();
+                let slot = &self.mesh_slots[i.mesh as usize];
+                let (lo, hi) = slot
+                    .deformed_bounds
+                    .unwrap_or_else(|| slot.blas.root_bounds());
                 transform_box(i.world, lo, hi)
             })
             .collect();
@@ -562,6 +724,7 @@ impl GpuScene {
             self.generation += 1;
         }
         self.emitter_count = emitters.len() as u32;
+        self.instance_order = tlas.order.clone();
         self.memory.instances_and_tlas =
             (instance_bytes.len() + tlas_bytes.len() + emitter_bytes.len()) as u64;
         self.uploaded_instances = ordered;
@@ -597,7 +760,7 @@ impl GpuScene {
                 let slot = &self.mesh_slots[m];
                 self.emissive_triangles[m] = emissive_slots(
                     mesh,
-                    &slot.bvh,
+                    slot.blas.order(),
                     slot.gpu.triangle_offset,
                     &self.material_data,
                 );
@@ -684,14 +847,12 @@ struct OrderedTriangles {
 
 fn order_triangles(
     mesh: &MeshData,
-    bvh: &MeshBvh,
+    order: &[u32],
     triangle_offset: u32,
     materials: &[GpuMaterial],
 ) -> OrderedTriangles {
-    let indices = bvh.ordered_triangles(&mesh.triangles);
-    let packed = bvh
-        .flat
-        .order
+    let indices: Vec<[u32; 3]> = order.iter().map(|&t| mesh.triangles[t as usize]).collect();
+    let packed = order
         .iter()
         .zip(&indices)
         .map(|(&t, [a, b, c])| [*a, *b, *c, mesh.triangle_materials[t as usize]])
@@ -699,19 +860,19 @@ fn order_triangles(
     OrderedTriangles {
         indices,
         packed,
-        emissive: emissive_slots(mesh, bvh, triangle_offset, materials),
+        emissive: emissive_slots(mesh, order, triangle_offset, materials),
     }
 }
 
-/// A mesh's emissive triangles in BVH order: (slot in the triangle buffer, material).
+/// A mesh's emissive triangles in BVH order (`order`: original triangle of each slot): (slot in the
+/// triangle buffer, material).
 fn emissive_slots(
     mesh: &MeshData,
-    bvh: &MeshBvh,
+    order: &[u32],
     triangle_offset: u32,
     materials: &[GpuMaterial],
 ) -> Vec<(u32, u32)> {
-    bvh.flat
-        .order
+    order
         .iter()
         .enumerate()
         .filter_map(|(slot, &t)| {

@@ -51,6 +51,15 @@ pub struct RenderSettings {
     /// Next-event estimation on emissive triangles (with MIS).
     pub nee: bool,
     pub bvh_quality: crate::bvh::BvhQuality,
+    /// Show the denoised image (display-side: turning it on or off keeps the accumulated samples).
+    #[serde(default)]
+    pub denoise: bool,
+    #[serde(default)]
+    pub denoise_params: super::denoise::DenoiseParams,
+    /// BVH layout of static meshes (deformable meshes always refit a BVH2).
+    pub static_bvh: crate::bvh::StaticLayout,
+    /// Where deformable meshes are skinned, morphed and refit (`Auto`: GPU on real GPUs).
+    pub deform: crate::gpu_deform::DeformBackend,
 }
 
 impl Default for RenderSettings {
@@ -70,6 +79,10 @@ impl Default for RenderSettings {
             rr_depth: 3,
             nee: true,
             bvh_quality: crate::bvh::BvhQuality::Medium,
+            denoise: false,
+            denoise_params: Default::default(),
+            static_bvh: crate::bvh::StaticLayout::Wide,
+            deform: crate::gpu_deform::DeformBackend::Auto,
         }
     }
 }
@@ -83,6 +96,8 @@ impl RenderSettings {
             view: AovView::default(),
             depth_view_scale: 0.0,
             spp_per_frame: 1,
+            denoise: false,
+            denoise_params: Default::default(),
             ..s.clone()
         };
         image_part(self) != image_part(other)

@@ -957,7 +957,8 @@ pub(super) fn read_uri(base_dir: &Path, uri: &str) -> Result<Vec<u8>, String> {
     std::fs::read(&file).map_err(|e| format!("cannot read {}: {e}", file.display()))
 }
 
-pub(super) fn percent_decode(uri: &str) -> String {
+/// glTF URIs are percent-encoded (`%20` for a space).
+pub(crate) fn percent_decode(uri: &str) -> String {
     let bytes = uri.as_bytes();
     let mut out = Vec::with_capacity(bytes.len());
     let mut i = 0;

@@ -10,6 +10,7 @@ mod spawn;
 mod tangents;
 
 pub use compose::{CrowdScene, compose, crowd_scene, unshare_deformable_meshes};
+pub(crate) use gltf_loader::percent_decode;
 pub use gltf_loader::{LoadOptions, load_gltf, load_gltf_slice};
 pub use gltf_writer::{SaveError, save_with_materials};
 pub use materials::Materials;

@@ -2,6 +2,7 @@
 //! loop. docs/VIEWER.md documents controls, the script format and where settings persist.
 
 mod offscreen;
+mod recording;
 mod script;
 mod session;
 mod ui_render;

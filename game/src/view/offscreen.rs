@@ -6,7 +6,8 @@
 use super::script::{Flow, ScriptHost, ScriptRunner};
 use super::session::{SceneSource, Session, SessionOptions};
 use super::ui_render::UiRenderer;
-use crate::bench_cmd::{git_commit, percentile};
+use crate::bench::git_commit;
+use crate::bench::stats::Spread;
 use anyhow::{Context, Result};
 use raykin::frame_timing::FrameTimings;
 use raykin::gpu::GpuContext;
@@ -21,25 +22,21 @@ const PANEL_WIDTH: u32 = 340;
 /// (and its staging memory) would grow whenever the GPU is the slower side.
 const FRAMES_IN_FLIGHT: usize = 2;
 
+/// The bench's spread (min, median, p10, p90, p99) of a series, with its mean and count.
 #[derive(serde::Serialize)]
-struct Spread {
-    median: f64,
-    p99: f64,
+struct Series {
+    #[serde(flatten)]
+    spread: Spread,
     mean: f64,
     n: usize,
 }
 
-fn spread(values: &[f64]) -> Option<Spread> {
-    let mut v: Vec<f64> = values.iter().copied().filter(|x| x.is_finite()).collect();
-    if v.is_empty() {
-        return None;
-    }
-    v.sort_by(f64::total_cmp);
-    Some(Spread {
-        median: percentile(&v, 0.5),
-        p99: percentile(&v, 0.99),
-        mean: v.iter().sum::<f64>() / v.len() as f64,
-        n: v.len(),
+fn spread(values: &[f64]) -> Option<Series> {
+    let finite: Vec<f64> = values.iter().copied().filter(|x| x.is_finite()).collect();
+    (!finite.is_empty()).then(|| Series {
+        spread: Spread::of(&finite),
+        mean: finite.iter().sum::<f64>() / finite.len() as f64,
+        n: finite.len(),
     })
 }
 
@@ -110,8 +107,8 @@ pub fn run(ctx: GpuContext, setup: OffscreenSetup) -> Result<()> {
     let mut script = setup.script;
     let warmup = (setup.frames / 10).min(10);
     let mut cpu = CpuSeries::default();
-    let (mut trace, mut tonemap, mut rays_per_s, mut ui_gpu) =
-        (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    let (mut trace, mut tonemap, mut denoise, mut rays_per_s, mut ui_gpu) =
+        (Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new());
     let (mut wait_schedule, mut wait_ui) = (Vec::new(), Vec::new());
     let mut in_flight = std::collections::VecDeque::new();
     let mut rss_after_warmup = None;
@@ -171,6 +168,9 @@ pub fn run(ctx: GpuContext, setup: OffscreenSetup) -> Result<()> {
                 if let Some(p) = g.passes {
                     trace.push(p.trace_ms);
                     tonemap.push(p.tonemap_ms);
+                    if p.denoise_ms > 0.0 {
+                        denoise.push(p.denoise_ms);
+                    }
                     if p.trace_ms > 0.0 {
                         rays_per_s.push(g.rays as f64 / (p.trace_ms * 1e-3));
                     }
@@ -236,6 +236,7 @@ pub fn run(ctx: GpuContext, setup: OffscreenSetup) -> Result<()> {
         "gpu_ms": {
             "trace": spread(&trace),
             "tonemap": spread(&tonemap),
+            "denoise": spread(&denoise),
             "ui_and_display": spread(&ui_gpu),
         },
         "gpu_wait_ms": setup.sync_passes.then(|| serde_json::json!({
@@ -255,8 +256,8 @@ pub fn run(ctx: GpuContext, setup: OffscreenSetup) -> Result<()> {
     eprintln!(
         "raykin: offscreen {} frames at {iw}x{ih}: frame {} ms median, trace {} ms median (GPU), RSS {} -> {} KiB",
         session.frames,
-        frame.map_or("-".into(), |s| format!("{:.2}", s.median)),
-        trace_ms.map_or("-".into(), |s| format!("{:.2}", s.median)),
+        frame.map_or("-".into(), |s| format!("{:.2}", s.spread.median)),
+        trace_ms.map_or("-".into(), |s| format!("{:.2}", s.spread.median)),
         rss_after_warmup.map_or("-".into(), |v| v.to_string()),
         rss_end.map_or("-".into(), |v| v.to_string()),
     );

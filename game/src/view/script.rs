@@ -37,6 +37,7 @@ pub enum Setting {
     Env([f32; 3]),
     SampleLimit(u32),
     Seed(u32),
+    Denoise(bool),
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -48,13 +49,16 @@ pub enum Command {
     Play(bool),
     Camera(CameraMode),
     ResetCamera,
-    Pick(f32, f32),
+    Pick(u32, u32),
     Set(Setting),
     Open(PathBuf),
     SaveAs(PathBuf),
     Screenshot(PathBuf),
     CaptureScreen(PathBuf),
     Resize(u32, u32),
+    /// The record button: folder, frames, spp, fps.
+    Record(PathBuf, u32, u32, f32),
+    WaitRecording,
     Quit,
 }
 
@@ -148,10 +152,14 @@ fn parse_line(line: &str) -> Result<Option<Command>> {
             })?)),
             _ => bail!("usage: camera orbit|fly|reset|INDEX"),
         },
-        "pick" => {
-            let [x, y] = floats::<2>(args)?;
-            Command::Pick(x, y)
-        }
+        "pick" => match args {
+            [x, y] => Command::Pick(
+                x.parse()
+                    .with_context(|| format!("`{x}`: a pixel column"))?,
+                y.parse().with_context(|| format!("`{y}`: a pixel row"))?,
+            ),
+            _ => bail!("usage: pick X Y (image pixels)"),
+        },
         "set" => {
             let [setting, values @ ..] = args else {
                 bail!("usage: set SETTING VALUE");
@@ -163,6 +171,11 @@ fn parse_line(line: &str) -> Result<Option<Command>> {
                 "sample_limit" => Setting::SampleLimit(uint(values)? as u32),
                 "seed" => Setting::Seed(uint(values)? as u32),
                 "sky" => Setting::Sky,
+                "denoise" => Setting::Denoise(match values {
+                    ["on"] => true,
+                    ["off"] => false,
+                    _ => bail!("denoise: on or off"),
+                }),
                 "env" => Setting::Env(floats::<3>(values)?),
                 "tonemapper" => Setting::Tonemapper(match values {
                     ["aces"] => Tonemapper::AcesFitted,
@@ -178,7 +191,7 @@ fn parse_line(line: &str) -> Result<Option<Command>> {
                     _ => bail!("view: color, albedo, normal or depth"),
                 }),
                 other => bail!(
-                    "unknown setting `{other}` (spp, max_depth, exposure, sample_limit, seed, sky, env, tonemapper, view)"
+                    "unknown setting `{other}` (spp, max_depth, exposure, sample_limit, seed, sky, env, tonemapper, view, denoise)"
                 ),
             })
         }
@@ -193,6 +206,19 @@ fn parse_line(line: &str) -> Result<Option<Command>> {
             ),
             _ => bail!("usage: resize WIDTH HEIGHT"),
         },
+        "record" => match args {
+            [dir, frames, spp, rest @ ..] if rest.len() <= 1 => Command::Record(
+                PathBuf::from(dir),
+                uint(&[frames])? as u32,
+                uint(&[spp])? as u32,
+                match rest {
+                    [] => 30.0,
+                    fps => floats::<1>(fps)?[0],
+                },
+            ),
+            _ => bail!("usage: record DIR FRAMES SPP [FPS]"),
+        },
+        "wait_recording" => Command::WaitRecording,
         "quit" => Command::Quit,
         other => bail!("unknown command `{other}`"),
     }))
@@ -221,6 +247,7 @@ enum Waiting {
     Nothing,
     Frames(u64),
     Samples { target: u32, frames: u64 },
+    Recording,
 }
 
 /// Runs a parsed script against a session, a few commands between frames.
@@ -269,6 +296,7 @@ impl ScriptRunner {
                     return Ok(Flow::Continue);
                 }
             }
+            Waiting::Recording if session.recording() => return Ok(Flow::Continue),
             _ => {}
         }
         self.waiting = Waiting::Nothing;
@@ -355,12 +383,8 @@ fn run(session: &mut Session, host: &mut dyn ScriptHost, command: &Command) -> R
             },
         ),
         Command::Pick(x, y) => {
-            let (w, h) = {
-                let t = session.tracer();
-                (t.width, t.height)
-            };
             let world = session.world();
-            let hit = raykin::render::pick::pick_pixel(world, *x, *y, w, h);
+            let hit = raykin::render::pick::pick_pixel(world, *x, *y);
             let mut state = world.resource_mut::<EditorState>();
             state.selection.entity = hit.map(|h| h.entity);
             state.selection.material = hit.and_then(|h| h.material);
@@ -375,6 +399,21 @@ fn run(session: &mut Session, host: &mut dyn ScriptHost, command: &Command) -> R
         Command::Screenshot(path) => screenshot(session, host, path)?,
         Command::CaptureScreen(path) => host.capture_screen(path)?,
         Command::Resize(w, h) => host.resize(*w, *h)?,
+        Command::Record(dir, frames, spp, fps) => {
+            let panel = raykin::editor::RecordSettings {
+                out_dir: dir.display().to_string(),
+                fps: *fps,
+                start: 0.0,
+                frames: *frames,
+                spp: *spp,
+            };
+            let start = raykin::editor::record_start(session.world(), &panel);
+            session.start_recording(start);
+            if !session.recording() {
+                bail!("the recording did not start (see the panel's message)");
+            }
+        }
+        Command::WaitRecording => return Ok(Step::Wait(Waiting::Recording)),
         Command::Quit => return Ok(Step::Quit),
     }
     Ok(Step::Next)
@@ -428,6 +467,7 @@ fn apply_setting(session: &mut Session, setting: &Setting) {
         Setting::Sky => s.environment = Environment::Sky,
         Setting::Env(c) => s.environment = Environment::Constant(c),
         Setting::Seed(n) => s.seed = n,
+        Setting::Denoise(on) => s.denoise = on,
         Setting::SampleLimit(_) => {}
     }
 }

@@ -115,6 +115,7 @@ pub struct Session {
     pub quit_requested: bool,
     pub frames: u64,
     last_frame: Option<Instant>,
+    recording: Option<super::recording::Recording>,
 }
 
 impl Session {
@@ -148,6 +149,7 @@ impl Session {
             quit_requested: false,
             frames: 0,
             last_frame: None,
+            recording: None,
         };
         if let Some(problem) = prefs_problem {
             eprintln!("raykin: warning: {problem}");
@@ -247,17 +249,66 @@ impl Session {
                     Err(e) => state.report(Severity::Error, e.to_string()),
                 }
             }
-            EditorAction::Record(request) => {
-                // RECORD HOOK (issue 5): start engine/src/record's recorder with `request` here and set
-                // `EditorState::recorder_available` in `build_engine`; until then the panel never sends this.
-                let _ = request;
-                self.state_mut().report(
-                    Severity::Error,
-                    "recording is not available in this build (raykin record)",
-                );
+            EditorAction::Record(request) => self.start_recording(request),
+            EditorAction::StopRecording => {
+                if let Some(r) = &self.recording {
+                    r.stop();
+                }
             }
             EditorAction::Quit => self.quit_requested = true,
         }
+    }
+
+    pub fn recording(&self) -> bool {
+        self.recording.is_some()
+    }
+
+    pub fn start_recording(&mut self, request: raykin::editor::RecordStart) {
+        let SceneSource::File(file) = self.source.clone() else {
+            return;
+        };
+        let dir = request.out_dir.clone();
+        match super::recording::start(&self.ctx, self.scene(), &file, request) {
+            Ok(recording) => {
+                self.recording = Some(recording);
+                self.state_mut().recording = Some(format!("recording into {}", dir.display()));
+            }
+            Err(e) => self.state_mut().report(Severity::Error, format!("{e:#}")),
+        }
+    }
+
+    /// Follows the recording in progress: its progress line, and its outcome when it ends.
+    fn poll_recording(&mut self) {
+        let Some(recording) = &mut self.recording else {
+            return;
+        };
+        let progress = recording.progress();
+        let finished = recording.finished();
+        let dir = recording.dir.clone();
+        let mut state = self.world().resource_mut::<EditorState>();
+        if let Some(p) = progress {
+            state.recording = Some(p);
+        }
+        let Some(result) = finished else {
+            return;
+        };
+        state.recording = None;
+        match result {
+            Ok(s) => state.report(
+                Severity::Info,
+                format!(
+                    "recorded {} frame(s) into {} ({} of {} complete{}; manifest {})",
+                    s.rendered,
+                    dir.display(),
+                    s.complete,
+                    s.frame_count,
+                    if s.interrupted { ", stopped" } else { "" },
+                    s.manifest.display()
+                ),
+            ),
+            Err(e) => state.report(Severity::Error, format!("{e:#}")),
+        }
+        self.recording = None;
     }
 
     /// File > Save as: the source glTF with the edited materials.
@@ -295,6 +346,7 @@ impl Session {
         self.world().resource_mut::<FrameClock>().delta = dt;
         self.engine.step();
         self.frames += 1;
+        self.poll_recording();
         let ctx = self.ctx.clone();
         let cpu_adapter = ctx.info.device_type == wgpu::DeviceType::Cpu;
         let world = self.world();
@@ -357,7 +409,7 @@ impl Session {
             .query::<&AnimationPlayer>()
             .iter(world)
             .any(|p| p.playing);
-        converged && !playing
+        converged && !playing && self.recording.is_none()
     }
 }
 
@@ -425,6 +477,7 @@ fn build_engine(
     let mut state = world.resource_mut::<EditorState>();
     state.fixed_render_size = options.fixed_render_size;
     state.can_save = !matches!(source, SceneSource::Crowd(_));
+    state.can_record = matches!(source, SceneSource::File(_));
     match (source, &prefs.last_scene) {
         (SceneSource::File(p), _) => state.open_path = p.display().to_string(),
         // Offer the scene of the last session in File > Open.

@@ -120,7 +120,7 @@ impl UiRenderer {
         if let Some(t) = &mut self.timer {
             encoder.resolve_query_set(&t.set, 0..2, &t.resolve, 0);
             t.readback
-                .encode(&mut encoder, &[(&t.resolve, 16)], self.frame);
+                .encode(&mut encoder, &[(&t.resolve, 0, 16)], self.frame);
         }
         let submission = queue.submit(callback_buffers.into_iter().chain([encoder.finish()]));
         if let Some(t) = &mut self.timer {

@@ -1,0 +1,365 @@
+//! Error against time: each rendering setting's image error (relMSE, FLIP) against a cached high-spp raykin
+//! reference of the same scene, as a function of the GPU time spent tracing.
+//!
+//! The reference is the scene at the bench's base settings (depth, RR, NEE), rendered as two independent
+//! halves so that its own noise is known and subtracted. Curves that change only the estimator (samples per
+//! frame, Russian roulette, NEE) converge to it; curves that change the image (a lower max depth) level off
+//! at their bias, which is what a user trading depth for speed needs to see.
+
+use super::metrics::{flip_mean, rel_mse, srgb8, tonemap};
+use super::scenes::BenchScene;
+use super::stats::{log_log_fit, time_to_reach};
+use anyhow::{Context, Result};
+use raykin::gpu::GpuContext;
+use raykin::render::RenderSettings;
+use sha2::Digest;
+use std::path::Path;
+
+/// One curve of the error-vs-time charts: a name and how it changes the bench's base settings.
+/// Adding a curve is adding one line here.
+pub struct Curve {
+    pub name: &'static str,
+    pub apply: fn(&mut RenderSettings),
+}
+
+const fn curve(name: &'static str, apply: fn(&mut RenderSettings)) -> Curve {
+    Curve { name, apply }
+}
+
+/// The first curve is the default the table's time-to-error and convergence slope come from.
+pub const CURVES: &[Curve] = &[
+    curve("default (1 spp/frame, RR, NEE+MIS)", |_| {}),
+    curve("4 spp/frame", |s| s.spp_per_frame = 4),
+    curve("16 spp/frame", |s| s.spp_per_frame = 16),
+    curve("max depth 2", |s| s.max_depth = s.max_depth.min(2)),
+    curve("max depth 3", |s| s.max_depth = s.max_depth.min(3)),
+    curve("Russian roulette off", |s| s.russian_roulette = false),
+    curve("NEE/MIS off (BRDF sampling only)", |s| s.nee = false),
+    // The image at each point is denoised once; its time includes that pass.
+    curve("denoised (a-trous, SVGF-style)", |s| s.denoise = true),
+];
+
+/// Seeds of the reference halves; curves use seeds far from these.
+const REFERENCE_SEEDS: [u32; 2] = [0x5EED_0001, 0x5EED_0002];
+
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct CurvePoint {
+    pub spp: u32,
+    /// Cumulative trace time (median over repeats), ms.
+    pub time_ms: f64,
+    /// relMSE of the tone-mapped image against the tone-mapped reference (median over repeats, min, max).
+    pub rel_mse: f64,
+    pub rel_mse_min: f64,
+    pub rel_mse_max: f64,
+    /// relMSE on linear radiance (median over repeats).
+    pub rel_mse_linear: f64,
+    pub flip: f64,
+    pub flip_min: f64,
+    pub flip_max: f64,
+}
+
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct CurveResult {
+    pub name: String,
+    pub points: Vec<CurvePoint>,
+}
+
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct SceneErrors {
+    pub scene: String,
+    pub width: u32,
+    pub height: u32,
+    pub max_depth: u32,
+    pub timing_source: &'static str,
+    pub reference_spp: u32,
+    pub reference_key: String,
+    pub reference_from_cache: bool,
+    /// relMSE of the reference itself (from its two halves), tone-mapped and linear: subtracted before fits
+    /// and time-to-error.
+    pub reference_noise_rel_mse: f64,
+    pub reference_noise_rel_mse_linear: f64,
+    pub repeats: usize,
+    pub curves: Vec<CurveResult>,
+    /// Default curve: least-squares slope of log relMSE against log spp (Monte Carlo: -1), and of log relative
+    /// RMSE (= half of it; the TARGETS figure, -0.5 +- 0.05); tone-mapped, then linear radiance.
+    pub slope_rel_mse_vs_spp: Option<f64>,
+    pub slope_rel_rmse_vs_spp: Option<f64>,
+    pub slope_rel_rmse_linear_vs_spp: Option<f64>,
+    /// Default curve: trace ms to reach relMSE 0.01 and 0.001 (reference noise subtracted); measured when the
+    /// curve got there, else extrapolated along the fitted power law (then `*_extrapolated` is true).
+    pub ms_to_rel_mse_0_01: Option<f64>,
+    pub ms_to_rel_mse_0_01_extrapolated: bool,
+    pub ms_to_rel_mse_0_001: Option<f64>,
+    pub ms_to_rel_mse_0_001_extrapolated: bool,
+}
+
+/// Measures every curve of [`CURVES`] on `scene` at `base` settings.
+pub fn measure(
+    ctx: &GpuContext,
+    scene: &BenchScene,
+    base: &RenderSettings,
+    suite: &super::suite::Suite,
+    cache: &Path,
+) -> Result<SceneErrors> {
+    let r = reference(ctx, scene, base, suite, cache)?;
+    let reference_display = tonemap(&r.mean);
+    let reference_srgb8 = srgb8(&reference_display);
+    let (w, h) = (base.width, base.height);
+    let mut curves = Vec::new();
+    let mut timing_source = "gpu-timestamps";
+    for (index, c) in CURVES.iter().enumerate() {
+        let mut settings = base.clone();
+        (c.apply)(&mut settings);
+        let spf = settings.spp_per_frame.max(1);
+        let checkpoints: Vec<u32> = (0..20)
+            .map(|k| 1u32 << k)
+            .filter(|&s| s >= spf && s <= suite.error_max_spp.max(spf))
+            .collect();
+        // runs[r][k] = (time, relMSE, FLIP, linear relMSE) at checkpoint k of repeat r.
+        let mut runs: Vec<Vec<[f64; 4]>> = Vec::new();
+        for repeat in 0..suite.error_repeats {
+            settings.seed = 1000 + 100 * index as u32 + repeat as u32;
+            let mut app = super::open_app(ctx, scene, settings.clone())?;
+            // The first dispatch also compiles the kernel on some drivers (lavapipe): trace one untimed frame
+            // and start the curve from a cleared accumulation.
+            app.step();
+            let gpu = app.ctx.clone();
+            app.app
+                .world_mut()
+                .resource_mut::<raykin::render::Renderer>()
+                .tracer
+                .reset(&gpu);
+            let (mut elapsed_ms, mut run) = (0.0, Vec::new());
+            let mut denoise_times = Vec::new();
+            for &target in &checkpoints {
+                while app.samples() < target {
+                    let start = std::time::Instant::now();
+                    app.step();
+                    match app.renderer().last_pass_times {
+                        Some(p) => elapsed_ms += p.trace_ms,
+                        None => {
+                            app.ctx.wait_idle();
+                            elapsed_ms += start.elapsed().as_secs_f64() * 1e3;
+                            timing_source = "cpu-wall";
+                        }
+                    }
+                }
+                let (image, denoise_ms) = if settings.denoise {
+                    let start = std::time::Instant::now();
+                    let image = app.denoised_radiance();
+                    let wall = start.elapsed().as_secs_f64() * 1e3;
+                    let gpu = app.renderer().tracer.read_denoise_ms(&app.ctx);
+                    (image, gpu.unwrap_or(wall))
+                } else {
+                    (app.radiance(), 0.0)
+                };
+                let display = tonemap(&image);
+                let err = rel_mse(&display, &reference_display);
+                let flip = flip_mean(&reference_srgb8, &srgb8(&display), w, h);
+                denoise_times.push(denoise_ms);
+                run.push([elapsed_ms, err, flip, rel_mse(&image, &r.mean)]);
+            }
+            // A denoise costs the same at any spp: its median time is added to every point (one pass's
+            // jitter would otherwise outweigh the trace time between the first checkpoints).
+            let denoise_ms = median(&denoise_times);
+            run.iter_mut().for_each(|p| p[0] += denoise_ms);
+            runs.push(run);
+        }
+        let points = checkpoints
+            .iter()
+            .enumerate()
+            .map(|(k, &spp)| {
+                let at = |i: usize| -> Vec<f64> { runs.iter().map(|r| r[k][i]).collect() };
+                let (t, e, fl) = (at(0), at(1), at(2));
+                let (e_min, e_max) = min_max(&e);
+                let (f_min, f_max) = min_max(&fl);
+                CurvePoint {
+                    spp,
+                    time_ms: median(&t),
+                    rel_mse: median(&e),
+                    rel_mse_min: e_min,
+                    rel_mse_max: e_max,
+                    rel_mse_linear: median(&at(3)),
+                    flip: median(&fl),
+                    flip_min: f_min,
+                    flip_max: f_max,
+                }
+            })
+            .collect();
+        curves.push(CurveResult {
+            name: c.name.to_string(),
+            points,
+        });
+    }
+    // Fits on the default curve, reference noise subtracted; the first two points (1-2 spp) are left out of
+    // the slopes: there the estimator is dominated by which pixels found the light at all.
+    let fit_slope = |value: fn(&CurvePoint) -> f64, noise: f64| {
+        let points: Vec<(f64, f64)> = curves[0]
+            .points
+            .iter()
+            .filter(|p| p.spp >= 4)
+            .map(|p| (p.spp as f64, (value(p) - noise).max(1e-12)))
+            .collect();
+        log_log_fit(&points).map(|f| f.0)
+    };
+    let slope = fit_slope(|p| p.rel_mse, r.noise);
+    let slope_linear = fit_slope(|p| p.rel_mse_linear, r.noise_linear);
+    let time_curve: Vec<(f64, f64)> = curves[0]
+        .points
+        .iter()
+        .map(|p| (p.time_ms, (p.rel_mse - r.noise).max(1e-12)))
+        .collect();
+    let tail = &time_curve[time_curve.len() / 2..];
+    let time_fit = log_log_fit(tail);
+    let reach = |target: f64| -> (Option<f64>, bool) {
+        match time_to_reach(&time_curve, target) {
+            Some(t) => (Some(t), false),
+            None => match time_fit {
+                Some((b, a)) if b < 0.0 => (Some(((target.ln() - a) / b).exp()), true),
+                _ => (None, false),
+            },
+        }
+    };
+    let (t2, t2x) = reach(0.01);
+    let (t3, t3x) = reach(0.001);
+    Ok(SceneErrors {
+        scene: scene.name.clone(),
+        width: w,
+        height: h,
+        max_depth: base.max_depth,
+        timing_source,
+        reference_spp: suite.reference_spp,
+        reference_key: r.key,
+        reference_from_cache: r.from_cache,
+        reference_noise_rel_mse: r.noise,
+        reference_noise_rel_mse_linear: r.noise_linear,
+        repeats: suite.error_repeats,
+        curves,
+        slope_rel_mse_vs_spp: slope,
+        slope_rel_rmse_vs_spp: slope.map(|s| s * 0.5),
+        slope_rel_rmse_linear_vs_spp: slope_linear.map(|s| s * 0.5),
+        ms_to_rel_mse_0_01: t2,
+        ms_to_rel_mse_0_01_extrapolated: t2x,
+        ms_to_rel_mse_0_001: t3,
+        ms_to_rel_mse_0_001_extrapolated: t3x,
+    })
+}
+
+fn median(v: &[f64]) -> f64 {
+    super::stats::Spread::of(v).median
+}
+
+fn min_max(v: &[f64]) -> (f64, f64) {
+    v.iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &x| {
+            (lo.min(x), hi.max(x))
+        })
+}
+
+/// The reference's cache key: a hash of everything that defines its pixels (scene file bytes, camera,
+/// image-affecting settings, size, sample count, seeds) and of the kernel source, so that a changed
+/// renderer never reuses an old reference.
+fn reference_key(scene: &BenchScene, base: &RenderSettings, spp: u32) -> Result<String> {
+    let mut hasher = sha2::Sha256::new();
+    for file in &scene.source_files {
+        let bytes =
+            std::fs::read(file).with_context(|| format!("{}: cannot read", file.display()))?;
+        hasher.update((bytes.len() as u64).to_le_bytes());
+        hasher.update(&bytes);
+    }
+    let image_settings = RenderSettings {
+        spp_per_frame: 1,
+        seed: 0,
+        ..base.clone()
+    };
+    hasher.update(format!("{:?}", scene.camera).as_bytes());
+    hasher.update(serde_json::to_vec(&image_settings)?);
+    hasher.update(format!("{spp} {REFERENCE_SEEDS:?}").as_bytes());
+    hasher.update(raykin::render::shaders::path_trace_source().as_bytes());
+    let digest = hasher.finalize();
+    Ok(digest[..12].iter().map(|b| format!("{b:02x}")).collect())
+}
+
+/// A reference image (mean of two halves) and what is known about it.
+struct Reference {
+    mean: Vec<[f32; 3]>,
+    /// relMSE of the mean against the truth, estimated from the halves: tone-mapped and linear.
+    noise: f64,
+    noise_linear: f64,
+    key: String,
+    from_cache: bool,
+}
+
+/// The reference for `scene` at `base`: from the cache, or rendered and cached.
+fn reference(
+    ctx: &GpuContext,
+    scene: &BenchScene,
+    base: &RenderSettings,
+    suite: &super::suite::Suite,
+    cache: &Path,
+) -> Result<Reference> {
+    let key = reference_key(scene, base, suite.reference_spp)?;
+    let dir = cache.join(format!("{}-{key}", scene.name));
+    let halves = [dir.join("half_a.exr"), dir.join("half_b.exr")];
+    let (w, h) = (base.width, base.height);
+    let cached = halves
+        .iter()
+        .map(|p| raykin::image_io::read_exr(p).ok())
+        .collect::<Option<Vec<_>>>()
+        .filter(|v| v.iter().all(|(iw, ih, _)| (*iw, *ih) == (w, h)));
+    let (a, b, from_cache) = match cached {
+        Some(mut v) => {
+            let b = v.pop().map(|x| x.2).unwrap_or_default();
+            let a = v.pop().map(|x| x.2).unwrap_or_default();
+            (a, b, true)
+        }
+        None => {
+            eprintln!(
+                "raykin bench: {}: rendering the {}-spp reference at {w}x{h} (cached as {})",
+                scene.name,
+                suite.reference_spp,
+                dir.display()
+            );
+            std::fs::create_dir_all(&dir)
+                .with_context(|| format!("{}: cannot create the cache folder", dir.display()))?;
+            let mut images = Vec::new();
+            for (seed, path) in REFERENCE_SEEDS.iter().zip(&halves) {
+                let settings = RenderSettings {
+                    seed: *seed,
+                    ..base.clone()
+                };
+                let mut app = super::open_app(ctx, scene, settings)?;
+                let chunk = if ctx.info.device_type == raykin::gpu::DeviceType::Cpu {
+                    8
+                } else {
+                    64
+                };
+                app.accumulate(suite.reference_spp / 2, chunk, |_| {});
+                let image = app.radiance();
+                if image.iter().flatten().any(|v| !v.is_finite()) {
+                    anyhow::bail!("{}: the reference has non-finite pixels", scene.name);
+                }
+                raykin::image_io::write_atomically(path, |p| {
+                    raykin::image_io::write_exr(p, w, h, &image)
+                })?;
+                images.push(image);
+            }
+            let b = images.pop().unwrap_or_default();
+            let a = images.pop().unwrap_or_default();
+            (a, b, false)
+        }
+    };
+    // Var of the mean of two halves = E[(a - b)^2] / 4 in relMSE units.
+    let mean = a
+        .iter()
+        .zip(&b)
+        .map(|(x, y)| [0, 1, 2].map(|c| 0.5 * (x[c] + y[c])))
+        .collect();
+    Ok(Reference {
+        mean,
+        noise: rel_mse(&tonemap(&a), &tonemap(&b)) / 4.0,
+        noise_linear: rel_mse(&a, &b) / 4.0,
+        key,
+        from_cache,
+    })
+}

@@ -1,0 +1,261 @@
+//! Frames through the whole schedule: per-pass time (CPU phases from `raykin::frame_timing`, GPU passes from
+//! timestamp queries), trace time, rays per second. One run gives a row of the throughput table and a bar
+//! of the frame-time breakdown.
+
+use super::scenes::BenchScene;
+use super::stats::Spread;
+use anyhow::Result;
+use raykin::gpu::GpuContext;
+use raykin::headless::HeadlessApp;
+use raykin::render::RenderSettings;
+
+/// Median milliseconds per frame of each pass, in frame order. The CPU phases are the frame-schedule sets;
+/// `trace` is the path-trace kernel, which also accumulates (one kernel: there is no separate accumulate
+/// pass); `encode_submit` is the Render set's CPU time less the GPU passes it waited for.
+#[derive(Clone, Copy, Debug, Default, serde::Serialize)]
+pub struct PassBreakdown {
+    pub animate: f64,
+    /// Global transforms and joint matrices.
+    pub transform: f64,
+    /// Skinning and morphing on the CPU (and, on the GPU backend, the joint matrices it uploads).
+    pub skinning: f64,
+    /// CPU refit of deformed BLASes plus their vertex uploads (CPU backend).
+    pub refit: f64,
+    /// Quality-guard rebuilds.
+    pub rebuild: f64,
+    /// Top-level BVH build plus instance and emitter upload.
+    pub top_level: f64,
+    pub upload: f64,
+    pub encode_submit: f64,
+    /// GPU deformation passes (GPU backend): skinning + morphing, BLAS refit + SAH cost.
+    pub skinning_gpu: f64,
+    pub refit_gpu: f64,
+    pub trace_and_accumulate_gpu: f64,
+    pub tonemap_gpu: f64,
+}
+
+impl PassBreakdown {
+    /// (label, value) in frame order, for the stacked bars.
+    pub fn parts(&self) -> [(&'static str, f64); 12] {
+        [
+            ("animation", self.animate),
+            ("transforms + joints", self.transform),
+            ("skinning", self.skinning),
+            ("refit", self.refit),
+            ("rebuild", self.rebuild),
+            ("top level + instances", self.top_level),
+            ("upload", self.upload),
+            ("encode + submit", self.encode_submit),
+            ("skinning (GPU)", self.skinning_gpu),
+            ("refit (GPU)", self.refit_gpu),
+            ("trace + accumulate (GPU)", self.trace_and_accumulate_gpu),
+            ("tonemap (GPU)", self.tonemap_gpu),
+        ]
+    }
+
+    pub fn total(&self) -> f64 {
+        self.parts().iter().map(|p| p.1).sum()
+    }
+}
+
+/// One (scene, size) of the throughput table. The first keys are those docs/BENCHMARKS.md has always used.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct FrameRow {
+    pub scene: String,
+    pub triangles: usize,
+    pub width: u32,
+    pub height: u32,
+    pub spp_per_frame: u32,
+    pub max_depth: u32,
+    pub frames: usize,
+    pub bvh_build_and_upload_ms: f64,
+    pub gpu_memory_geometry_bvh_mib: f64,
+    pub bytes_per_triangle_geometry_bvh: f64,
+    pub trace_ms_median: f64,
+    pub trace_ms_p99: f64,
+    pub timing_source: &'static str,
+    pub primary_rays_per_s: f64,
+    pub all_rays_per_s: f64,
+    pub rays_per_pixel_per_frame: f64,
+    /// Wall time of a whole frame (`App::update`, which waits for the GPU while pass timing is on).
+    pub frame_ms: Spread,
+    pub trace_ms: Spread,
+    pub passes_median_ms: PassBreakdown,
+    pub animated: bool,
+    /// Where deformable meshes were skinned, morphed and refit (`--deform`, resolved for the adapter).
+    pub deform_backend: String,
+    /// Median skinning + refit per frame per 100k deformable triangles (CPU phases on the CPU backend, GPU
+    /// passes on the GPU backend; the target is <= 1 ms); 0 for static scenes.
+    pub skin_refit_ms_per_100k_tris: f64,
+    pub bvh_rebuilds: u64,
+    pub max_sah_ratio_last_frame: f32,
+    /// Shading-free ray casting (`PathTracer::cast_rays`) on the last pose: camera rays per second, and
+    /// diffuse bounce rays per second (the extra rays over the extra time when one bounce is added); 0 without
+    /// timestamp queries.
+    pub raycast_camera_rays_per_s: f64,
+    pub raycast_diffuse_rays_per_s: f64,
+}
+
+/// A frame loop over `scene` at `settings`' size: `warmup` frames, then `frames` measured.
+pub fn measure(
+    ctx: &GpuContext,
+    scene: &BenchScene,
+    settings: RenderSettings,
+    warmup: usize,
+    frames: usize,
+) -> Result<FrameRow> {
+    let (width, height) = (settings.width, settings.height);
+    let mut app = super::open_app(ctx, scene, settings.clone())?;
+    app.app
+        .world_mut()
+        .resource_mut::<raykin::render::Renderer>()
+        .tonemap_each_frame = true;
+    let mut samples: Vec<[f64; SAMPLE_COLUMNS]> = Vec::with_capacity(frames);
+    let mut rays = 0u64;
+    for f in 0..warmup + frames {
+        let start = std::time::Instant::now();
+        app.step();
+        let wall = start.elapsed().as_secs_f64() * 1e3;
+        if f < warmup {
+            continue;
+        }
+        rays += app.renderer().tracer.read_ray_count(&app.ctx);
+        samples.push(frame_sample(&app, wall));
+    }
+    let column = |i: usize| Spread::of(&samples.iter().map(|s| s[i]).collect::<Vec<_>>());
+    let passes = PassBreakdown {
+        animate: column(0).median,
+        transform: column(1).median,
+        skinning: column(2).median,
+        refit: column(3).median,
+        rebuild: column(4).median,
+        top_level: column(5).median,
+        upload: column(6).median,
+        encode_submit: column(7).median,
+        trace_and_accumulate_gpu: column(8).median,
+        tonemap_gpu: column(9).median,
+        skinning_gpu: column(11).median,
+        refit_gpu: column(12).median,
+    };
+    let gpu_timed = app.renderer().last_pass_times.is_some();
+    // Without timestamps the trace column holds whole-frame wall times.
+    let trace = if gpu_timed { column(8) } else { column(10) };
+    let frame = column(10);
+    let trace_total_s: f64 = samples
+        .iter()
+        .map(|s| if gpu_timed { s[8] } else { s[10] })
+        .sum::<f64>()
+        / 1e3;
+    let pixels = width as f64 * height as f64;
+    let spp = settings.spp_per_frame as f64;
+    let (raycast_camera, raycast_diffuse) = raycast_rates(&mut app, frames.clamp(1, 50));
+    let renderer = app.renderer();
+    let memory = renderer.scene.memory;
+    let triangles = scene.scene.triangle_count();
+    let deformable_triangles: usize = scene
+        .scene
+        .meshes
+        .iter()
+        .filter(|m| m.is_deformable())
+        .map(|m| m.triangles.len())
+        .sum();
+    let gpu_deform = renderer.deformer.is_some();
+    let skin_refit_ms = if gpu_deform {
+        passes.skinning_gpu + passes.refit_gpu
+    } else {
+        passes.skinning + passes.refit
+    };
+    let deform_backend = format!("{:?}", renderer.deform_backend);
+    let stats = app.bvh_stats();
+    Ok(FrameRow {
+        scene: scene.name.clone(),
+        triangles,
+        width,
+        height,
+        spp_per_frame: settings.spp_per_frame,
+        max_depth: settings.max_depth,
+        frames,
+        bvh_build_and_upload_ms: renderer.scene.build_seconds * 1e3,
+        gpu_memory_geometry_bvh_mib: memory.geometry_and_bvh() as f64 / 1048576.0,
+        bytes_per_triangle_geometry_bvh: memory.geometry_and_bvh() as f64 / triangles.max(1) as f64,
+        trace_ms_median: trace.median,
+        trace_ms_p99: trace.p99,
+        timing_source: if gpu_timed {
+            "gpu-timestamps"
+        } else {
+            "cpu-wall"
+        },
+        primary_rays_per_s: pixels * spp * frames as f64 / trace_total_s,
+        all_rays_per_s: rays as f64 / trace_total_s,
+        rays_per_pixel_per_frame: rays as f64 / (pixels * frames as f64),
+        frame_ms: frame,
+        trace_ms: trace,
+        passes_median_ms: passes,
+        animated: scene.animated(),
+        deform_backend,
+        skin_refit_ms_per_100k_tris: if deformable_triangles > 0 {
+            skin_refit_ms / (deformable_triangles as f64 / 1e5)
+        } else {
+            0.0
+        },
+        bvh_rebuilds: stats.rebuilds,
+        max_sah_ratio_last_frame: stats.sah_ratio.iter().copied().fold(0.0, f32::max),
+        raycast_camera_rays_per_s: raycast_camera,
+        raycast_diffuse_rays_per_s: raycast_diffuse,
+    })
+}
+
+/// Median ray-casting rates over `reps` runs of each pass: (camera rays/s, diffuse bounce rays/s).
+fn raycast_rates(app: &mut HeadlessApp, reps: usize) -> (f64, f64) {
+    let mut runs = |diffuse| {
+        // Warm-up: the first call builds the pipeline.
+        app.cast_rays(diffuse);
+        let mut samples: Vec<(f64, u64)> = (0..reps)
+            .filter_map(|_| app.cast_rays(diffuse))
+            .map(|t| (t.gpu_ms, t.rays))
+            .collect();
+        samples.sort_by(|a, b| a.0.total_cmp(&b.0));
+        samples.get(samples.len() / 2).copied()
+    };
+    let (Some((t0, r0)), Some((t1, r1))) = (runs(false), runs(true)) else {
+        return (0.0, 0.0);
+    };
+    let camera = r0 as f64 / (t0 / 1e3);
+    let diffuse = if t1 > t0 {
+        (r1 - r0) as f64 / ((t1 - t0) / 1e3)
+    } else {
+        0.0
+    };
+    (camera, diffuse)
+}
+
+const SAMPLE_COLUMNS: usize = 13;
+
+/// This frame's pass times: [animate, transform, skinning, refit, rebuild, top level, upload,
+/// encode/submit, trace GPU, tonemap GPU, frame wall, skinning GPU, refit GPU].
+fn frame_sample(app: &HeadlessApp, wall_ms: f64) -> [f64; SAMPLE_COLUMNS] {
+    let world = app.app.world();
+    let t = world.resource::<raykin::frame_timing::FrameTimings>().last;
+    let stats = app.bvh_stats();
+    let refit = stats.last_refit_seconds * 1e3;
+    let rebuild = stats.last_rebuild_seconds * 1e3;
+    let gpu = app.renderer().last_pass_times;
+    let (trace, tonemap) = gpu.map_or((f64::NAN, f64::NAN), |p| (p.trace_ms, p.tonemap_ms));
+    let (skin_gpu, refit_gpu) = gpu.map_or((0.0, 0.0), |p| (p.skin_ms, p.refit_ms));
+    let gpu_total = gpu.map_or(0.0, |p| p.trace_ms + p.tonemap_ms + p.skin_ms + p.refit_ms);
+    [
+        t.animate_ms,
+        t.transform_ms,
+        t.deform_ms,
+        refit,
+        rebuild,
+        (t.bvh_ms - refit - rebuild).max(0.0),
+        t.upload_ms,
+        (t.render_ms - gpu_total).max(0.0),
+        trace,
+        tonemap,
+        wall_ms,
+        skin_gpu,
+        refit_gpu,
+    ]
+}

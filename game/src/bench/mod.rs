@@ -1,0 +1,555 @@
+//! `raykin bench`: speed against accuracy, measured and charted by raykin itself.
+//!
+//! One command runs the suite's parts on fixed, named scenes and writes `DIR/results.json` (+ CSVs, a
+//! markdown summary) and PNG charts in `DIR/charts/`:
+//! - frame loop ([`frame_loop`]): ms per frame, per-pass breakdown, rays/s, memory, per scene and size;
+//! - error vs time ([`error_curves`]): relMSE and FLIP against a cached high-spp reference, per setting;
+//! - BVH quality ([`bvh_quality`]): obvhs presets, and refit vs rebuild along an animation;
+//! - scaling ([`scaling`]): trace time vs instanced triangle count and vs resolution.
+
+mod bvh_quality;
+mod charts;
+mod error_curves;
+mod frame_loop;
+mod metrics;
+mod scaling;
+mod scenes;
+pub(crate) mod stats;
+mod suite;
+
+use crate::cli::BenchArgs;
+use crate::render_cmd::open_gpu;
+use anyhow::{Context, Result};
+use raykin::gpu::GpuContext;
+use raykin::headless::HeadlessApp;
+use raykin::render::RenderSettings;
+use scenes::BenchScene;
+use std::path::Path;
+
+/// The parts `--parts` can pick (all by default).
+pub const PARTS: &[&str] = &["frames", "errors", "bvh", "refit", "scaling"];
+
+/// The per-scene table of docs/BENCHMARKS.md.
+#[derive(serde::Serialize)]
+struct TableRow {
+    scene: String,
+    triangles: usize,
+    sizes: Vec<(u32, u32)>,
+    /// Per size: median wall ms of a whole frame, median GPU trace ms, rays/s.
+    ms_per_frame: Vec<f64>,
+    trace_ms: Vec<f64>,
+    primary_rays_per_s: Vec<f64>,
+    /// Shading-free ray casting: camera rays/s and diffuse bounce rays/s per size.
+    raycast_camera_rays_per_s: Vec<f64>,
+    raycast_diffuse_rays_per_s: Vec<f64>,
+    all_rays_per_s: Vec<f64>,
+    error_size: Option<(u32, u32)>,
+    ms_to_rel_mse_0_01: Option<f64>,
+    ms_to_rel_mse_0_01_extrapolated: bool,
+    ms_to_rel_mse_0_001: Option<f64>,
+    ms_to_rel_mse_0_001_extrapolated: bool,
+    slope_rel_rmse_vs_spp: Option<f64>,
+    slope_rel_rmse_linear_vs_spp: Option<f64>,
+}
+
+#[derive(serde::Serialize)]
+struct Results {
+    adapter: String,
+    backend: String,
+    device_type: String,
+    driver: String,
+    commit: String,
+    date_unix_s: u64,
+    date: String,
+    command: String,
+    suite: suite::Suite,
+    max_depth: u32,
+    rows: Vec<frame_loop::FrameRow>,
+    table: Vec<TableRow>,
+    error_vs_time: Vec<error_curves::SceneErrors>,
+    bvh_presets: Vec<bvh_quality::PresetRow>,
+    refit_vs_rebuild: Option<bvh_quality::RefitResult>,
+    scaling_triangles: Vec<scaling::TriangleScalingRow>,
+    scaling_resolution: Vec<scaling::ResolutionScalingRow>,
+    charts: Vec<String>,
+    wall_seconds: f64,
+    /// /proc/loadavg at the start and the end (Linux): on a CPU adapter other processes slow every figure.
+    load_average_start: Option<String>,
+    load_average_end: Option<String>,
+}
+
+/// A headless app on `scene` with its fixed camera and environment, players attached, GPU passes timed.
+fn open_app(ctx: &GpuContext, scene: &BenchScene, settings: RenderSettings) -> Result<HeadlessApp> {
+    let settings = RenderSettings {
+        environment: scene.environment,
+        ..settings
+    };
+    let mut app = HeadlessApp::new(ctx.clone(), scene.scene.clone(), settings, &scene.camera)
+        .with_context(|| format!("bench scene `{}`", scene.name))?;
+    let world = app.app.world_mut();
+    if !scene.players.is_empty() {
+        let root = world
+            .query_filtered::<bevy_ecs::entity::Entity, bevy_ecs::query::With<raykin::scene::SceneRoot>>()
+            .single(world)
+            .map_err(|e| anyhow::anyhow!("{}: scene root: {e}", scene.name))?;
+        raykin::animation::attach_players(world, root, &scene.players);
+    }
+    world.resource_mut::<raykin::render::Renderer>().time_passes = true;
+    Ok(app)
+}
+
+fn at_size(base: &RenderSettings, (width, height): (u32, u32)) -> RenderSettings {
+    RenderSettings {
+        width,
+        height,
+        ..base.clone()
+    }
+}
+
+fn wants(args: &BenchArgs, part: &str) -> bool {
+    args.parts.is_empty() || args.parts.iter().any(|p| p == part)
+}
+
+pub fn run(args: &BenchArgs) -> Result<()> {
+    let started = std::time::Instant::now();
+    let load_average_start = load_average();
+    for p in &args.parts {
+        anyhow::ensure!(
+            PARTS.contains(&p.as_str()),
+            "--parts {p}: unknown part; the parts are {}",
+            PARTS.join(", ")
+        );
+    }
+    let ctx = open_gpu()?;
+    let suite = suite::Suite::new(&args.suite, ctx.info.device_type)?;
+    let mut scene_names = if args.crowd {
+        vec!["crowd".to_string()]
+    } else {
+        args.scene.clone()
+    };
+    if scene_names.is_empty() {
+        scene_names = suite.scenes.clone();
+    }
+    let sizes = match (args.width, args.height) {
+        (None, None) => suite.sizes.clone(),
+        (w, h) => vec![(w.unwrap_or(64).max(1), h.unwrap_or(36).max(1))],
+    };
+    let frames = args.frames.unwrap_or(suite.frames).max(1);
+    let charts_dir = args.out.join("charts");
+    std::fs::create_dir_all(&charts_dir)
+        .with_context(|| format!("{}: cannot create the output folder", charts_dir.display()))?;
+    let base = RenderSettings {
+        spp_per_frame: 1,
+        max_depth: args.max_depth,
+        static_bvh: args.static_bvh.into(),
+        deform: args.deform.into(),
+        ..Default::default()
+    };
+    let commit = std::env::var("RAYKIN_COMMIT")
+        .ok()
+        .or_else(git_commit)
+        .unwrap_or_else(|| "unknown".into());
+    let date_unix_s = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_secs());
+    let date = stats::utc_date(date_unix_s);
+    let note = if suite.scaling_note.is_empty() {
+        String::new()
+    } else {
+        format!(" ({})", suite.scaling_note)
+    };
+    let context = format!(
+        "{} ({:?}) | {} suite{note} | commit {commit} | {date}",
+        ctx.info.name, ctx.info.device_type, suite.name
+    );
+    let title = |what: &str| charts::Title {
+        what: what.to_string(),
+        context: context.clone(),
+    };
+
+    let mut loaded = Vec::new();
+    for name in &scene_names {
+        eprintln!("raykin bench: loading {name}");
+        loaded.push(scenes::resolve(name, &args.assets)?);
+    }
+    let mut charts = Vec::new();
+    let mut chart = |name: &str, draw: &dyn Fn(&Path) -> Result<()>| -> Result<()> {
+        let path = charts_dir.join(name);
+        draw(&path)?;
+        eprintln!("raykin bench: wrote {}", path.display());
+        charts.push(format!("charts/{name}"));
+        Ok(())
+    };
+
+    let mut rows = Vec::new();
+    if wants(args, "frames") {
+        for scene in &loaded {
+            for &(width, height) in &sizes {
+                let settings = at_size(&base, (width, height));
+                let row = frame_loop::measure(&ctx, scene, settings, suite.warmup, frames)?;
+                eprintln!(
+                    "raykin bench: {} {width}x{height}: {:.2} ms/frame, trace {:.2} ms median ({:.2} p99), {:.3} M primary rays/s, {:.3} M rays/s; ray casting without shading: {:.0} M camera rays/s, {:.0} M diffuse rays/s",
+                    row.scene,
+                    row.frame_ms.median,
+                    row.trace_ms_median,
+                    row.trace_ms_p99,
+                    row.primary_rays_per_s / 1e6,
+                    row.all_rays_per_s / 1e6,
+                    row.raycast_camera_rays_per_s / 1e6,
+                    row.raycast_diffuse_rays_per_s / 1e6
+                );
+                if row.animated {
+                    let p = &row.passes_median_ms;
+                    eprintln!(
+                        "raykin bench: {} {width}x{height}: deform backend {}: skinning {:.2} ms CPU + {:.2} ms GPU, refit {:.2} ms CPU + {:.2} ms GPU, rebuild {:.2} ms, top level {:.2} ms: {:.2} ms skin+refit per 100k triangles",
+                        row.scene,
+                        row.deform_backend,
+                        p.skinning,
+                        p.skinning_gpu,
+                        p.refit,
+                        p.refit_gpu,
+                        p.rebuild,
+                        p.top_level,
+                        row.skin_refit_ms_per_100k_tris
+                    );
+                }
+                rows.push(row);
+            }
+        }
+        if !rows.is_empty() {
+            chart("frame-breakdown.png", &|p| {
+                charts::frame_breakdown(p, &title("Frame time per pass"), &rows)
+            })?;
+        }
+    }
+
+    let mut errors = Vec::new();
+    if wants(args, "errors") {
+        let (w, h) = suite.error_size;
+        let settings = at_size(&base, (w, h));
+        let cache = args.cache.clone();
+        for scene in loaded.iter().filter(|s| !s.animated()) {
+            eprintln!("raykin bench: {}: error vs time at {w}x{h}", scene.name);
+            let e = error_curves::measure(&ctx, scene, &settings, &suite, &cache)?;
+            let file = format!("error-vs-time-{}.png", scene.name);
+            chart(&file, &|p| {
+                charts::error_vs_time(
+                    p,
+                    &title(&format!(
+                        "{}: error vs time, {w}x{h}, depth {}",
+                        scene.name, base.max_depth
+                    )),
+                    &e,
+                )
+            })?;
+            errors.push(e);
+        }
+    }
+
+    let mut presets = Vec::new();
+    if wants(args, "bvh") {
+        let (w, h) = suite.scaling_size;
+        let settings = at_size(&base, (w, h));
+        for name in &suite.bvh_scenes {
+            let scene = match loaded.iter().find(|s| &s.name == name) {
+                Some(s) => s,
+                None => {
+                    loaded.push(scenes::resolve(name, &args.assets)?);
+                    loaded.last().expect("just pushed")
+                }
+            };
+            eprintln!("raykin bench: {}: BVH presets", scene.name);
+            presets.extend(bvh_quality::presets(
+                &ctx,
+                scene,
+                &settings,
+                1,
+                suite.bvh_frames,
+            )?);
+        }
+        if !presets.is_empty() {
+            chart("bvh-presets.png", &|p| {
+                charts::bvh_presets(
+                    p,
+                    &title(&format!("BVH presets: build vs trace time, {w}x{h}")),
+                    &presets,
+                )
+            })?;
+        }
+    }
+
+    let mut refit = None;
+    if wants(args, "refit") {
+        let (w, h) = suite.refit_size;
+        let (asset, camera) = scenes::cesium_man(&args.assets)?;
+        eprintln!("raykin bench: CesiumMan: refit vs rebuild");
+        let settings = at_size(&base, (w, h));
+        let r = bvh_quality::refit_vs_rebuild(
+            &ctx,
+            asset,
+            camera,
+            &settings,
+            suite.refit_fps,
+            suite.refit_seconds,
+            suite.refit_trace_repeats,
+        )?;
+        chart("refit-vs-rebuild.png", &|p| {
+            charts::refit_vs_rebuild(
+                p,
+                &title(&format!("CesiumMan walk: refit vs rebuild, {w}x{h}")),
+                &r,
+            )
+        })?;
+        refit = Some(r);
+    }
+
+    let (mut tri_scaling, mut res_scaling) = (Vec::new(), Vec::new());
+    if wants(args, "scaling") {
+        let (w, h) = suite.scaling_size;
+        let settings = RenderSettings {
+            width: w,
+            height: h,
+            environment: raykin::render::Environment::Sky,
+            ..base.clone()
+        };
+        eprintln!("raykin bench: scaling with triangle count and resolution");
+        let asset = scenes::load_scaling_asset(&args.assets)?;
+        tri_scaling = scaling::triangles(
+            &ctx,
+            &asset,
+            &suite.scaling_copies,
+            &settings,
+            suite.scaling_frames,
+        )?;
+        let cornell = match loaded.iter().find(|s| s.name == "cornell") {
+            Some(s) => s,
+            None => {
+                loaded.push(scenes::resolve("cornell", &args.assets)?);
+                loaded.last().expect("just pushed")
+            }
+        };
+        res_scaling = scaling::resolution(
+            &ctx,
+            cornell,
+            &suite.scaling_resolutions,
+            &base,
+            suite.scaling_frames,
+        )?;
+        chart("scaling.png", &|p| {
+            charts::scaling(p, &title("Trace time scaling"), &tri_scaling, &res_scaling)
+        })?;
+    }
+
+    let table = table(&loaded, &rows, &errors);
+    let results = Results {
+        adapter: ctx.info.name.clone(),
+        backend: format!("{:?}", ctx.info.backend),
+        device_type: format!("{:?}", ctx.info.device_type),
+        driver: format!("{} {}", ctx.info.driver, ctx.info.driver_info),
+        commit,
+        date_unix_s,
+        date,
+        command: std::env::args().collect::<Vec<_>>().join(" "),
+        suite,
+        max_depth: base.max_depth,
+        rows,
+        table,
+        error_vs_time: errors,
+        bvh_presets: presets,
+        refit_vs_rebuild: refit,
+        scaling_triangles: tri_scaling,
+        scaling_resolution: res_scaling,
+        charts,
+        wall_seconds: started.elapsed().as_secs_f64(),
+        load_average_start,
+        load_average_end: load_average(),
+    };
+    write_outputs(&args.out, &results)?;
+    eprintln!(
+        "raykin bench: wrote {}/results.json, results.csv, curves.csv, summary.md and {} charts in {:.0} s",
+        args.out.display(),
+        results.charts.len(),
+        results.wall_seconds
+    );
+    Ok(())
+}
+
+fn table(
+    scenes: &[BenchScene],
+    rows: &[frame_loop::FrameRow],
+    errors: &[error_curves::SceneErrors],
+) -> Vec<TableRow> {
+    let mut names: Vec<&str> = rows.iter().map(|r| r.scene.as_str()).collect();
+    names.extend(errors.iter().map(|e| e.scene.as_str()));
+    let mut seen = Vec::new();
+    names.retain(|n| {
+        let new = !seen.contains(n);
+        seen.push(n);
+        new
+    });
+    names
+        .into_iter()
+        .map(|name| {
+            let mine: Vec<&frame_loop::FrameRow> =
+                rows.iter().filter(|r| r.scene == name).collect();
+            let e = errors.iter().find(|e| e.scene == name);
+            TableRow {
+                scene: name.to_string(),
+                triangles: scenes
+                    .iter()
+                    .find(|s| s.name == name)
+                    .map_or(0, |s| s.scene.triangle_count()),
+                sizes: mine.iter().map(|r| (r.width, r.height)).collect(),
+                ms_per_frame: mine.iter().map(|r| r.frame_ms.median).collect(),
+                trace_ms: mine.iter().map(|r| r.trace_ms_median).collect(),
+                primary_rays_per_s: mine.iter().map(|r| r.primary_rays_per_s).collect(),
+                raycast_camera_rays_per_s: mine
+                    .iter()
+                    .map(|r| r.raycast_camera_rays_per_s)
+                    .collect(),
+                raycast_diffuse_rays_per_s: mine
+                    .iter()
+                    .map(|r| r.raycast_diffuse_rays_per_s)
+                    .collect(),
+                all_rays_per_s: mine.iter().map(|r| r.all_rays_per_s).collect(),
+                error_size: e.map(|e| (e.width, e.height)),
+                ms_to_rel_mse_0_01: e.and_then(|e| e.ms_to_rel_mse_0_01),
+                ms_to_rel_mse_0_01_extrapolated: e
+                    .is_some_and(|e| e.ms_to_rel_mse_0_01_extrapolated),
+                ms_to_rel_mse_0_001: e.and_then(|e| e.ms_to_rel_mse_0_001),
+                ms_to_rel_mse_0_001_extrapolated: e
+                    .is_some_and(|e| e.ms_to_rel_mse_0_001_extrapolated),
+                slope_rel_rmse_vs_spp: e.and_then(|e| e.slope_rel_rmse_vs_spp),
+                slope_rel_rmse_linear_vs_spp: e.and_then(|e| e.slope_rel_rmse_linear_vs_spp),
+            }
+        })
+        .collect()
+}
+
+fn write_outputs(out: &Path, results: &Results) -> Result<()> {
+    let write = |name: &str, text: String| -> Result<()> {
+        let path = out.join(name);
+        std::fs::write(&path, text).with_context(|| format!("{}: cannot write", path.display()))
+    };
+    write("results.json", serde_json::to_string_pretty(results)?)?;
+    let mut csv = String::from(
+        "scene,width,height,triangles,trace_ms_median,trace_ms_p99,primary_rays_per_s,all_rays_per_s,bvh_build_and_upload_ms,gpu_memory_geometry_bvh_mib,frame_ms_median,raycast_camera_rays_per_s,raycast_diffuse_rays_per_s\n",
+    );
+    for r in &results.rows {
+        csv += &format!(
+            "{},{},{},{},{:.4},{:.4},{:.0},{:.0},{:.1},{:.2},{:.4},{:.0},{:.0}\n",
+            r.scene,
+            r.width,
+            r.height,
+            r.triangles,
+            r.trace_ms_median,
+            r.trace_ms_p99,
+            r.primary_rays_per_s,
+            r.all_rays_per_s,
+            r.bvh_build_and_upload_ms,
+            r.gpu_memory_geometry_bvh_mib,
+            r.frame_ms.median,
+            r.raycast_camera_rays_per_s,
+            r.raycast_diffuse_rays_per_s
+        );
+    }
+    write("results.csv", csv)?;
+    let mut curves = String::from("scene,curve,spp,trace_ms,rel_mse,flip\n");
+    for e in &results.error_vs_time {
+        for c in &e.curves {
+            for p in &c.points {
+                curves += &format!(
+                    "{},\"{}\",{},{:.4},{:.6e},{:.6}\n",
+                    e.scene, c.name, p.spp, p.time_ms, p.rel_mse, p.flip
+                );
+            }
+        }
+    }
+    write("curves.csv", curves)?;
+    write("summary.md", summary_markdown(results))
+}
+
+/// The per-scene table as markdown, for docs/BENCHMARKS.md.
+fn summary_markdown(r: &Results) -> String {
+    let join = |v: &[f64], f: &dyn Fn(f64) -> String| {
+        v.iter().map(|x| f(*x)).collect::<Vec<_>>().join(" / ")
+    };
+    let rays = |x: f64| {
+        if x >= 1e9 {
+            format!("{:.2} G", x / 1e9)
+        } else {
+            format!("{:.3} M", x / 1e6)
+        }
+    };
+    let time = |t: Option<f64>, extrapolated: bool| match t {
+        Some(ms) if ms >= 1e4 => {
+            format!("{}{:.1} s", if extrapolated { "~" } else { "" }, ms / 1e3)
+        }
+        Some(ms) => format!("{}{ms:.1} ms", if extrapolated { "~" } else { "" }),
+        None => "n/a".into(),
+    };
+    let mut s = format!(
+        "`{}` on {} ({}, driver {}), commit {}, {}; suite `{}`{}.\n\n",
+        r.command,
+        r.adapter,
+        r.device_type,
+        r.driver,
+        r.commit,
+        r.date,
+        r.suite.name,
+        if r.suite.scaling_note.is_empty() {
+            String::new()
+        } else {
+            format!(" ({})", r.suite.scaling_note)
+        }
+    );
+    s += "| scene | triangles | size | ms/frame | trace ms | primary rays/s | all rays/s | ray casting: camera / diffuse rays/s | error size | trace time to relMSE 0.01 | to 0.001 | slope of log rel. RMSE vs log spp (tone-mapped / linear) |\n";
+    s += "|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+    for t in &r.table {
+        let sizes: Vec<String> = t.sizes.iter().map(|(w, h)| format!("{w}x{h}")).collect();
+        s += &format!(
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
+            t.scene,
+            t.triangles,
+            sizes.join(" / "),
+            join(&t.ms_per_frame, &|x| format!("{x:.2}")),
+            join(&t.trace_ms, &|x| format!("{x:.2}")),
+            join(&t.primary_rays_per_s, &rays),
+            join(&t.all_rays_per_s, &rays),
+            t.raycast_camera_rays_per_s
+                .iter()
+                .zip(&t.raycast_diffuse_rays_per_s)
+                .map(|(c, d)| format!("{} / {}", rays(*c), rays(*d)))
+                .collect::<Vec<_>>()
+                .join(", "),
+            t.error_size.map_or("-".into(), |(w, h)| format!("{w}x{h}")),
+            time(t.ms_to_rel_mse_0_01, t.ms_to_rel_mse_0_01_extrapolated),
+            time(t.ms_to_rel_mse_0_001, t.ms_to_rel_mse_0_001_extrapolated),
+            [t.slope_rel_rmse_vs_spp, t.slope_rel_rmse_linear_vs_spp]
+                .map(|x| x.map_or("n/a".into(), |x| format!("{x:.2}")))
+                .join(" / "),
+        );
+    }
+    s += "\nms/frame: wall time of a whole frame (all passes, waiting for the GPU); trace ms: GPU timestamps of the \
+path-trace kernel; relMSE on tone-mapped images against the cached reference, its own noise subtracted; \
+~ = extrapolated along the fitted power law (the curve did not get there within the suite's samples); \
+ray casting: the shading-free pass (camera rays through pixel centres, then one cosine-distributed bounce ray \
+per hit), per size.\n";
+    s
+}
+
+fn load_average() -> Option<String> {
+    std::fs::read_to_string("/proc/loadavg")
+        .ok()
+        .map(|s| s.trim().to_string())
+}
+
+pub(crate) fn git_commit() -> Option<String> {
+    let out = std::process::Command::new("git")
+        .args(["rev-parse", "--short", "HEAD"])
+        .output()
+        .ok()?;
+    out.status
+        .success()
+        .then(|| String::from_utf8_lossy(&out.stdout).trim().to_string())
+}

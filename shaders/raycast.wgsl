@@ -1,0 +1,46 @@
+// Ray-casting throughput without shading, the workload of the speed targets' "primary" and "diffuse bounce"
+// rays: traversal and intersection only. `frame.max_depth` 0: one camera ray through each pixel centre; 1: the
+// camera ray, then from its hit one cosine-distributed ray about the geometric normal (closest hit).
+// The summed hit distances are written out so that no work can be optimised away.
+
+@group(1) @binding(0) var<storage, read_write> hit_distance: array<f32>;
+// [0]: rays cast (camera + bounce).
+@group(1) @binding(1) var<storage, read_write> rays_cast: array<atomic<u32>>;
+
+fn geometric_normal(hit: Hit) -> vec3<f32> {
+    let inst = instances[hit.instance];
+    let mesh = meshes[inst.mesh];
+    let tri = triangles[hit.triangle];
+    let p0 = transform_point(inst.world_from_object, vertex_position(mesh, tri.x));
+    let p1 = transform_point(inst.world_from_object, vertex_position(mesh, tri.y));
+    let p2 = transform_point(inst.world_from_object, vertex_position(mesh, tri.z));
+    return normalize(cross(p1 - p0, p2 - p0));
+}
+
+@compute @workgroup_size(8, 8)
+fn cast_rays(@builtin(global_invocation_id) gid: vec3<u32>) {
+    if gid.x >= frame.width || gid.y >= frame.height { return; }
+    let pixel = gid.y * frame.width + gid.x;
+    let cam = frame.world_from_camera;
+    let aspect = f32(frame.width) / f32(frame.height);
+    let ndc = vec2<f32>(
+        (f32(gid.x) + 0.5) / f32(frame.width) * 2.0 - 1.0,
+        1.0 - (f32(gid.y) + 0.5) / f32(frame.height) * 2.0);
+    let d_cam = vec3<f32>(ndc.x * frame.tan_half_fov * aspect, ndc.y * frame.tan_half_fov, -1.0);
+    let ray = Ray(cam[3].xyz, normalize((cam * vec4<f32>(d_cam, 0.0)).xyz));
+    let hit = trace(ray, MISS, false);
+    var distance = hit.t;
+    var rays = 1u;
+    if frame.max_depth > 0u && hit.instance != NONE {
+        var ng = geometric_normal(hit);
+        if dot(ng, ray.dir) > 0.0 { ng = -ng; }
+        let p = ray.origin + ray.dir * hit.t;
+        var rng = rng_new(pixel, frame.sample_base, frame.seed);
+        let dir = basis(ng) * sample_cosine(vec2<f32>(rand(&rng), rand(&rng)));
+        let bounce = trace(Ray(offset_ray_origin(p, ng), dir), MISS, false);
+        distance += min(bounce.t, 1e30);
+        rays += 1u;
+    }
+    hit_distance[pixel] = distance;
+    atomicAdd(&rays_cast[0], rays);
+}

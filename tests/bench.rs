@@ -1,0 +1,287 @@
+//! `raykin bench --suite quick` end to end on whatever adapter CI has (lavapipe): the JSON, CSVs and charts
+//! exist and are sane. Nothing here asserts speed; it asserts what must hold at any speed: finite positive
+//! timings, all rays >= primary rays, error curves that fall with time (within noise) at a Monte Carlo-like
+//! rate, a reference less noisy than the curves it judges, rebuilds that cost more than refits, and charts
+//! that decode with visible content.
+
+mod common;
+use common::*;
+use serde_json::Value;
+use std::path::Path;
+
+fn f(v: &Value) -> f64 {
+    v.as_f64()
+        .unwrap_or_else(|| panic!("expected a number, got {v}"))
+}
+
+fn finite_positive(v: &Value, what: &str) -> f64 {
+    let x = f(v);
+    assert!(x.is_finite() && x > 0.0, "{what}: {x}");
+    x
+}
+
+#[test]
+fn quick_suite_writes_sane_results_and_charts() {
+    let out = std::env::temp_dir().join(format!("raykin-bench-test-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&out);
+    let xdg = std::env::temp_dir().join("raykin-xdg");
+    std::fs::create_dir_all(&xdg).unwrap();
+    let start = std::time::Instant::now();
+    let output = std::process::Command::new(env!("CARGO_BIN_EXE_raykin"))
+        .args(["bench", "--suite", "quick", "--out"])
+        .arg(&out)
+        .arg("--cache")
+        .arg(out.join("cache"))
+        .arg("--assets")
+        .arg(shared_assets())
+        .env("XDG_RUNTIME_DIR", &xdg)
+        .output()
+        .expect("raykin runs");
+    let log = String::from_utf8_lossy(&output.stderr);
+    assert!(output.status.success(), "raykin bench failed:\n{log}");
+    eprintln!("quick suite: {:.0} s", start.elapsed().as_secs_f64());
+
+    let results: Value =
+        serde_json::from_slice(&std::fs::read(out.join("results.json")).unwrap()).unwrap();
+    for key in ["adapter", "driver", "commit", "date"] {
+        assert!(
+            !results[key].as_str().unwrap_or("").is_empty(),
+            "{key} is missing"
+        );
+    }
+    assert_eq!(results["suite"]["name"], "quick");
+
+    check_frame_rows(&results);
+    check_error_curves(&results, &out);
+    check_bvh(&results);
+    check_scaling(&results);
+
+    let charts = results["charts"].as_array().unwrap();
+    assert_eq!(charts.len(), 6, "charts: {charts:?}");
+    for c in charts {
+        check_chart(&out.join(c.as_str().unwrap()));
+    }
+    let summary = std::fs::read_to_string(out.join("summary.md")).unwrap();
+    for scene in ["| cornell |", "| flight-helmet |", "| crowd |"] {
+        assert!(
+            summary.contains(scene),
+            "summary.md lacks {scene}:\n{summary}"
+        );
+    }
+    let csv = std::fs::read_to_string(out.join("results.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 1 + 3, "results.csv:\n{csv}");
+    let _ = std::fs::remove_dir_all(&out);
+}
+
+fn check_frame_rows(results: &Value) {
+    let rows = results["rows"].as_array().unwrap();
+    assert_eq!(rows.len(), 3, "one row per quick scene");
+    for r in rows {
+        let scene = r["scene"].as_str().unwrap();
+        let trace = finite_positive(&r["trace_ms_median"], "trace ms");
+        assert!(f(&r["trace_ms_p99"]) >= trace);
+        let primary = finite_positive(&r["primary_rays_per_s"], "primary rays/s");
+        let all = finite_positive(&r["all_rays_per_s"], "all rays/s");
+        assert!(
+            all >= primary * 0.999,
+            "{scene}: all rays {all} < primary {primary}"
+        );
+        // A frame waits for its GPU passes, so it cannot take less wall time than the trace.
+        assert!(
+            f(&r["frame_ms"]["median"]) >= trace * 0.9,
+            "{scene}: frame ms"
+        );
+        let passes = r["passes_median_ms"].as_object().unwrap();
+        for (name, v) in passes {
+            assert!(
+                f(v).is_finite() && f(v) >= 0.0,
+                "{scene}: pass {name} = {v}"
+            );
+        }
+        if scene == "crowd" {
+            assert_eq!(r["animated"], true);
+            for pass in ["skinning", "refit", "top_level"] {
+                assert!(f(&passes[pass]) > 0.0, "crowd: no {pass} time");
+            }
+        } else {
+            assert_eq!(r["animated"], false);
+        }
+    }
+}
+
+fn check_error_curves(results: &Value, out: &Path) {
+    let scenes = results["error_vs_time"].as_array().unwrap();
+    let names: Vec<&str> = scenes
+        .iter()
+        .map(|s| s["scene"].as_str().unwrap())
+        .collect();
+    assert_eq!(names, ["cornell", "flight-helmet"], "static scenes only");
+    for s in scenes {
+        let scene = s["scene"].as_str().unwrap();
+        assert_eq!(s["reference_from_cache"], false, "a fresh cache folder");
+        let key = s["reference_key"].as_str().unwrap();
+        let cached = out.join("cache").join(format!("{scene}-{key}"));
+        assert!(cached.join("half_a.exr").exists() && cached.join("half_b.exr").exists());
+        let curves = s["curves"].as_array().unwrap();
+        assert_eq!(curves.len(), 8);
+        for c in curves {
+            let name = c["name"].as_str().unwrap();
+            let points = c["points"].as_array().unwrap();
+            assert!(points.len() >= 3, "{scene}/{name}: {} points", points.len());
+            let mut last_time = 0.0;
+            for p in points {
+                let t = finite_positive(&p["time_ms"], "time");
+                assert!(t > last_time, "{scene}/{name}: time must grow with spp");
+                last_time = t;
+                finite_positive(&p["rel_mse"], "relMSE");
+                finite_positive(&p["rel_mse_linear"], "linear relMSE");
+                let flip = finite_positive(&p["flip"], "FLIP");
+                assert!(flip < 1.0, "FLIP is at most 1");
+            }
+            let flip = |i: usize| f(&points[i]["flip"]);
+            assert!(
+                flip(points.len() - 1) <= flip(0) * 1.02,
+                "{scene}/{name}: FLIP grew from {} to {}",
+                flip(0),
+                flip(points.len() - 1)
+            );
+        }
+        // The default curve: falls overall, never jumps up by more than noise, and its reference is cleaner.
+        let default: Vec<f64> = curves[0]["points"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|p| f(&p["rel_mse"]))
+            .collect();
+        let (first, last) = (default[0], default[default.len() - 1]);
+        assert!(last < first * 0.3, "{scene}: relMSE {first} -> {last}");
+        for w in default.windows(2) {
+            assert!(
+                w[1] < w[0] * 1.5,
+                "{scene}: relMSE jumped {} -> {}",
+                w[0],
+                w[1]
+            );
+        }
+        assert!(
+            f(&s["reference_noise_rel_mse"]) < last,
+            "{scene}: reference noise"
+        );
+        let slope = f(&s["slope_rel_rmse_vs_spp"]);
+        assert!(
+            (-1.0..=-0.2).contains(&slope),
+            "{scene}: relative RMSE slope {slope} outside the loose band [-1, -0.2]"
+        );
+    }
+    let table = results["table"].as_array().unwrap();
+    let helmet = table
+        .iter()
+        .find(|t| t["scene"] == "flight-helmet")
+        .unwrap();
+    finite_positive(&helmet["ms_to_rel_mse_0_01"], "time to relMSE 0.01");
+}
+
+fn check_bvh(results: &Value) {
+    let presets = results["bvh_presets"].as_array().unwrap();
+    assert_eq!(presets.len(), 6, "every obvhs preset");
+    for p in presets {
+        finite_positive(&p["build_ms"], "build ms");
+        finite_positive(&p["sah_cost"], "SAH cost");
+        finite_positive(&p["trace_ms"]["median"], "preset trace ms");
+    }
+    let refit = &results["refit_vs_rebuild"];
+    let frames = refit["frames"].as_array().unwrap();
+    assert_eq!(frames.len(), 9, "8 poses per second over 1 s, both ends");
+    // Both trees are built at the first pose; refitting moves the ratio from 1.
+    assert!((f(&frames[0]["sah_ratio_refit"]) - 1.0).abs() < 1e-3);
+    assert!(f(&refit["max_sah_ratio"]) > 1.0);
+    for fr in frames {
+        finite_positive(&fr["trace_ms_refit"], "refit-tree trace ms");
+        finite_positive(&fr["trace_ms_rebuilt"], "rebuilt-tree trace ms");
+    }
+    let (refit_ms, rebuild_ms) = (
+        finite_positive(&refit["refit_ms"]["median"], "refit ms"),
+        finite_positive(&refit["rebuild_ms"]["median"], "rebuild ms"),
+    );
+    assert!(
+        rebuild_ms > refit_ms,
+        "a full rebuild ({rebuild_ms} ms) should cost more than a refit ({refit_ms} ms)"
+    );
+}
+
+fn check_scaling(results: &Value) {
+    let tri = results["scaling_triangles"].as_array().unwrap();
+    assert_eq!(tri.len(), 3);
+    for r in tri {
+        let copies = r["copies"].as_u64().unwrap();
+        assert_eq!(
+            r["instanced_triangles"].as_u64().unwrap(),
+            copies * r["unique_triangles"].as_u64().unwrap()
+        );
+        finite_positive(&r["trace_ms"]["median"], "scaling trace ms");
+    }
+    let res = results["scaling_resolution"].as_array().unwrap();
+    assert_eq!(res.len(), 3);
+    for r in res {
+        finite_positive(&r["ns_per_pixel"], "ns per pixel");
+    }
+}
+
+/// Decodes, is chart-sized, and is not blank: plenty of non-white pixels in many colours.
+fn check_chart(path: &Path) {
+    let img = image::open(path)
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+        .to_rgb8();
+    let (w, h) = img.dimensions();
+    assert!(w >= 800 && h >= 500, "{}: {w}x{h}", path.display());
+    let non_white = img.pixels().filter(|p| p.0 != [255, 255, 255]).count();
+    let mut colours: Vec<[u8; 3]> = img.pixels().map(|p| p.0).collect();
+    colours.sort_unstable();
+    colours.dedup();
+    assert!(
+        non_white as f64 > 0.02 * (w * h) as f64 && colours.len() > 20,
+        "{}: looks blank ({non_white} non-white pixels, {} colours)",
+        path.display(),
+        colours.len()
+    );
+}
+
+/// Bad arguments fail at once with a message naming the problem (no GPU work, no partial output).
+#[test]
+fn bad_arguments_fail_with_clear_messages() {
+    let out = std::env::temp_dir().join(format!("raykin-bench-bad-{}", std::process::id()));
+    let run = |args: &[&str]| {
+        let output = std::process::Command::new(env!("CARGO_BIN_EXE_raykin"))
+            .arg("bench")
+            .args(args)
+            .arg("--out")
+            .arg(&out)
+            .env("XDG_RUNTIME_DIR", std::env::temp_dir().join("raykin-xdg"))
+            .output()
+            .expect("raykin runs");
+        assert!(!output.status.success(), "{args:?} should fail");
+        String::from_utf8_lossy(&output.stderr).into_owned()
+    };
+    let missing = run(&["--scene", "/no/such/scene.glb"]);
+    assert!(
+        missing.contains("/no/such/scene.glb") && missing.contains("not a named bench scene"),
+        "{missing}"
+    );
+    let part = run(&["--parts", "everything"]);
+    assert!(
+        part.contains("unknown part") && part.contains("scaling"),
+        "{part}"
+    );
+    let suite = run(&["--suite", "huge"]);
+    assert!(suite.contains("unknown suite `huge`"), "{suite}");
+    let assets = run(&["--scene", "cornell", "--assets", "/no/such/assets"]);
+    assert!(
+        assets.contains("/no/such/assets") && assets.contains("cornell"),
+        "{assets}"
+    );
+    assert!(
+        !out.join("results.json").exists(),
+        "no results from a failed run"
+    );
+    let _ = std::fs::remove_dir_all(&out);
+}
