@@ -18,10 +18,6 @@ use std::time::Instant;
 /// Width the editor panel takes beside the image.
 const PANEL_WIDTH: u32 = 340;
 
-/// Frames the CPU may run ahead of the GPU, as a window's swapchain would allow; without a bound the queue
-/// (and its staging memory) would grow whenever the GPU is the slower side.
-const FRAMES_IN_FLIGHT: usize = 2;
-
 /// The bench's spread (min, median, p10, p90, p99) of a series, with its mean and count.
 #[derive(serde::Serialize)]
 struct Series {
@@ -110,7 +106,7 @@ pub fn run(ctx: GpuContext, setup: OffscreenSetup) -> Result<()> {
     let (mut trace, mut tonemap, mut denoise, mut rays_per_s, mut ui_gpu) =
         (Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new());
     let (mut wait_schedule, mut wait_ui) = (Vec::new(), Vec::new());
-    let mut in_flight = std::collections::VecDeque::new();
+    let mut pacer = super::ui_render::FramePacer::default();
     let mut rss_after_warmup = None;
     // Resident memory every tenth of the run, to see that it stays flat.
     let mut rss_samples: Vec<(u64, Option<u64>)> = Vec::new();
@@ -140,15 +136,7 @@ pub fn run(ctx: GpuContext, setup: OffscreenSetup) -> Result<()> {
         );
         let paint_ms = t1.elapsed().as_secs_f64() * 1e3;
         let waited_ui = setup.sync_passes.then(|| wait_ms(&ctx));
-        in_flight.push_back(submission);
-        if in_flight.len() > FRAMES_IN_FLIGHT
-            && let Some(oldest) = in_flight.pop_front()
-        {
-            let _ = ctx.device.poll(wgpu::PollType::Wait {
-                submission_index: Some(oldest),
-                timeout: None,
-            });
-        }
+        pacer.submitted(&ctx, submission);
         let frame_ms = t0.elapsed().as_secs_f64() * 1e3;
         let measured = frame >= warmup;
         if measured {

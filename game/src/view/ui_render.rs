@@ -164,3 +164,28 @@ impl UiRenderer {
             .collect()
     }
 }
+
+/// Keeps the CPU at most [`FramePacer::FRAMES_IN_FLIGHT`] frames ahead of the GPU. A swapchain usually does this,
+/// but not every present mode and driver blocks (lavapipe under X11 without vsync does not), and an offscreen
+/// target never does: unbounded, the queue and its staging memory would grow whenever the GPU is the slower side.
+#[derive(Default)]
+pub struct FramePacer {
+    in_flight: std::collections::VecDeque<wgpu::SubmissionIndex>,
+}
+
+impl FramePacer {
+    pub const FRAMES_IN_FLIGHT: usize = 2;
+
+    /// Call with each frame's last submission; waits for the frame that many frames back.
+    pub fn submitted(&mut self, ctx: &GpuContext, submission: wgpu::SubmissionIndex) {
+        self.in_flight.push_back(submission);
+        if self.in_flight.len() > Self::FRAMES_IN_FLIGHT
+            && let Some(oldest) = self.in_flight.pop_front()
+        {
+            let _ = ctx.device.poll(wgpu::PollType::Wait {
+                submission_index: Some(oldest),
+                timeout: None,
+            });
+        }
+    }
+}

@@ -3,7 +3,7 @@
 
 use super::script::{Flow, ScriptHost, ScriptRunner};
 use super::session::{SceneSource, Session, SessionOptions};
-use super::ui_render::UiRenderer;
+use super::ui_render::{FramePacer, UiRenderer};
 use anyhow::{Context, Result};
 use raykin::editor::EditorState;
 use raykin::gpu::GpuContext;
@@ -45,6 +45,7 @@ struct Running {
     script: Option<ScriptRunner>,
     /// When egui asked to be repainted again (tooltips, animations) while the image is idle.
     repaint_at: Option<Instant>,
+    pacer: FramePacer,
 }
 
 struct Viewer {
@@ -178,6 +179,7 @@ impl Viewer {
             session,
             script: setup.script,
             repaint_at: None,
+            pacer: FramePacer::default(),
         });
         Ok(())
     }
@@ -231,11 +233,11 @@ impl Running {
                 let view = frame.texture.create_view(&Default::default());
                 let size = [self.config.width, self.config.height];
                 let tracer = &self.session.engine.renderer().tracer;
-                // The swapchain bounds the frames in flight (get_current_texture waits for a free image).
-                let _ = self
-                    .ui
-                    .render(&ctx, &self.session.egui, &mut output, &view, size, tracer);
+                let submission =
+                    self.ui
+                        .render(&ctx, &self.session.egui, &mut output, &view, size, tracer);
                 ctx.queue.present(frame);
+                self.pacer.submitted(&ctx, submission);
             }
             // No surface texture this time (resizing, occluded): the UI still consumes its texture updates.
             None => self.ui.discard(&ctx, &mut output),
