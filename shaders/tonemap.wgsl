@@ -45,31 +45,30 @@ fn linear_to_srgb(c: vec3<f32>) -> vec3<f32> {
     return select(1.055 * pow(c, vec3<f32>(1.0 / 2.4)) - 0.055, c * 12.92, c <= vec3<f32>(0.0031308));
 }
 
+// Branch-free on purpose: the same selection written as nested if/else made lavapipe (Mesa 22.3.6, LLVM 15) grow
+// its resident memory by ~200 KB on every dispatch of more than a few workgroups, which the viewer does each
+// frame (docs/VIEWER.md, "Memory over long runs"). The extra reads and ALU are negligible next to the trace.
 @compute @workgroup_size(8, 8)
 fn tonemap(@builtin(global_invocation_id) gid: vec3<u32>) {
     if gid.x >= params.width || gid.y >= params.height { return; }
     let i = gid.y * params.width + gid.x;
     let a = accum[i];
     let samples = max(a.w, 1.0);
-    var display: vec3<f32>;
-    if params.view == 0u {
-        let c = max(a.rgb / samples, vec3<f32>(0.0)) * params.exposure_scale;
-        if params.tonemapper == 0u {
-            display = linear_to_srgb(aces_fitted(c));
-        } else if params.tonemapper == 1u {
-            display = linear_to_srgb(reinhard_luminance(c));
-        } else {
-            display = linear_to_srgb(clamp(c, vec3<f32>(0.0), vec3<f32>(1.0)));
-        }
-    } else if params.view == 1u {
-        display = linear_to_srgb(clamp(aov_albedo_depth[i].rgb / samples, vec3<f32>(0.0), vec3<f32>(1.0)));
-    } else if params.view == 2u {
-        let n = aov_normal[i];
-        display = select(vec3<f32>(0.0), normalize(n.xyz) * 0.5 + 0.5, n.w > 0.0 && dot(n.xyz, n.xyz) > 0.0);
-    } else {
-        let n = aov_normal[i].w;
-        let d = select(0.0, aov_albedo_depth[i].w / n, n > 0.0);
-        display = vec3<f32>(exp(-d * params.depth_scale));
-    }
+    let c = max(a.rgb / samples, vec3<f32>(0.0)) * params.exposure_scale;
+    var tone = clamp(c, vec3<f32>(0.0), vec3<f32>(1.0));
+    tone = select(tone, reinhard_luminance(c), params.tonemapper == 1u);
+    tone = select(tone, aces_fitted(c), params.tonemapper == 0u);
+    let colour = linear_to_srgb(tone);
+    let ad = aov_albedo_depth[i];
+    let albedo = linear_to_srgb(clamp(ad.rgb / samples, vec3<f32>(0.0), vec3<f32>(1.0)));
+    let nh = aov_normal[i];
+    let has_normal = nh.w > 0.0 && dot(nh.xyz, nh.xyz) > 0.0;
+    let normal = select(vec3<f32>(0.0), normalize(select(vec3<f32>(1.0), nh.xyz, has_normal)) * 0.5 + 0.5, has_normal);
+    // Mean camera depth over the samples that hit (0 where none did).
+    let depth = select(0.0, ad.w / max(nh.w, 1e-30), nh.w > 0.0);
+    var display = colour;
+    display = select(display, albedo, params.view == 1u);
+    display = select(display, normal, params.view == 2u);
+    display = select(display, vec3<f32>(exp(-depth * params.depth_scale)), params.view == 3u);
     out_rgba8[i] = pack4x8unorm(vec4<f32>(display, 1.0));
 }
