@@ -10,6 +10,8 @@ const MATERIAL_ALPHA_BLEND: u32 = 4u;
 const FRAME_NEE: u32 = 1u;
 // Write the primary-hit AOV (the recorder's motion vectors need it; off otherwise).
 const FRAME_HIT_AOV: u32 = 2u;
+// Accumulate the denoiser's moments (skipped when nothing will denoise this accumulation: about 5% of a frame).
+const FRAME_MOMENTS: u32 = 4u;
 
 struct BvhChild { min: vec3<f32>, index: u32, max: vec3<f32>, count: u32 }
 struct BvhNode { a: BvhChild, b: BvhChild }

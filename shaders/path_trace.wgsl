@@ -380,5 +380,7 @@ fn trace_pixel(gid: vec2<u32>) {
     accum[pixel] += vec4<f32>(radiance, f32(frame.spp));
     aov_albedo_depth[pixel] += albedo_depth;
     aov_normal[pixel] += normal_hits;
-    moments[pixel] += unscattered_m2;
+    if (frame.flags & FRAME_MOMENTS) != 0u {
+        moments[pixel] += unscattered_m2;
+    }
 }

@@ -134,6 +134,16 @@ impl HeadlessApp {
     }
 
     /// Records the primary hit through each pixel centre from the next accumulation on ([`Self::primary_hits`]).
+    /// Whether the denoiser's inputs accumulate while the denoiser is off ([`crate::render::PathTracer`]'s
+    /// `keep_denoiser_inputs`): renders whose settings never switch it on turn this off to save the cost.
+    pub fn set_keep_denoiser_inputs(&mut self, keep: bool) {
+        self.app
+            .world_mut()
+            .resource_mut::<Renderer>()
+            .tracer
+            .keep_denoiser_inputs = keep;
+    }
+
     pub fn set_hit_aov(&mut self, enabled: bool) {
         let ctx = self.ctx.clone();
         self.app

@@ -200,6 +200,8 @@ fn render_to_file(
         .map(str::to_ascii_lowercase);
     let settings = settings_from(args);
     let mut app = HeadlessApp::new(ctx, scene.clone(), settings.clone(), &camera)?;
+    // The denoiser is on or off for the whole render: its inputs accumulate only when it runs.
+    app.set_keep_denoiser_inputs(false);
     for n in &app.notes {
         eprintln!("raykin: warning: {}: {n}", scene.source);
     }

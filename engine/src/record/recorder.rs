@@ -240,6 +240,8 @@ impl Recorder {
             ..settings.frame.render.clone()
         };
         let mut app = HeadlessApp::new(ctx, self.job.scene.clone(), render, &camera)?;
+        // `--denoise` holds for the whole recording: the denoiser's inputs accumulate only when it runs.
+        app.set_keep_denoiser_inputs(false);
         summary.notes.append(&mut app.notes);
         app.set_rebuild_policy(RebuildPolicy::PoseDetermined);
         let motion = settings.frame.aovs.contains(&Aov::Motion);

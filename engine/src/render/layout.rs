@@ -129,6 +129,8 @@ pub struct GpuFrame {
 pub const FRAME_NEE: u32 = 1;
 /// Bit 1: write the primary-hit AOV (first dispatch after a reset only).
 pub const FRAME_HIT_AOV: u32 = 2;
+/// Bit 2: accumulate the denoiser's moments (its variance and unscattered-light inputs).
+pub const FRAME_MOMENTS: u32 = 4;
 
 /// Octahedral encoding of a unit vector into two snorm16 values (WGSL `unpack2x16snorm` decodes it).
 pub fn oct_encode(v: Vec3) -> u32 {

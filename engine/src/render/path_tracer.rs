@@ -83,6 +83,10 @@ pub struct PathTracer {
     /// `hit_aov_enabled` is off, so nothing is spent on it unless asked.
     pub aov_hit: wgpu::Buffer,
     hit_aov_enabled: bool,
+    /// Accumulate the denoiser's moments even while it is off, so that switching it on mid-accumulation
+    /// works (interactive use; the default). Headless renders that never denoise turn this off: the moments
+    /// cost about 5% of a path-trace pass (H200, docs/BENCHMARKS.md).
+    pub keep_denoiser_inputs: bool,
     /// Rays traced by the last dispatch.
     ray_counter: wgpu::Buffer,
     scene_bind_group: Option<(u64, wgpu::BindGroup)>,
@@ -313,6 +317,7 @@ impl PathTracer {
             output_rgba8: v.rgba8,
             aov_hit,
             hit_aov_enabled: false,
+            keep_denoiser_inputs: true,
             ray_counter,
             scene_bind_group: None,
             accum_bind_group,
@@ -749,6 +754,11 @@ impl PathTracer {
             flags: if settings.nee { FRAME_NEE } else { 0 }
                 | if self.hit_aov_enabled && self.samples == 0 {
                     FRAME_HIT_AOV
+                } else {
+                    0
+                }
+                | if settings.denoise || self.keep_denoiser_inputs {
+                    FRAME_MOMENTS
                 } else {
                     0
                 },

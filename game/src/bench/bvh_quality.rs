@@ -144,6 +144,12 @@ pub fn refit_vs_rebuild(
         players: Vec::new(),
         source_files: Vec::new(),
     };
+    // CPU deformation: its refit and rebuild run synchronously in the frame they are asked for, so each pose
+    // is traced with exactly the tree this comparison is about (the GPU backend rebuilds asynchronously).
+    let base = &RenderSettings {
+        deform: raykin::gpu_deform::DeformBackend::Cpu,
+        ..base.clone()
+    };
     let mut refit_app = super::open_app(ctx, &scene, base.clone())?;
     let mut rebuild_app = super::open_app(ctx, &scene, base.clone())?;
     // One untimed frame each at the rest pose: the first dispatch also compiles the kernel on some drivers.

@@ -86,6 +86,8 @@ fn open_app(ctx: &GpuContext, scene: &BenchScene, settings: RenderSettings) -> R
     };
     let mut app = HeadlessApp::new(ctx.clone(), scene.scene.clone(), settings, &scene.camera)
         .with_context(|| format!("bench scene `{}`", scene.name))?;
+    // As `raykin render`: the denoiser's inputs accumulate only where the settings denoise.
+    app.set_keep_denoiser_inputs(false);
     let world = app.app.world_mut();
     if !scene.players.is_empty() {
         let root = world
