@@ -443,13 +443,11 @@ fn a_bad_file_reports_an_error_and_keeps_the_scene() {
 }
 
 /// A long offscreen run (animation playing: instances, TLAS and accumulation change every frame) must not grow
-/// its resident memory in the second half. Slow on lavapipe (a few minutes): set RAYKIN_SOAK=1 to run it.
+/// its resident memory in the second half. Slow on lavapipe (minutes), so opt-in:
+/// `cargo test --workspace --test viewer -- --ignored memory`.
 #[test]
+#[ignore = "soak test, minutes on lavapipe: run with --ignored"]
 fn offscreen_memory_stays_flat() {
-    if std::env::var_os("RAYKIN_SOAK").is_none() {
-        eprintln!("skipped: set RAYKIN_SOAK=1 to run the soak test");
-        return;
-    }
     let frames: u64 = std::env::var("RAYKIN_SOAK_FRAMES")
         .ok()
         .and_then(|v| v.parse().ok())
