@@ -14,6 +14,7 @@ mod frame_loop;
 mod metrics;
 mod scaling;
 mod scenes;
+pub use scenes::named_camera;
 pub(crate) mod stats;
 mod suite;
 

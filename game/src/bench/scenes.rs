@@ -73,6 +73,19 @@ pub fn named_scene_names() -> Vec<&'static str> {
     NAMED.iter().map(|n| n.name).collect()
 }
 
+/// The fixed camera of a named bench scene (the viewer opens `crowd` with it, so its offscreen timings frame
+/// the same picture as the bench's).
+pub fn named_camera(name: &str) -> Option<CameraChoice> {
+    NAMED
+        .iter()
+        .find(|n| n.name == name)
+        .map(|n| CameraChoice::LookAt {
+            eye: Vec3::from(n.eye),
+            target: Vec3::from(n.target),
+            yfov: n.yfov_deg.to_radians(),
+        })
+}
+
 /// A scene ready to bench: the asset, its fixed view, and what produced it (for reference-cache keys).
 pub struct BenchScene {
     pub name: String,
@@ -113,11 +126,7 @@ pub fn resolve(spec: &str, assets: &Path) -> Result<BenchScene> {
             source_files: gltf_files(&path),
         });
     };
-    let camera = CameraChoice::LookAt {
-        eye: Vec3::from(named.eye),
-        target: Vec3::from(named.target),
-        yfov: named.yfov_deg.to_radians(),
-    };
+    let camera = named_camera(named.name).unwrap_or_default();
     let (scene, players, source_files) = match named.source {
         Source::File(rel) => {
             let path = assets.join(rel);

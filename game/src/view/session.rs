@@ -430,6 +430,10 @@ fn build_engine(
     // The embedded Cornell box is lit by its ceiling light only and framed like `raykin` renders it.
     let camera = match (source, &options.camera) {
         (SceneSource::Embedded, CameraChoice::Auto) => crate::render_cmd::embedded_camera(),
+        // The crowd opens on the bench's fixed view (the automatic framing fits the whole ground).
+        (SceneSource::Crowd(_), CameraChoice::Auto) => {
+            crate::bench::named_camera("crowd").unwrap_or_default()
+        }
         (_, c) => c.clone(),
     };
     let mut engine = HeadlessApp::new(ctx.clone(), scene.clone(), settings, &camera)?;
