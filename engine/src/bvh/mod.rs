@@ -285,14 +285,7 @@ impl MeshBvh {
         triangles: &[[u32; 3]],
         quality: BvhQuality,
     ) -> Result<Self, BvhTooDeep> {
-        let tris: Vec<Triangle> = triangles
-            .iter()
-            .map(|t| Triangle {
-                v0: Vec3A::from(positions[t[0] as usize]),
-                v1: Vec3A::from(positions[t[1] as usize]),
-                v2: Vec3A::from(positions[t[2] as usize]),
-            })
-            .collect();
+        let tris = obvhs_triangles(positions, triangles);
         let mut core = std::time::Duration::ZERO;
         let bvh = obvhs::bvh2::builder::build_bvh2_from_tris(&tris, quality.params(), &mut core);
         let flat = FlatBvh::from_obvhs(&bvh)?;
@@ -414,4 +407,16 @@ pub fn build_tlas(boxes: &[(Vec3, Vec3)]) -> Result<FlatBvh, BvhTooDeep> {
     let mut core = std::time::Duration::ZERO;
     let bvh = obvhs::bvh2::builder::build_bvh2(&prims, params, &mut core);
     FlatBvh::from_obvhs(&bvh)
+}
+
+/// The mesh's triangles as obvhs builds take them.
+pub(crate) fn obvhs_triangles(positions: &[Vec3], triangles: &[[u32; 3]]) -> Vec<Triangle> {
+    triangles
+        .iter()
+        .map(|t| Triangle {
+            v0: Vec3A::from(positions[t[0] as usize]),
+            v1: Vec3A::from(positions[t[1] as usize]),
+            v2: Vec3A::from(positions[t[2] as usize]),
+        })
+        .collect()
 }

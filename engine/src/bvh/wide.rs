@@ -8,9 +8,8 @@
 //! layout is uploaded as is and traversed by `trace_blas_wide` in `shaders/bvh.wgsl`.
 
 use super::{BvhQuality, BvhTooDeep};
-use glam::{Vec3, Vec3A};
+use glam::Vec3;
 use obvhs::cwbvh::{CwBvh, node::CwBvhNode};
-use obvhs::triangle::Triangle;
 
 /// Deepest wide tree the GPU's node-group stack holds (one entry per level, see `shaders/bvh.wgsl`).
 pub const MAX_WIDE_DEPTH: u32 = 32;
@@ -41,14 +40,7 @@ impl WideBvh {
                 depth: 1,
             });
         }
-        let tris: Vec<Triangle> = triangles
-            .iter()
-            .map(|t| Triangle {
-                v0: Vec3A::from(positions[t[0] as usize]),
-                v1: Vec3A::from(positions[t[1] as usize]),
-                v2: Vec3A::from(positions[t[2] as usize]),
-            })
-            .collect();
+        let tris = super::obvhs_triangles(positions, triangles);
         let mut params = quality.params();
         // A wide leaf holds at most 3 triangles (the unary count in a child's meta byte).
         params.max_prims_per_leaf = 3;
