@@ -181,3 +181,13 @@ fn sample_texture(texture: u32, uv: vec2<f32>) -> vec4<f32> {
 fn srgb_to_linear(c: vec3<f32>) -> vec3<f32> {
     return select(pow((c + 0.055) / 1.055, vec3<f32>(2.4)), c / 12.92, c <= vec3<f32>(0.04045));
 }
+
+// Direction of the camera ray through `offset` (in pixels, 0..1 each way) of pixel `gid`.
+fn camera_ray_dir(gid: vec2<u32>, offset: vec2<f32>) -> vec3<f32> {
+    let aspect = f32(frame.width) / f32(frame.height);
+    let ndc = vec2<f32>(
+        (f32(gid.x) + offset.x) / f32(frame.width) * 2.0 - 1.0,
+        1.0 - (f32(gid.y) + offset.y) / f32(frame.height) * 2.0);
+    let d_cam = vec3<f32>(ndc.x * frame.tan_half_fov * aspect, ndc.y * frame.tan_half_fov, -1.0);
+    return normalize((frame.world_from_camera * vec4<f32>(d_cam, 0.0)).xyz);
+}

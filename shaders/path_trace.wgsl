@@ -335,16 +335,6 @@ fn trace_pixels(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_in
     }
 }
 
-// Direction of the camera ray through `offset` (in pixels, 0..1 each way) of pixel `gid`.
-fn camera_ray_dir(gid: vec2<u32>, offset: vec2<f32>) -> vec3<f32> {
-    let aspect = f32(frame.width) / f32(frame.height);
-    let ndc = vec2<f32>(
-        (f32(gid.x) + offset.x) / f32(frame.width) * 2.0 - 1.0,
-        1.0 - (f32(gid.y) + offset.y) / f32(frame.height) * 2.0);
-    let d_cam = vec3<f32>(ndc.x * frame.tan_half_fov * aspect, ndc.y * frame.tan_half_fov, -1.0);
-    return normalize((frame.world_from_camera * vec4<f32>(d_cam, 0.0)).xyz);
-}
-
 fn trace_pixel(gid: vec2<u32>) {
     let pixel = gid.y * frame.width + gid.x;
     let cam = frame.world_from_camera;

@@ -21,13 +21,7 @@ fn geometric_normal(hit: Hit) -> vec3<f32> {
 fn cast_rays(@builtin(global_invocation_id) gid: vec3<u32>) {
     if gid.x >= frame.width || gid.y >= frame.height { return; }
     let pixel = gid.y * frame.width + gid.x;
-    let cam = frame.world_from_camera;
-    let aspect = f32(frame.width) / f32(frame.height);
-    let ndc = vec2<f32>(
-        (f32(gid.x) + 0.5) / f32(frame.width) * 2.0 - 1.0,
-        1.0 - (f32(gid.y) + 0.5) / f32(frame.height) * 2.0);
-    let d_cam = vec3<f32>(ndc.x * frame.tan_half_fov * aspect, ndc.y * frame.tan_half_fov, -1.0);
-    let ray = Ray(cam[3].xyz, normalize((cam * vec4<f32>(d_cam, 0.0)).xyz));
+    let ray = Ray(frame.world_from_camera[3].xyz, camera_ray_dir(gid.xy, vec2<f32>(0.5)));
     let hit = trace(ray, MISS, false);
     var distance = hit.t;
     var rays = 1u;

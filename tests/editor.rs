@@ -178,13 +178,12 @@ fn plane_hit(origin: Vec3, dir: Vec3, [a, b, c]: [Vec3; 3], slack: f32) -> Optio
     inside.then_some(dist)
 }
 
-/// Picks every `step`-th pixel through the GPU's primary-hit AOV and checks it against a brute-force cast of
+/// Picks every `step`-th pixel through the GPU pick pass and checks it against a brute-force cast of
 /// the same ray over every triangle: same nearest surface (a different triangle only where two meet at the
 /// same distance: shared edges), barycentrics that put the hit on the ray, the triangle's own material. At
 /// least `min_hit_fraction` of the pixels must hit; at most 1% may disagree on hit vs miss (silhouette edges).
 fn check_picking(scene: Arc<SceneAsset>, time: Option<f32>, step: usize, min_hit_fraction: f64) {
     let (mut app, _gpu) = app(&scene);
-    raykin::render::pick::enable_picking(app.app.world_mut());
     if let Some(t) = time {
         app.set_time(0, t).expect("animated");
     }

@@ -176,7 +176,6 @@ impl bevy_app::Plugin for EditorPlugin {
             .init_resource::<ViewerStats>()
             .add_plugins(crate::camera::CameraControllerPlugin);
         let world = app.world_mut();
-        crate::render::pick::enable_picking(world);
         let scene = world.resource::<SceneAssets>().0.clone();
         if world.get_resource::<CameraRig>().is_none()
             && let Some(view) = world.get_resource::<CameraView>().copied()

@@ -58,6 +58,13 @@ pub struct RayCastTiming {
 }
 
 /// The ray-casting benchmark pass, built on first use.
+/// The picking pass (`shaders/pick.wgsl`): its pipeline and 32-byte request/result buffer.
+struct Picker {
+    pipeline: wgpu::ComputePipeline,
+    group_layout: wgpu::BindGroupLayout,
+    io: wgpu::Buffer,
+}
+
 struct RayCaster {
     pipeline: wgpu::ComputePipeline,
     layout: wgpu::BindGroupLayout,
@@ -103,6 +110,8 @@ pub struct PathTracer {
     denoise_timestamps: Option<crate::gpu::PassTimestamps>,
     /// The tone mapper's bindings with the denoised image as its input (made when first needed).
     denoised_tonemap_group: OnceLock<wgpu::BindGroup>,
+    /// Made at the first pick.
+    picker: OnceLock<Picker>,
     denoised_last_dispatch: bool,
     /// Identifies the per-view buffers (unique across tracers; changes on resize), so displays rebind them.
     pub view_generation: u64,
@@ -329,6 +338,7 @@ impl PathTracer {
             denoiser: Denoiser::new(ctx),
             denoise_timestamps: crate::gpu::PassTimestamps::new(ctx, "denoise timestamps", 1),
             denoised_tonemap_group: OnceLock::new(),
+            picker: OnceLock::new(),
             denoised_last_dispatch: false,
             view_generation: next_view_id(),
             dispatches: 0,
@@ -424,7 +434,13 @@ impl PathTracer {
         {
             return group.clone();
         }
-        let group = bind_group(
+        let group = self.new_scene_bind_group(ctx, scene);
+        self.scene_bind_group = Some((scene.generation, group.clone()));
+        group
+    }
+
+    fn new_scene_bind_group(&self, ctx: &GpuContext, scene: &GpuScene) -> wgpu::BindGroup {
+        bind_group(
             ctx,
             &self.scene_layout,
             &[
@@ -441,9 +457,71 @@ impl PathTracer {
                 &self.frame_uniform,
                 &scene.wide_nodes,
             ],
-        );
-        self.scene_bind_group = Some((scene.generation, group.clone()));
-        group
+        )
+    }
+
+    /// What the ray through the centre of pixel (`x`, `y`) of the last traced frame hits: one ray on the GPU
+    /// over the same buffers and traversal as the path kernel, so exactly what is shown (GPU-deformed poses,
+    /// wide BVHs, alpha cut-outs). Blocks for a 16-byte readback; `None` outside the image.
+    pub fn pick(&self, ctx: &GpuContext, scene: &GpuScene, x: u32, y: u32) -> Option<PrimaryHit> {
+        if x >= self.width || y >= self.height {
+            return None;
+        }
+        let picker = self.picker.get_or_init(|| {
+            let device = &ctx.device;
+            let group_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("pick io"),
+                entries: &[layout_entry(0, false)],
+            });
+            let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some("pick"),
+                source: wgpu::ShaderSource::Wgsl(super::shaders::pick_source().into()),
+            });
+            let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("pick"),
+                bind_group_layouts: &[Some(&self.scene_layout), Some(&group_layout)],
+                immediate_size: 0,
+            });
+            let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some("pick"),
+                layout: Some(&pipeline_layout),
+                module: &module,
+                entry_point: Some("pick"),
+                compilation_options: Default::default(),
+                cache: None,
+            });
+            let io = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("pick io"),
+                size: 32,
+                usage: wgpu::BufferUsages::STORAGE
+                    | wgpu::BufferUsages::COPY_DST
+                    | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            });
+            Picker {
+                pipeline,
+                group_layout,
+                io,
+            }
+        });
+        ctx.queue
+            .write_buffer(&picker.io, 0, bytemuck::cast_slice(&[x, y, 0, 0]));
+        let io_group = bind_group(ctx, &picker.group_layout, &[&picker.io]);
+        let scene_group = self.new_scene_bind_group(ctx, scene);
+        let mut encoder = ctx.device.create_command_encoder(&Default::default());
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("pick"),
+                timestamp_writes: None,
+            });
+            pass.set_pipeline(&picker.pipeline);
+            pass.set_bind_group(0, &scene_group, &[]);
+            pass.set_bind_group(1, &io_group, &[]);
+            pass.dispatch_workgroups(1, 1, 1);
+        }
+        ctx.queue.submit([encoder.finish()]);
+        let bytes = ctx.read_buffer_range(&picker.io, 16, 16);
+        Some(primary_hit(bytemuck::cast_slice::<u8, [u32; 4]>(&bytes)[0]))
     }
 
     /// Traces `spp` more samples per pixel into the accumulation buffers (and tone-maps if asked), in one
@@ -542,17 +620,6 @@ impl PathTracer {
                 }
             })
             .collect()
-    }
-
-    /// The primary hit through pixel (`x`, `y`) as of the current accumulation's first frame (blocks);
-    /// `None` while the hit AOV is off or outside the image.
-    pub fn read_hit(&self, ctx: &GpuContext, x: u32, y: u32) -> Option<PrimaryHit> {
-        if !self.hit_aov_enabled || x >= self.width || y >= self.height {
-            return None;
-        }
-        let offset = (y as u64 * self.width as u64 + x as u64) * 16;
-        let bytes = ctx.read_buffer_range(&self.aov_hit, offset, 16);
-        Some(primary_hit(bytemuck::cast_slice::<u8, [u32; 4]>(&bytes)[0]))
     }
 
     /// Whether the display shows the denoised image (colour view with the denoiser on).

@@ -1,7 +1,8 @@
-//! Picking: which entity, mesh and material a pixel shows. The path tracer's primary-hit AOV (written by the
-//! GPU at the first sample of each accumulation) is read back for the clicked pixel, so a pick selects exactly
-//! what is on screen: GPU-deformed poses, compressed wide BVHs and alpha-masked cut-outs included, where a CPU
-//! ray cast would see stale trees.
+//! Picking: which entity, mesh and material a pixel shows. A one-ray GPU pass (`shaders/pick.wgsl`) traces the
+//! clicked pixel's centre through the last traced frame's camera, buffers and traversal, so a pick selects
+//! exactly what is on screen: GPU-deformed poses, compressed wide BVHs and alpha-masked cut-outs included, where
+//! a CPU ray cast would see stale trees. It costs nothing until a click (an earlier design wrote a per-pixel hit
+//! AOV at every accumulation restart: a ray per pixel per frame while an animation plays).
 
 use super::Renderer;
 use crate::gpu::GpuContext;
@@ -21,24 +22,13 @@ pub struct PickHit {
     pub barycentrics: [f32; 2],
 }
 
-/// Turns the primary-hit AOV on: picking reads it. It is written from the next accumulation restart on.
-pub fn enable_picking(world: &mut World) {
-    let Some(ctx) = world.get_resource::<GpuContext>().cloned() else {
-        return;
-    };
-    if let Some(mut renderer) = world.get_resource_mut::<Renderer>() {
-        renderer.tracer.set_hit_aov(&ctx, true);
-        renderer.restart_accumulation = true;
-    }
-}
-
 /// The hit through pixel (`x`, `y`) of the current image (pixels from the top-left); `None` where the ray
-/// left the scene, outside the image, or when picking is not enabled. Blocks for a 16-byte readback.
+/// left the scene or outside the image. Blocks for a 16-byte readback.
 pub fn pick_pixel(world: &World, x: u32, y: u32) -> Option<PickHit> {
     let renderer = world.get_resource::<Renderer>()?;
     let ctx = world.get_resource::<GpuContext>()?;
     let scene = &world.get_resource::<SceneAssets>()?.0;
-    let hit = renderer.tracer.read_hit(ctx, x, y)?;
+    let hit = renderer.tracer.pick(ctx, &renderer.scene, x, y)?;
     let entity = *renderer.instance_entities.get(hit.instance? as usize)?;
     let mesh = world.get::<MeshInstance>(entity)?.mesh;
     let slot = renderer.scene.mesh_slots.get(mesh)?;

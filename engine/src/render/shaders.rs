@@ -9,6 +9,7 @@ pub const TONEMAP: &str = include_str!("../../../shaders/tonemap.wgsl");
 pub const DISPLAY: &str = include_str!("../../../shaders/display.wgsl");
 pub const DENOISE: &str = include_str!("../../../shaders/denoise.wgsl");
 pub const RAYCAST: &str = include_str!("../../../shaders/raycast.wgsl");
+pub const PICK: &str = include_str!("../../../shaders/pick.wgsl");
 /// GPU skinning + morphing and the GPU BLAS refit (`crate::gpu_deform`); standalone modules.
 pub const DEFORM: &str = include_str!("../../../shaders/deform.wgsl");
 pub const REFIT: &str = include_str!("../../../shaders/refit.wgsl");
@@ -31,6 +32,17 @@ pub fn raycast_source() -> String {
         file("bvh.wgsl", BVH),
         file("brdf.wgsl", BRDF),
         file("raycast.wgsl", RAYCAST),
+    ]
+    .join("\n")
+}
+
+/// The viewer's picking pass: one ray through a pixel centre, the path tracer's bindings and traversal.
+pub fn pick_source() -> String {
+    [
+        file("common.wgsl", COMMON),
+        file("bvh.wgsl", BVH),
+        file("brdf.wgsl", BRDF),
+        file("pick.wgsl", PICK),
     ]
     .join("\n")
 }
@@ -80,6 +92,7 @@ pub fn all_modules() -> Vec<(&'static str, String)> {
         ("display", display_source()),
         ("denoise", denoise_source()),
         ("raycast", raycast_source()),
+        ("pick", pick_source()),
         ("deform", deform_source()),
         ("refit", refit_source()),
     ]
