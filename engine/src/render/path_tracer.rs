@@ -439,6 +439,40 @@ impl PathTracer {
         group
     }
 
+    /// A compute pipeline over the scene bindings (group 0) and its own group 1 (`entries`); `entry` names
+    /// the WGSL entry point and labels the objects.
+    fn scene_kernel(
+        ctx: &GpuContext,
+        scene_layout: &wgpu::BindGroupLayout,
+        entry: &str,
+        source: String,
+        entries: &[wgpu::BindGroupLayoutEntry],
+    ) -> (wgpu::ComputePipeline, wgpu::BindGroupLayout) {
+        let device = &ctx.device;
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some(entry),
+            entries,
+        });
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some(entry),
+            source: wgpu::ShaderSource::Wgsl(source.into()),
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some(entry),
+            bind_group_layouts: &[Some(scene_layout), Some(&layout)],
+            immediate_size: 0,
+        });
+        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some(entry),
+            layout: Some(&pipeline_layout),
+            module: &module,
+            entry_point: Some(entry),
+            compilation_options: Default::default(),
+            cache: None,
+        });
+        (pipeline, layout)
+    }
+
     fn new_scene_bind_group(&self, ctx: &GpuContext, scene: &GpuScene) -> wgpu::BindGroup {
         bind_group(
             ctx,
@@ -468,29 +502,14 @@ impl PathTracer {
             return None;
         }
         let picker = self.picker.get_or_init(|| {
-            let device = &ctx.device;
-            let group_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                label: Some("pick io"),
-                entries: &[layout_entry(0, false)],
-            });
-            let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-                label: Some("pick"),
-                source: wgpu::ShaderSource::Wgsl(super::shaders::pick_source().into()),
-            });
-            let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some("pick"),
-                bind_group_layouts: &[Some(&self.scene_layout), Some(&group_layout)],
-                immediate_size: 0,
-            });
-            let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some("pick"),
-                layout: Some(&pipeline_layout),
-                module: &module,
-                entry_point: Some("pick"),
-                compilation_options: Default::default(),
-                cache: None,
-            });
-            let io = device.create_buffer(&wgpu::BufferDescriptor {
+            let (pipeline, group_layout) = Self::scene_kernel(
+                ctx,
+                &self.scene_layout,
+                "pick",
+                super::shaders::pick_source(),
+                &[layout_entry(0, false)],
+            );
+            let io = ctx.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("pick io"),
                 size: 32,
                 usage: wgpu::BufferUsages::STORAGE
@@ -718,28 +737,13 @@ impl PathTracer {
         self.timestamps.as_ref()?;
         let pixels = self.width as u64 * self.height as u64;
         let caster = self.raycaster.get_or_insert_with(|| {
-            let device = &ctx.device;
-            let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                label: Some("raycast output"),
-                entries: &[layout_entry(0, false), layout_entry(1, false)],
-            });
-            let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-                label: Some("raycast"),
-                source: wgpu::ShaderSource::Wgsl(super::shaders::raycast_source().into()),
-            });
-            let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some("raycast"),
-                bind_group_layouts: &[Some(&self.scene_layout), Some(&layout)],
-                immediate_size: 0,
-            });
-            let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some("raycast"),
-                layout: Some(&pipeline_layout),
-                module: &module,
-                entry_point: Some("cast_rays"),
-                compilation_options: Default::default(),
-                cache: None,
-            });
+            let (pipeline, layout) = Self::scene_kernel(
+                ctx,
+                &self.scene_layout,
+                "cast_rays",
+                super::shaders::raycast_source(),
+                &[layout_entry(0, false), layout_entry(1, false)],
+            );
             RayCaster {
                 pipeline,
                 layout,
