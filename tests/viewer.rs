@@ -85,6 +85,17 @@ fn offscreen(size: &str, frames: u64, extra: &[&std::ffi::OsStr]) -> Command {
     command
 }
 
+/// Runs `raykin view --offscreen` at 48x30 on the test scene with a script; the run must succeed.
+fn run_offscreen_script(script_path: &Path, frames: u64) {
+    let command = offscreen(
+        "48x30",
+        frames,
+        &["--script".as_ref(), script_path.as_os_str()],
+    );
+    let (log, ok) = run_with_limit(command, Duration::from_secs(300));
+    assert!(ok, "{log}");
+}
+
 fn load_png(path: &Path) -> RgbaImage {
     image::open(path)
         .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
@@ -413,15 +424,9 @@ fn a_bad_file_reports_an_error_and_keeps_the_scene() {
         bad = bad.display(),
         shot = dir.join("after.png").display()
     );
-    std::fs::write(dir.join("s.script"), script).expect("script");
     let script_path = dir.join("s.script");
-    let command = offscreen(
-        "48x30",
-        100,
-        &["--script".as_ref(), script_path.as_os_str()],
-    );
-    let (log, ok) = run_with_limit(command, Duration::from_secs(300));
-    assert!(ok, "{log}");
+    std::fs::write(&script_path, script).expect("script");
+    run_offscreen_script(&script_path, 100);
     let record = load_json(&dir.join("after.json"));
     let messages = record["messages"].to_string();
     assert!(
@@ -486,13 +491,7 @@ fn record_button_writes_a_resumable_recording() {
     );
     let script_path = dir.join("s.script");
     std::fs::write(&script_path, script).expect("script");
-    let command = offscreen(
-        "48x30",
-        5000,
-        &["--script".as_ref(), script_path.as_os_str()],
-    );
-    let (log, ok) = run_with_limit(command, Duration::from_secs(300));
-    assert!(ok, "{log}");
+    run_offscreen_script(&script_path, 5000);
     for k in 0..3 {
         let frame = load_png(&out.join(format!("frame_{k:05}.png")));
         assert_eq!(frame.dimensions(), (48, 30), "frame {k} at the view's size");
@@ -506,13 +505,7 @@ fn record_button_writes_a_resumable_recording() {
     let messages = load_json(&dir.join("after.json"))["messages"].to_string();
     assert!(messages.contains("recorded 3 frame(s)"), "{messages}");
     // Pressing Record again with the same settings resumes: nothing left to render.
-    let command = offscreen(
-        "48x30",
-        5000,
-        &["--script".as_ref(), script_path.as_os_str()],
-    );
-    let (log, ok) = run_with_limit(command, Duration::from_secs(300));
-    assert!(ok, "{log}");
+    run_offscreen_script(&script_path, 5000);
     let messages = load_json(&dir.join("after.json"))["messages"].to_string();
     assert!(
         messages.contains("recorded 0 frame(s)") && messages.contains("3 of 3 complete"),

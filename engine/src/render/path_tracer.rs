@@ -235,35 +235,15 @@ impl PathTracer {
                 uniform_entry(4),
             ],
         });
-        let pipeline = |label: &str,
-                        source: String,
-                        layouts: &[Option<&wgpu::BindGroupLayout>],
-                        entry: &str| {
-            let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-                label: Some(label),
-                source: wgpu::ShaderSource::Wgsl(source.into()),
-            });
-            let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some(label),
-                bind_group_layouts: layouts,
-                immediate_size: 0,
-            });
-            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(label),
-                layout: Some(&layout),
-                module: &module,
-                entry_point: Some(entry),
-                compilation_options: Default::default(),
-                cache: None,
-            })
-        };
-        let trace_pipeline = pipeline(
+        let trace_pipeline = crate::gpu::compute_pipeline(
+            device,
             "path trace",
             super::shaders::path_trace_source(),
             &[Some(&scene_layout), Some(&accum_layout)],
             "trace_pixels",
         );
-        let tonemap_pipeline = pipeline(
+        let tonemap_pipeline = crate::gpu::compute_pipeline(
+            device,
             "tonemap",
             super::shaders::tonemap_source(),
             &[Some(&tonemap_layout)],
@@ -448,28 +428,19 @@ impl PathTracer {
         source: String,
         entries: &[wgpu::BindGroupLayoutEntry],
     ) -> (wgpu::ComputePipeline, wgpu::BindGroupLayout) {
-        let device = &ctx.device;
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some(entry),
-            entries,
-        });
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some(entry),
-            source: wgpu::ShaderSource::Wgsl(source.into()),
-        });
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some(entry),
-            bind_group_layouts: &[Some(scene_layout), Some(&layout)],
-            immediate_size: 0,
-        });
-        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some(entry),
-            layout: Some(&pipeline_layout),
-            module: &module,
-            entry_point: Some(entry),
-            compilation_options: Default::default(),
-            cache: None,
-        });
+        let layout = ctx
+            .device
+            .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some(entry),
+                entries,
+            });
+        let pipeline = crate::gpu::compute_pipeline(
+            &ctx.device,
+            entry,
+            source,
+            &[Some(scene_layout), Some(&layout)],
+            entry,
+        );
         (pipeline, layout)
     }
 
