@@ -305,11 +305,7 @@ impl MeshBvh {
 
     /// `triangles` (a mesh's, in file order) rearranged into this BVH's leaf order.
     pub fn ordered_triangles(&self, triangles: &[[u32; 3]]) -> Vec<[u32; 3]> {
-        self.flat
-            .order
-            .iter()
-            .map(|&t| triangles[t as usize])
-            .collect()
+        ordered_triangles(&self.flat.order, triangles)
     }
 
     /// Current SAH cost over the cost at build: 1 after a build, rising as a refit degrades the tree.
@@ -407,6 +403,11 @@ pub fn build_tlas(boxes: &[(Vec3, Vec3)]) -> Result<FlatBvh, BvhTooDeep> {
     let mut core = std::time::Duration::ZERO;
     let bvh = obvhs::bvh2::builder::build_bvh2(&prims, params, &mut core);
     FlatBvh::from_obvhs(&bvh)
+}
+
+/// `triangles` (a mesh's, in file order) rearranged into a BVH's leaf `order` (BVH2 or wide).
+pub fn ordered_triangles(order: &[u32], triangles: &[[u32; 3]]) -> Vec<[u32; 3]> {
+    order.iter().map(|&t| triangles[t as usize]).collect()
 }
 
 /// The mesh's triangles as obvhs builds take them.

@@ -58,11 +58,11 @@ pub struct RayCastTiming {
 }
 
 /// The ray-casting benchmark pass, built on first use.
-/// The picking pass (`shaders/pick.wgsl`): its pipeline and 32-byte request/result buffer.
+/// The picking pass (`shaders/pick.wgsl`): its pipeline and 32-byte request/result buffer, bound once.
 struct Picker {
     pipeline: wgpu::ComputePipeline,
-    group_layout: wgpu::BindGroupLayout,
     io: wgpu::Buffer,
+    io_group: wgpu::BindGroup,
 }
 
 struct RayCaster {
@@ -488,15 +488,15 @@ impl PathTracer {
                     | wgpu::BufferUsages::COPY_SRC,
                 mapped_at_creation: false,
             });
+            let io_group = bind_group(ctx, &group_layout, &[&io]);
             Picker {
                 pipeline,
-                group_layout,
                 io,
+                io_group,
             }
         });
         ctx.queue
             .write_buffer(&picker.io, 0, bytemuck::cast_slice(&[x, y, 0, 0]));
-        let io_group = bind_group(ctx, &picker.group_layout, &[&picker.io]);
         let scene_group = self.new_scene_bind_group(ctx, scene);
         let mut encoder = ctx.device.create_command_encoder(&Default::default());
         {
@@ -506,7 +506,7 @@ impl PathTracer {
             });
             pass.set_pipeline(&picker.pipeline);
             pass.set_bind_group(0, &scene_group, &[]);
-            pass.set_bind_group(1, &io_group, &[]);
+            pass.set_bind_group(1, &picker.io_group, &[]);
             pass.dispatch_workgroups(1, 1, 1);
         }
         ctx.queue.submit([encoder.finish()]);

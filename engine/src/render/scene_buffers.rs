@@ -851,7 +851,7 @@ fn order_triangles(
     triangle_offset: u32,
     materials: &[GpuMaterial],
 ) -> OrderedTriangles {
-    let indices: Vec<[u32; 3]> = order.iter().map(|&t| mesh.triangles[t as usize]).collect();
+    let indices = crate::bvh::ordered_triangles(order, &mesh.triangles);
     let packed = order
         .iter()
         .zip(&indices)

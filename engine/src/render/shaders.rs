@@ -16,33 +16,27 @@ pub const REFIT: &str = include_str!("../../../shaders/refit.wgsl");
 
 /// The path tracer module: shared declarations, traversal, BRDF, then the kernel.
 pub fn path_trace_source() -> String {
-    [
-        file("common.wgsl", COMMON),
-        file("bvh.wgsl", BVH),
-        file("brdf.wgsl", BRDF),
-        file("path_trace.wgsl", PATH_TRACE),
-    ]
-    .join("\n")
+    scene_kernel_source("path_trace.wgsl", PATH_TRACE)
 }
 
 /// The shading-free ray-casting benchmark kernel: the path tracer's scene bindings and traversal.
 pub fn raycast_source() -> String {
-    [
-        file("common.wgsl", COMMON),
-        file("bvh.wgsl", BVH),
-        file("brdf.wgsl", BRDF),
-        file("raycast.wgsl", RAYCAST),
-    ]
-    .join("\n")
+    scene_kernel_source("raycast.wgsl", RAYCAST)
 }
 
 /// The viewer's picking pass: one ray through a pixel centre, the path tracer's bindings and traversal.
 pub fn pick_source() -> String {
+    scene_kernel_source("pick.wgsl", PICK)
+}
+
+/// A kernel over the scene bindings: shared declarations, traversal and BRDF, then `kernel` (WGSL has no
+/// includes).
+fn scene_kernel_source(name: &str, kernel: &str) -> String {
     [
         file("common.wgsl", COMMON),
         file("bvh.wgsl", BVH),
         file("brdf.wgsl", BRDF),
-        file("pick.wgsl", PICK),
+        file(name, kernel),
     ]
     .join("\n")
 }
