@@ -255,6 +255,7 @@ pub fn refit_deformed(
     assets: Res<SceneAssets>,
     settings: Res<RenderSettings>,
     deformed: Res<DeformedMeshes>,
+    elsewhere: Res<DeformedElsewhere>,
     mut stats: ResMut<BvhStats>,
     mut renderer: ResMut<Renderer>,
 ) {
@@ -278,8 +279,7 @@ pub fn refit_deformed(
     stats.last_refit_seconds = start.elapsed().as_secs_f64() - upload_seconds;
     let start = std::time::Instant::now();
     // Meshes the GPU deforms are rebuilt by the GPU deformer, from their GPU positions.
-    let owned = renderer.deformer.as_ref().map(GpuDeformer::owned);
-    let cpu_owned = |m: usize| owned.as_ref().is_none_or(|o| !o[m]);
+    let cpu_owned = |m: usize| !elsewhere.0.get(m).copied().unwrap_or(false);
     for m in stats.due(cpu_owned) {
         match renderer
             .scene
