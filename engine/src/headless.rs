@@ -262,6 +262,16 @@ impl HeadlessApp {
         self.renderer().tracer.denoised_radiance(&self.ctx, &params)
     }
 
+    /// The image an output file takes: [`Self::denoised_radiance`] when `RenderSettings::denoise` is on, else
+    /// [`Self::radiance`] (as the display pass follows the same setting).
+    pub fn output_radiance(&self) -> Vec<[f32; 3]> {
+        if self.app.world().resource::<RenderSettings>().denoise {
+            self.denoised_radiance()
+        } else {
+            self.radiance()
+        }
+    }
+
     pub fn aovs(&self) -> Aovs {
         self.renderer().tracer.read_aovs(&self.ctx)
     }

@@ -28,13 +28,9 @@ pub fn embedded_scene() -> Result<SceneAsset> {
     Ok(scene)
 }
 
-/// The classic Cornell box view of the embedded scene.
+/// The classic Cornell box view of the embedded scene (the bench's `cornell` camera).
 pub fn embedded_camera() -> CameraChoice {
-    CameraChoice::LookAt {
-        eye: glam::Vec3::new(-278.0, 273.0, 800.0),
-        target: glam::Vec3::new(-278.0, 273.0, 0.0),
-        yfov: 39.3077f32.to_radians(),
-    }
+    crate::bench::named_camera("cornell").expect("the bench names the Cornell box")
 }
 
 pub fn load_scene(path: &Path) -> Result<Arc<SceneAsset>> {
@@ -216,11 +212,7 @@ fn render_to_file(
     bar.finish_and_clear();
     let wall = start.elapsed().as_secs_f64();
     let (w, h) = (settings.width, settings.height);
-    let radiance = if settings.denoise {
-        app.denoised_radiance()
-    } else {
-        app.radiance()
-    };
+    let radiance = app.output_radiance();
     if let Some(bad) = radiance.iter().flatten().find(|v| !v.is_finite()) {
         anyhow::bail!("internal error: the render has a non-finite pixel value ({bad})");
     }

@@ -3,7 +3,7 @@
 //! A deformed mesh's BVH is refit every frame it moves (one reverse sweep, see [`super::FlatBvh::refit`]).
 //! Refitting keeps the topology chosen for the build pose, so when parts of the mesh move far from where
 //! they were built (a fold, a twist, limbs scattering), boxes overlap and traversal slows. The guard
-//! compares the refit tree's SAH cost with its cost at build ([`MeshBvh::sah_ratio`]); above
+//! compares the refit tree's SAH cost with its cost at build ([`crate::bvh::MeshBvh::sah_ratio`]); above
 //! [`DEFAULT_REBUILD_THRESHOLD`] the mesh's BVH is rebuilt in place (its GPU node range is reserved at
 //! upload). At most [`BvhStats::max_rebuilds_per_frame`] rebuilds run per frame, the worst ratios
 //! first, so a crowd crossing the threshold together spreads its rebuilds over frames instead of hitching;
@@ -13,9 +13,7 @@
 //! needs frame k to re-render alone bit-identically, so [`RebuildPolicy::PoseDetermined`] makes the tree a
 //! function of the current pose only: each pose starts again from the tree built at upload.
 
-use super::MeshBvh;
 use bevy_ecs::prelude::Resource;
-use glam::Vec3;
 
 /// SAH-ratio above which a refit BVH is rebuilt (chosen from measured ratio curves, docs/ANIMATION.md).
 pub const DEFAULT_REBUILD_THRESHOLD: f32 = 1.5;
@@ -99,11 +97,6 @@ impl BvhStats {
             self.mesh_rebuilds.resize(meshes, 0);
         }
     }
-}
-
-/// Refits `bvh` to `positions` (triangles in BVH order) and returns its SAH ratio (one sweep for both).
-pub fn refit_and_measure(bvh: &mut MeshBvh, positions: &[Vec3], gpu_triangles: &[[u32; 3]]) -> f32 {
-    bvh.refit(positions, gpu_triangles)
 }
 
 /// Upper bound of a child-pair BVH's node count over `triangles` triangles (>= 1 triangle per leaf):

@@ -58,10 +58,6 @@ impl WideBvh {
             depth,
         })
     }
-
-    pub fn node_bytes(&self) -> usize {
-        self.nodes.len() * std::mem::size_of::<CwBvhNode>()
-    }
 }
 
 /// Levels of inner nodes on the longest root-to-leaf path.

@@ -140,8 +140,6 @@ pub struct GpuDeformer {
     timestamps: Option<crate::gpu::PassTimestamps>,
     /// Whether the last encoded frame wrote timestamps.
     timed: bool,
-    /// Bytes of static deform inputs (rest attributes, influences, morph deltas) on the GPU.
-    pub input_bytes: u64,
     /// Bytes of every buffer this deformer owns (inputs, per-frame data, refit tables, readbacks).
     pub gpu_bytes: u64,
 }
@@ -397,7 +395,6 @@ impl GpuDeformer {
             matrices: vec![Mat4::IDENTITY; inputs.matrix_count as usize],
             weights: vec![0.0; inputs.weight_count as usize],
             groups: inputs.groups,
-            input_bytes: inputs.bytes(),
             meshes,
             index_of,
             deform_pipeline,
@@ -697,10 +694,5 @@ impl GpuDeformer {
             skin_ms: ms[0],
             refit_ms: ms[1],
         })
-    }
-
-    /// Meshes with a rebuild in progress.
-    pub fn rebuilds_in_flight(&self) -> usize {
-        self.rebuilds.len()
     }
 }

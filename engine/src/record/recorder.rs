@@ -391,11 +391,7 @@ fn write_frame(
     let bytes = match settings.frame.format {
         FrameFormat::Exr => {
             // `--denoise`: the PNG path's display pass denoises on its own; EXR frames take the same filter.
-            let radiance = if settings.frame.render.denoise {
-                app.denoised_radiance()
-            } else {
-                app.radiance()
-            };
+            let radiance = app.output_radiance();
             if let Some(bad) = radiance.iter().flatten().find(|v| !v.is_finite()) {
                 return Err(RecordError::Render {
                     frame: k,

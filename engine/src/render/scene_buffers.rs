@@ -556,8 +556,7 @@ impl GpuScene {
                     .blas
                     .binary_mut()
                     .expect("deformable meshes have a refittable BVH");
-                let sah_ratio =
-                    crate::bvh::refit::refit_and_measure(bvh, &d.positions, &slot.gpu_triangles);
+                let sah_ratio = bvh.refit(&d.positions, &slot.gpu_triangles);
                 // Reuses the previous frame's allocation.
                 match &mut slot.positions {
                     Some(p) => p.clone_from(&d.positions),
