@@ -180,9 +180,9 @@ impl bevy_app::Plugin for EditorPlugin {
         if world.get_resource::<CameraRig>().is_none()
             && let Some(view) = world.get_resource::<CameraView>().copied()
         {
-            let extent = scene
-                .rest_bounds()
-                .map_or(1.0, |(lo, hi)| (hi - lo).length() * 0.5);
+            // Walks every vertex: once.
+            let bounds = scene.rest_bounds();
+            let extent = bounds.map_or(1.0, |(lo, hi)| (hi - lo).length() * 0.5);
             let has_cameras = scene.nodes.iter().any(|n| n.camera.is_some());
             let mode = if has_cameras {
                 CameraMode::Scene(0)
@@ -191,7 +191,7 @@ impl bevy_app::Plugin for EditorPlugin {
             };
             // Orbit around the scene's centre when the view frames it.
             let mut rig = CameraRig::new(view, mode, extent.max(1e-3));
-            if let Some((lo, hi)) = scene.rest_bounds() {
+            if let Some((lo, hi)) = bounds {
                 rig.distance = view.position().distance((lo + hi) * 0.5).max(1e-3);
                 rig.set_from_view(&view);
             }

@@ -107,9 +107,8 @@ impl ViewerPrefs {
             std::fs::create_dir_all(dir).map_err(|e| err(e.to_string()))?;
         }
         let text = toml::to_string_pretty(self).map_err(|e| err(e.to_string()))?;
-        let tmp = path.with_extension("toml.partial");
-        std::fs::write(&tmp, text).map_err(|e| err(e.to_string()))?;
-        std::fs::rename(&tmp, path).map_err(|e| err(e.to_string()))
+        crate::image_io::write_bytes_atomically(path, text.as_bytes())
+            .map_err(|e| err(e.to_string()))
     }
 
     /// Puts these settings into a viewer world (render settings, editor state, camera speed).

@@ -95,7 +95,7 @@ pub fn save_with_materials(
         root.to_vec_pretty()
             .map_err(|e| source_err(e.to_string()))?
     };
-    write_atomically(out, &bytes).map_err(|e| write_err(out, e.to_string()))
+    crate::image_io::write_bytes_atomically(out, &bytes).map_err(|e| write_err(out, e.to_string()))
 }
 
 /// Writes the editable parameters of `m` over the JSON material; texture references the editor turned off are
@@ -185,7 +185,7 @@ fn relocate_uris(
                 let bytes = sources.buffer(buffer)?;
                 let name = format!("{stem}.bin");
                 let path = out_dir.join(&name);
-                write_atomically(&path, &bytes)
+                crate::image_io::write_bytes_atomically(&path, &bytes)
                     .map_err(|e| format!("{}: cannot write: {e}", path.display()))?;
                 buffer.uri = Some(percent_encode(&name));
             }
@@ -331,15 +331,6 @@ fn percent_encode(path: &str) -> String {
         }
     }
     out
-}
-
-fn write_atomically(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
-    let name = path
-        .file_name()
-        .map_or("out".into(), |n| n.to_string_lossy().to_string());
-    let tmp = path.with_file_name(format!(".{name}.partial"));
-    std::fs::write(&tmp, bytes)?;
-    std::fs::rename(&tmp, path)
 }
 
 #[cfg(test)]
