@@ -6,7 +6,7 @@ mod common;
 use common::*;
 use raykin::camera::CameraChoice;
 use raykin::headless::HeadlessApp;
-use raykin::render::{Environment, RenderSettings, Renderer};
+use raykin::render::{Denoiser, Environment, RenderSettings};
 use raykin::scene::{Image, Material, NodeTransform, SceneAsset, Texture, TextureRef, procedural};
 use std::sync::Arc;
 
@@ -454,14 +454,14 @@ fn geometric_edges_stay_sharp() {
 type Accumulation = [Vec<[f32; 4]>; 4];
 
 fn read_accumulation(app: &HeadlessApp) -> Accumulation {
-    let t = &app.renderer().tracer;
-    [&t.accum, &t.aov_albedo_depth, &t.aov_normal, &t.moments]
+    let t = app.view();
+    [&t.accum, &t.albedo_depth, &t.normal_hits, &t.moments]
         .map(|b| bytemuck::cast_slice(&app.ctx.read_buffer(b, b.size())).to_vec())
 }
 
 fn write_accumulation(app: &HeadlessApp, data: &Accumulation) {
-    let t = &app.renderer().tracer;
-    for (buffer, values) in [&t.accum, &t.aov_albedo_depth, &t.aov_normal, &t.moments]
+    let t = app.view();
+    for (buffer, values) in [&t.accum, &t.albedo_depth, &t.normal_hits, &t.moments]
         .into_iter()
         .zip(data)
     {
@@ -581,9 +581,8 @@ fn denoise_switch_never_touches_accumulation() {
         let mut app = cornell_app(ctx.clone(), true, size, 51);
         app.settings_mut().spp_per_frame = 2;
         // The viewer's path: denoise + tone map every frame, GPU timestamps read back.
-        let mut renderer = app.app.world_mut().resource_mut::<Renderer>();
-        renderer.tonemap_each_frame = true;
-        renderer.time_passes = true;
+        app.accumulation_mut().display_each_frame = true;
+        app.set_time_passes(true);
         app
     };
     let (mut plain, mut toggled) = (new_app(), new_app());
@@ -591,7 +590,7 @@ fn denoise_switch_never_touches_accumulation() {
         plain.step();
         toggled.settings_mut().denoise = frame == 1 || frame == 2;
         toggled.step();
-        let times = toggled.renderer().last_pass_times;
+        let times = toggled.pass_times();
         if let Some(t) = times
             && !toggled.app.world().resource::<RenderSettings>().denoise
         {
@@ -605,11 +604,11 @@ fn denoise_switch_never_touches_accumulation() {
         "toggling the denoiser restarted accumulation"
     );
     assert_eq!(
-        plain.renderer().tracer.denoiser_memory_bytes(),
+        plain.app.world().resource::<Denoiser>().memory_bytes(),
         0,
         "a run that never denoised allocated denoiser buffers"
     );
-    assert!(toggled.renderer().tracer.denoiser_memory_bytes() > 0);
+    assert!(toggled.app.world().resource::<Denoiser>().memory_bytes() > 0);
     let bits =
         |img: Vec<[f32; 3]>| -> Vec<u32> { img.iter().flatten().map(|v| v.to_bits()).collect() };
     assert!(

@@ -8,7 +8,7 @@ use common::{gpu, repo_root, shared_assets};
 use glam::{Vec3, Vec4};
 use raykin::camera::CameraChoice;
 use raykin::headless::HeadlessApp;
-use raykin::render::{RenderSettings, Renderer};
+use raykin::render::{GpuScene, RenderSettings};
 use raykin::scene::{LoadOptions, Materials, MeshInstance, SceneAsset, load_gltf};
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -66,7 +66,7 @@ fn material_edits_reupload_and_restart_accumulation() {
     app.step();
     assert_eq!(app.samples(), 4, "the edit restarted accumulation");
     assert_eq!(
-        app.renderer().scene.material_data[paint].base_color,
+        app.gpu_scene().material_data[paint].base_color,
         [0.05, 0.1, 0.9, 1.0],
         "the GPU copy holds the edit"
     );
@@ -89,7 +89,7 @@ fn material_edits_reupload_and_restart_accumulation() {
     assert_eq!(app.samples(), 12);
 
     // Making the floor emissive turns it into a light: emitters appear (next-event estimation samples them).
-    assert_eq!(app.renderer().scene.emitter_count, 0);
+    assert_eq!(app.gpu_scene().emitter_count, 0);
     let floor = app
         .app
         .world()
@@ -105,16 +105,16 @@ fn material_edits_reupload_and_restart_accumulation() {
     app.step();
     assert_eq!(app.samples(), 4);
     assert_eq!(
-        app.renderer().scene.emitter_count,
+        app.gpu_scene().emitter_count,
         2,
         "the floor's two triangles"
     );
-    assert!(app.renderer().scene.emitter_total_power > 0.0);
+    assert!(app.gpu_scene().emitter_total_power > 0.0);
     // Revert to the file's values: no emitters again.
     let file = scene.materials[floor].clone();
     app.app.world_mut().resource_mut::<Materials>().0[floor] = file;
     app.step();
-    assert_eq!(app.renderer().scene.emitter_count, 0);
+    assert_eq!(app.gpu_scene().emitter_count, 0);
 }
 
 /// Every instance's triangles in world space (current pose): (entity, triangle index, corners).
@@ -141,10 +141,10 @@ fn world_triangles(app: &mut HeadlessApp) -> Vec<(bevy_ecs::entity::Entity, usiz
             )
         })
         .collect();
-    let renderer = world.resource::<Renderer>();
+    let gpu_scene = world.resource::<GpuScene>();
     let mut out = Vec::new();
     for (entity, m, mesh) in instances {
-        let positions = renderer.scene.mesh_slots[mesh]
+        let positions = gpu_scene.mesh_slots[mesh]
             .positions
             .clone()
             .unwrap_or_else(|| scene.meshes[mesh].positions.clone());
@@ -194,7 +194,7 @@ fn check_picking(scene: Arc<SceneAsset>, time: Option<f32>, step: usize, min_hit
     for py in (0..H).step_by(step) {
         for px in (0..W).step_by(step) {
             let (origin, dir) = view.ray_through(px as f32 + 0.5, py as f32 + 0.5, W, H);
-            let picked = raykin::render::pick::pick_pixel(app.app.world(), px, py);
+            let picked = raykin::render::picking::pick_pixel(app.app.world(), px, py);
             let nearest = triangles
                 .iter()
                 .filter_map(|(e, i, t)| plane_hit(origin, dir, *t, 0.0).map(|d| (*e, *i, d)))

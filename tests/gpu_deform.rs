@@ -140,18 +140,19 @@ struct Checked {
 
 /// Compares the current frame of the GPU path with the CPU path, mesh by mesh.
 fn compare(scene: &Arc<SceneAsset>, cpu: &HeadlessApp, gpu_app: &HeadlessApp, t: f32) -> Checked {
-    let renderer = gpu_app.renderer();
-    let deformer = renderer
+    let scene_g = gpu_app.gpu_scene();
+    let deformer = gpu_app
+        .deformation()
         .deformer
         .as_ref()
         .expect("the GPU backend deforms this scene");
     let owned = deformer.owned();
     let (pool_c, pool_g) = (
-        words(cpu, &cpu.renderer().scene.vertex_pool),
-        words(gpu_app, &renderer.scene.vertex_pool),
+        words(cpu, &cpu.gpu_scene().vertex_pool),
+        words(gpu_app, &scene_g.vertex_pool),
     );
     let nodes_g: Vec<GpuBvhNode> =
-        bytemuck::cast_slice(&words(gpu_app, &renderer.scene.blas_nodes)).to_vec();
+        bytemuck::cast_slice(&words(gpu_app, &scene_g.blas_nodes)).to_vec();
     let cpu_deformed = gpu_app
         .app
         .world()
@@ -165,7 +166,7 @@ fn compare(scene: &Arc<SceneAsset>, cpu: &HeadlessApp, gpu_app: &HeadlessApp, t:
     for (m, _) in owned.iter().enumerate().filter(|(_, o)| **o) {
         let mesh = &scene.meshes[m];
         let n = mesh.positions.len();
-        let slot = &renderer.scene.mesh_slots[m];
+        let slot = &scene_g.mesh_slots[m];
         let g = slot.gpu;
         assert!(
             cpu_deformed.meshes.get(m).is_none_or(Option::is_none),
@@ -322,11 +323,12 @@ fn gpu_sah_ratio_matches_cpu() {
         app.step();
         app.ctx.wait_idle();
     }
-    let renderer = app.renderer();
-    let pool = words(&app, &renderer.scene.vertex_pool);
+    let gpu_scene = app.gpu_scene();
+    let pool = words(&app, &gpu_scene.vertex_pool);
     let stats = app.bvh_stats();
     let mut checked = 0;
-    for (m, owned) in renderer
+    for (m, owned) in app
+        .deformation()
         .deformer
         .as_ref()
         .unwrap()
@@ -337,7 +339,7 @@ fn gpu_sah_ratio_matches_cpu() {
         if !owned {
             continue;
         }
-        let slot = &renderer.scene.mesh_slots[m];
+        let slot = &gpu_scene.mesh_slots[m];
         let positions = positions_of(
             &pool,
             slot.gpu.position_offset,
@@ -361,27 +363,25 @@ fn gpu_sah_ratio_matches_cpu() {
 fn switching_backend_mid_run_redeforms_everything() {
     let scene = load(shared_assets().join("CesiumMan/glTF-Binary/CesiumMan.glb"));
     let reference = posed(&scene, DeformBackend::Cpu, 0, 0.8);
-    let want = words(&reference, &reference.renderer().scene.vertex_pool);
+    let want = words(&reference, &reference.gpu_scene().vertex_pool);
     let mut app = posed(&scene, DeformBackend::Gpu, 0, 0.8);
-    assert!(app.renderer().deformer.is_some());
-    let gpu_pool = words(&app, &app.renderer().scene.vertex_pool);
+    assert!(app.deformation().deformer.is_some());
+    let gpu_pool = words(&app, &app.gpu_scene().vertex_pool);
 
     app.settings_mut().deform = DeformBackend::Cpu;
     app.step();
-    let renderer = app.renderer();
-    assert_eq!(renderer.deform_backend, DeformBackend::Cpu);
-    assert!(renderer.deformer.is_none());
+    assert_eq!(app.deformation().backend, DeformBackend::Cpu);
+    assert!(app.deformation().deformer.is_none());
     assert!(
-        renderer
-            .scene
+        app.gpu_scene()
             .mesh_slots
             .iter()
             .all(|s| s.deformed_bounds.is_none())
     );
-    assert_eq!(words(&app, &renderer.scene.vertex_pool), want);
+    assert_eq!(words(&app, &app.gpu_scene().vertex_pool), want);
 
     app.settings_mut().deform = DeformBackend::Gpu;
     app.step();
-    assert_eq!(app.renderer().deform_backend, DeformBackend::Gpu);
-    assert_eq!(words(&app, &app.renderer().scene.vertex_pool), gpu_pool);
+    assert_eq!(app.deformation().backend, DeformBackend::Gpu);
+    assert_eq!(words(&app, &app.gpu_scene().vertex_pool), gpu_pool);
 }

@@ -870,8 +870,7 @@ fn pose_determined_bvh_does_not_depend_on_earlier_poses() {
             app.step();
         }
         let trees: Vec<_> = app
-            .renderer()
-            .scene
+            .gpu_scene()
             .mesh_slots
             .iter()
             .map(|s| {

@@ -216,7 +216,7 @@ fn rebuild_fires_and_image_matches_fresh_build() {
             for max_rebuilds in [0usize, 1] {
                 let mut app =
                     HeadlessApp::new(gpu(), scene.clone(), settings(backend), &camera()).unwrap();
-                assert_eq!(app.renderer().deform_backend, backend);
+                assert_eq!(app.deformation().backend, backend);
                 app.app
                     .world_mut()
                     .resource_mut::<raykin::bvh::refit::BvhStats>()

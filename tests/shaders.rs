@@ -1,9 +1,12 @@
-//! Every WGSL module the renderer builds is parsed and validated by naga, so a broken kernel fails CI
-//! instead of a user's first frame.
+//! Every WGSL kernel the renderer builds is composed from the shader library, parsed and validated by naga, so a
+//! broken kernel fails CI instead of a user's first frame; and every struct Rust uploads has exactly the size and
+//! field offsets of the WGSL struct that reads it.
+
+use raykin::render::passes;
 
 #[test]
-fn all_wgsl_modules_validate() {
-    for (name, source) in raykin::render::shaders::all_modules() {
+fn all_wgsl_kernels_validate() {
+    for (name, source) in passes::all_kernels() {
         let module = naga::front::wgsl::parse_str(&source)
             .unwrap_or_else(|e| panic!("{name}.wgsl: {}", e.emit_to_string(&source)));
         let mut validator = naga::valid::Validator::new(
@@ -19,48 +22,210 @@ fn all_wgsl_modules_validate() {
     }
 }
 
-/// Byte size of each named struct of a WGSL module.
-fn wgsl_sizes(source: &str) -> impl Fn(&str) -> usize + use<> {
-    let module = naga::front::wgsl::parse_str(source).expect("parses");
-    let mut layouter = naga::proc::Layouter::default();
-    layouter.update(module.to_ctx()).expect("layout");
-    move |name: &str| {
-        let (handle, _) = module
+/// Size and member offsets (by name) of each named struct of a WGSL module.
+struct WgslLayouts {
+    module: naga::Module,
+    layouter: naga::proc::Layouter,
+}
+
+impl WgslLayouts {
+    fn of(kernel: &raykin::render::shaders::ShaderModule) -> Self {
+        let source = raykin::render::shaders::compose(kernel);
+        let module = naga::front::wgsl::parse_str(&source).expect("parses");
+        let mut layouter = naga::proc::Layouter::default();
+        layouter.update(module.to_ctx()).expect("layout");
+        Self { module, layouter }
+    }
+
+    fn size(&self, name: &str) -> usize {
+        self.layouter[self.handle(name)].size as usize
+    }
+
+    fn offset(&self, name: &str, member: &str) -> usize {
+        match &self.module.types[self.handle(name)].inner {
+            naga::TypeInner::Struct { members, .. } => members
+                .iter()
+                .find(|m| m.name.as_deref() == Some(member))
+                .unwrap_or_else(|| panic!("WGSL struct {name} has no member {member}"))
+                .offset as usize,
+            _ => panic!("{name} is not a struct"),
+        }
+    }
+
+    fn handle(&self, name: &str) -> naga::Handle<naga::Type> {
+        self.module
             .types
             .iter()
             .find(|(_, t)| t.name.as_deref() == Some(name))
-            .unwrap_or_else(|| panic!("type {name}"));
-        layouter[handle].size as usize
+            .unwrap_or_else(|| panic!("no WGSL type {name}"))
+            .0
     }
 }
 
-/// The Rust structs uploaded to the GPU must have the sizes the WGSL structs read.
-#[test]
-fn gpu_struct_sizes_match_wgsl() {
-    let size_of = wgsl_sizes(&raykin::render::shaders::path_trace_source());
-    use raykin::render::layout::*;
-    assert_eq!(
-        size_of("BvhNode"),
-        std::mem::size_of::<raykin::bvh::GpuBvhNode>()
-    );
-    assert_eq!(size_of("Instance"), std::mem::size_of::<GpuInstance>());
-    assert_eq!(size_of("Mesh"), std::mem::size_of::<GpuMesh>());
-    assert_eq!(size_of("Material"), std::mem::size_of::<GpuMaterial>());
-    assert_eq!(size_of("TextureInfo"), std::mem::size_of::<GpuTexture>());
-    assert_eq!(size_of("Emitter"), std::mem::size_of::<GpuEmitter>());
-    assert_eq!(size_of("Frame"), std::mem::size_of::<GpuFrame>());
+/// Asserts that the WGSL struct `$wgsl` has the size of the Rust type and each listed field at the Rust
+/// field's offset (Rust field name = WGSL member name unless given as `rust => wgsl`).
+macro_rules! same_layout {
+    ($layouts:expr, $wgsl:literal, $rust:ty, [$($field:ident $(=> $member:literal)?),* $(,)?]) => {{
+        let l = &$layouts;
+        assert_eq!(l.size($wgsl), std::mem::size_of::<$rust>(), "size of {}", $wgsl);
+        $(
+            let member = same_layout!(@name $field $($member)?);
+            assert_eq!(
+                l.offset($wgsl, member),
+                std::mem::offset_of!($rust, $field),
+                "offset of {}.{}",
+                $wgsl,
+                member
+            );
+        )*
+    }};
+    (@name $field:ident $member:literal) => { $member };
+    (@name $field:ident) => { stringify!($field) };
 }
 
 #[test]
-fn gpu_deform_struct_sizes_match_wgsl() {
-    use raykin::gpu_deform::{DeformParams, RefitMeshGpu, inputs::DeformMeshGpu};
-    let deform = wgsl_sizes(raykin::render::shaders::DEFORM);
-    assert_eq!(deform("DeformMesh"), std::mem::size_of::<DeformMeshGpu>());
-    assert_eq!(deform("DeformParams"), std::mem::size_of::<DeformParams>());
-    let refit = wgsl_sizes(raykin::render::shaders::REFIT);
-    assert_eq!(refit("RefitMesh"), std::mem::size_of::<RefitMeshGpu>());
-    assert_eq!(
-        refit("BvhNode"),
-        std::mem::size_of::<raykin::bvh::GpuBvhNode>()
+fn scene_structs_match_wgsl() {
+    use raykin::render::layout::*;
+    let l = WgslLayouts::of(&passes::trace::KERNEL);
+    same_layout!(l, "BvhNode", raykin::bvh::GpuBvhNode, []);
+    same_layout!(l, "Instance", GpuInstance, [world_from_object, object_from_world, mesh]);
+    same_layout!(
+        l,
+        "Mesh",
+        GpuMesh,
+        [
+            blas_root,
+            triangle_offset,
+            position_offset,
+            normal_offset,
+            tangent_offset,
+            uv0_offset,
+            uv1_offset,
+            color_offset
+        ]
     );
+    same_layout!(
+        l,
+        "Material",
+        GpuMaterial,
+        [
+            base_color,
+            emissive,
+            metallic,
+            roughness,
+            alpha_cutoff,
+            normal_scale,
+            flags,
+            base_color_texture,
+            metallic_roughness_texture,
+            normal_texture,
+            emissive_texture
+        ]
+    );
+    same_layout!(l, "TextureInfo", GpuTexture, [offset, width, height, flags]);
+    same_layout!(l, "Emitter", GpuEmitter, [instance, triangle, cdf, pmf]);
+    same_layout!(
+        l,
+        "Frame",
+        GpuFrame,
+        [
+            world_from_camera,
+            env_color,
+            tan_half_fov,
+            width,
+            height,
+            sample_base,
+            spp,
+            max_depth,
+            seed,
+            env_mode,
+            rr_depth,
+            emitter_count,
+            flags,
+            emitter_total_power
+        ]
+    );
+}
+
+#[test]
+fn pass_uniforms_match_wgsl() {
+    use passes::denoise::DenoisePassParams;
+    use passes::display::DisplayParams;
+    use passes::tonemap::TonemapParams;
+    same_layout!(
+        WgslLayouts::of(&passes::tonemap::KERNEL),
+        "Params",
+        TonemapParams,
+        [width, height, tonemapper, view, exposure_scale, depth_scale]
+    );
+    same_layout!(
+        WgslLayouts::of(&passes::denoise::KERNEL),
+        "Params",
+        DenoisePassParams,
+        [
+            width,
+            height,
+            step,
+            last,
+            sigma_luminance,
+            sigma_normal,
+            sigma_depth
+        ]
+    );
+    same_layout!(
+        WgslLayouts::of(&passes::display::KERNEL),
+        "DisplayParams",
+        DisplayParams,
+        [origin, size, image_width, image_height, srgb_target]
+    );
+}
+
+#[test]
+fn gpu_deform_structs_match_wgsl() {
+    use passes::deform::DeformParams;
+    use passes::refit::RefitMeshGpu;
+    use raykin::gpu_deform::inputs::DeformMeshGpu;
+    let deform = WgslLayouts::of(&passes::deform::KERNEL);
+    same_layout!(deform, "DeformParams", DeformParams, [mesh_count, groups_x]);
+    same_layout!(
+        deform,
+        "DeformMesh",
+        DeformMeshGpu,
+        [
+            vertex_count,
+            first_group,
+            rest_position,
+            rest_normal,
+            rest_tangent,
+            influences,
+            influence_sets,
+            morph_targets,
+            morph_deltas,
+            morph_stride,
+            morph_normal,
+            morph_tangent,
+            out_position,
+            out_normal,
+            out_tangent,
+            joint_base,
+            joint_count,
+            weight_base
+        ]
+    );
+    let refit = WgslLayouts::of(&passes::refit::KERNEL);
+    same_layout!(
+        refit,
+        "RefitMesh",
+        RefitMeshGpu,
+        [
+            blas_root,
+            triangle_offset,
+            position_offset,
+            node_count,
+            order_offset,
+            level_offset,
+            levels
+        ]
+    );
+    same_layout!(refit, "BvhNode", raykin::bvh::GpuBvhNode, []);
 }

@@ -2,7 +2,9 @@
 
 use crate::camera::{CameraChoice, CameraView, resolve_camera};
 use crate::gpu::GpuContext;
-use crate::render::{Aovs, RenderPlugin, RenderSettings, Renderer};
+use crate::render::{
+    Accumulation, Aovs, FrameStats, GpuScene, RenderPlugin, RenderSettings, ViewTargets,
+};
 use crate::scene::{SceneAsset, ScenePlugin};
 use bevy_app::App;
 use std::sync::Arc;
@@ -39,17 +41,22 @@ impl HeadlessApp {
         camera: &CameraChoice,
         binding_limit: Option<u64>,
     ) -> Result<Self, HeadlessError> {
-        let (renderer, notes) = Renderer::new(&ctx, &scene, &settings, binding_limit)?;
         let mut app = App::new();
+        let world = app.world_mut();
+        let mut notes =
+            crate::render::insert_resources(world, &ctx, &scene, &settings, binding_limit)?;
+        notes.extend(crate::gpu_deform::insert_resources(
+            world, &ctx, &scene, &settings,
+        ));
         crate::configure_frame_schedule(&mut app);
         app.insert_resource(ctx.clone())
             .insert_resource(settings.clone())
-            .insert_resource(renderer)
             .add_plugins(ScenePlugin {
                 scene: scene.clone(),
             })
             .add_plugins(crate::animation::AnimationPlugin)
             .add_plugins(RenderPlugin)
+            .add_plugins(crate::gpu_deform::DeformPlugin)
             .add_plugins(crate::frame_timing::FrameTimingPlugin);
         // Transforms must be current before a camera node can be resolved.
         use bevy_ecs::system::RunSystemOnce;
@@ -125,37 +132,31 @@ impl HeadlessApp {
 
     /// Drops the accumulated samples: the next [`Self::step`] starts a new image (sample index 0).
     pub fn restart_accumulation(&mut self) {
-        let ctx = self.ctx.clone();
-        self.app
-            .world_mut()
-            .resource_mut::<Renderer>()
-            .tracer
-            .reset(&ctx);
+        let world = self.app.world_mut();
+        world.resource::<ViewTargets>().clear(&self.ctx);
+        let mut accumulation = world.resource_mut::<Accumulation>();
+        accumulation.samples = 0;
+        accumulation.restart();
+    }
+
+    /// Whether the denoiser's inputs accumulate while the denoiser is off ([`Accumulation`]'s
+    /// `keep_denoiser_inputs`): renders whose settings never switch it on turn this off to save the cost.
+    pub fn set_keep_denoiser_inputs(&mut self, keep: bool) {
+        self.accumulation_mut().keep_denoiser_inputs = keep;
     }
 
     /// Records the primary hit through each pixel centre from the next accumulation on ([`Self::primary_hits`]).
-    /// Whether the denoiser's inputs accumulate while the denoiser is off ([`crate::render::PathTracer`]'s
-    /// `keep_denoiser_inputs`): renders whose settings never switch it on turn this off to save the cost.
-    pub fn set_keep_denoiser_inputs(&mut self, keep: bool) {
-        self.app
-            .world_mut()
-            .resource_mut::<Renderer>()
-            .tracer
-            .keep_denoiser_inputs = keep;
-    }
-
     pub fn set_hit_aov(&mut self, enabled: bool) {
         let ctx = self.ctx.clone();
         self.app
             .world_mut()
-            .resource_mut::<Renderer>()
-            .tracer
+            .resource_mut::<ViewTargets>()
             .set_hit_aov(&ctx, enabled);
     }
 
     /// The primary hit through each pixel centre (empty unless [`Self::set_hit_aov`] is on).
     pub fn primary_hits(&self) -> Vec<crate::render::PrimaryHit> {
-        self.renderer().tracer.read_hits(&self.ctx)
+        self.view().read_hits(&self.ctx)
     }
 
     pub fn camera(&self) -> CameraView {
@@ -222,44 +223,72 @@ impl HeadlessApp {
     /// The shading-free ray-casting pass (camera rays, plus one diffuse bounce per hit when asked) on the
     /// current pose and camera; `None` where the adapter has no timestamp queries.
     pub fn cast_rays(&mut self, diffuse_bounce: bool) -> Option<crate::render::RayCastTiming> {
-        if self.renderer().frames == 0 {
+        if self.frame_stats().frames == 0 {
             // Instances and the top-level BVH are uploaded by the first frame.
             self.step();
         }
         let world = self.app.world_mut();
-        let settings = world.resource::<RenderSettings>().clone();
-        let camera = *world.resource::<CameraView>();
-        let mut renderer = world.resource_mut::<Renderer>();
-        let renderer = &mut *renderer;
-        renderer
-            .tracer
-            .resize(&self.ctx, settings.width, settings.height);
-        renderer.tracer.cast_rays(
-            &self.ctx,
-            &renderer.scene,
-            &settings,
-            &camera,
-            diffuse_bounce,
-        )
+        let (width, height) = {
+            let s = world.resource::<RenderSettings>();
+            (s.width, s.height)
+        };
+        world
+            .resource_mut::<ViewTargets>()
+            .resize(&self.ctx, width, height);
+        crate::render::queries::cast_rays(world, diffuse_bounce)
     }
 
-    pub fn renderer(&self) -> &Renderer {
-        self.app.world().resource::<Renderer>()
+    /// The scene's GPU buffers (mesh slots, materials, emitters, memory).
+    pub fn gpu_scene(&self) -> &GpuScene {
+        self.app.world().resource::<GpuScene>()
+    }
+
+    /// The view's render targets.
+    pub fn view(&self) -> &ViewTargets {
+        self.app.world().resource::<ViewTargets>()
+    }
+
+    pub fn accumulation_mut(&mut self) -> bevy_ecs::world::Mut<'_, Accumulation> {
+        self.app.world_mut().resource_mut::<Accumulation>()
+    }
+
+    /// GPU pass times and frame counts.
+    pub fn frame_stats(&self) -> &FrameStats {
+        self.app.world().resource::<FrameStats>()
+    }
+
+    /// GPU times of the last frame's passes (set while `FrameStats::time_passes` is on).
+    pub fn pass_times(&self) -> Option<crate::render::PassTimes> {
+        self.frame_stats().last_pass_times
+    }
+
+    /// Times every frame's passes on the GPU from now on (blocks the CPU each frame; benches).
+    pub fn set_time_passes(&mut self, on: bool) {
+        self.app
+            .world_mut()
+            .resource_mut::<FrameStats>()
+            .time_passes = on;
+    }
+
+    /// The GPU deformation state (backend in use, the deformer when the GPU deforms).
+    pub fn deformation(&self) -> &crate::gpu_deform::GpuDeformation {
+        self.app
+            .world()
+            .resource::<crate::gpu_deform::GpuDeformation>()
     }
 
     pub fn samples(&self) -> u32 {
-        self.renderer().tracer.samples
+        self.app.world().resource::<Accumulation>().samples
     }
 
     pub fn radiance(&self) -> Vec<[f32; 3]> {
-        self.renderer().tracer.read_radiance(&self.ctx)
+        self.view().read_radiance(&self.ctx)
     }
 
     /// The current accumulation denoised with the settings' `denoise_params` (whether or not
     /// `RenderSettings::denoise` is on): linear RGB per pixel, row-major from the top-left.
     pub fn denoised_radiance(&self) -> Vec<[f32; 3]> {
-        let params = self.app.world().resource::<RenderSettings>().denoise_params;
-        self.renderer().tracer.denoised_radiance(&self.ctx, &params)
+        crate::render::queries::denoised_radiance(self.app.world())
     }
 
     /// The image an output file takes: [`Self::denoised_radiance`] when `RenderSettings::denoise` is on, else
@@ -273,14 +302,11 @@ impl HeadlessApp {
     }
 
     pub fn aovs(&self) -> Aovs {
-        self.renderer().tracer.read_aovs(&self.ctx)
+        self.view().read_aovs(&self.ctx, self.samples())
     }
 
     /// Tone-mapped sRGB RGBA8 of the current accumulation (denoised when `RenderSettings::denoise` is on).
     pub fn display_rgba8(&self) -> Vec<u8> {
-        let settings = self.app.world().resource::<RenderSettings>().clone();
-        let r = self.renderer();
-        r.tracer.tonemap(&self.ctx, &settings);
-        r.tracer.read_rgba8(&self.ctx)
+        crate::render::queries::display_rgba8(self.app.world())
     }
 }

@@ -161,18 +161,20 @@ impl PreviousPose {
 /// recorded.
 pub fn motion_vectors(app: &HeadlessApp, previous: &PreviousPose) -> Vec<[f32; 3]> {
     let hits = app.primary_hits();
-    let renderer = app.renderer();
     let scene = app.scene();
+    let world = app.app.world();
+    let view = app.view();
     let frames = TwoFrames {
-        now: app.app.world(),
+        now: world,
         before: previous.app.world(),
         nodes_before: &previous.nodes,
-        renderer,
+        gpu_scene: app.gpu_scene(),
+        instances: world.resource::<crate::render::systems::InstanceMap>(),
         scene: &scene,
         projection_now: Projection {
             view: app.camera(),
-            width: renderer.tracer.width,
-            height: renderer.tracer.height,
+            width: view.width,
+            height: view.height,
         },
         projection_before: previous.projection,
     };
@@ -192,7 +194,8 @@ struct TwoFrames<'a> {
     now: &'a World,
     before: &'a World,
     nodes_before: &'a [Entity],
-    renderer: &'a crate::render::Renderer,
+    gpu_scene: &'a crate::render::GpuScene,
+    instances: &'a crate::render::systems::InstanceMap,
     scene: &'a SceneAsset,
     projection_now: Projection,
     projection_before: Projection,
@@ -211,10 +214,10 @@ impl TwoFrames<'_> {
             let before = self.projection_before.direction(d)?;
             return Some((before - centre, STATUS_ENVIRONMENT));
         };
-        let entity = *self.renderer.instance_entities.get(instance as usize)?;
+        let entity = *self.instances.entities.get(instance as usize)?;
         let mesh = self.now.get::<MeshInstance>(entity)?.mesh;
         let node = self.now.get::<SceneNode>(entity)?.node;
-        let slot = self.renderer.scene.mesh_slots.get(mesh)?;
+        let slot = self.gpu_scene.mesh_slots.get(mesh)?;
         let local = hit.triangle.checked_sub(slot.gpu.triangle_offset)? as usize;
         let verts = *slot.gpu_triangles.get(local)?;
         let now = barycentric_point(

@@ -239,7 +239,7 @@ fn render_to_file(
             })?;
         }
     }
-    let renderer = app.renderer();
+    let gpu_scene = app.gpu_scene();
     eprintln!(
         "raykin: wrote {} ({w}x{h}, {} spp{}, {:.2} s, {:.2} M samples/s)",
         out.display(),
@@ -259,9 +259,9 @@ fn render_to_file(
             max_depth: args.max_depth,
             denoise: settings.denoise,
             triangles: scene.triangle_count(),
-            bvh_build_and_upload_s: renderer.scene.build_seconds,
-            gpu_memory_geometry_bvh_bytes: renderer.scene.memory.geometry_and_bvh(),
-            gpu_memory_total_bytes: renderer.scene.memory.total(),
+            bvh_build_and_upload_s: gpu_scene.build_seconds,
+            gpu_memory_geometry_bvh_bytes: gpu_scene.memory.geometry_and_bvh(),
+            gpu_memory_total_bytes: gpu_scene.memory.total(),
             render_wall_s: wall,
             samples_per_second: (w as f64 * h as f64 * args.spp as f64) / wall,
         };

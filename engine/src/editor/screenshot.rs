@@ -2,7 +2,7 @@
 
 use crate::gpu::GpuContext;
 use crate::image_io::{ImageError, write_atomically, write_exr, write_png};
-use crate::render::Renderer;
+use crate::render::{Accumulation, ViewTargets};
 use bevy_ecs::prelude::*;
 use std::path::{Path, PathBuf};
 
@@ -21,7 +21,7 @@ pub struct ScreenshotInfo {
 /// folder. Reads back the image the last frame displayed.
 pub fn write(world: &World, path: &Path) -> Result<ScreenshotInfo, ImageError> {
     let ctx = world.resource::<GpuContext>();
-    let tracer = &world.resource::<Renderer>().tracer;
+    let view = world.resource::<ViewTargets>();
     let (png, exr) = (path.with_extension("png"), path.with_extension("exr"));
     if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).map_err(|e| ImageError {
@@ -29,16 +29,16 @@ pub fn write(world: &World, path: &Path) -> Result<ScreenshotInfo, ImageError> {
             reason: format!("cannot create the folder: {e}"),
         })?;
     }
-    let (w, h) = (tracer.width, tracer.height);
-    let rgba = tracer.read_rgba8(ctx);
+    let (w, h) = (view.width, view.height);
+    let rgba = view.read_rgba8(ctx);
     write_atomically(&png, |p| write_png(p, w, h, &rgba))?;
-    let radiance = tracer.read_radiance(ctx);
+    let radiance = view.read_radiance(ctx);
     write_atomically(&exr, |p| write_exr(p, w, h, &radiance))?;
     Ok(ScreenshotInfo {
         png,
         exr,
         width: w,
         height: h,
-        samples: tracer.samples,
+        samples: world.resource::<Accumulation>().samples,
     })
 }

@@ -5,7 +5,7 @@ use super::ViewerStats;
 use crate::bvh::refit::BvhStats;
 use crate::frame_timing::FrameTimings;
 use crate::gpu::GpuContext;
-use crate::render::Renderer;
+use crate::render::{Accumulation, GpuScene, ViewTargets};
 use bevy_ecs::prelude::*;
 
 fn mib(bytes: u64) -> String {
@@ -18,7 +18,8 @@ pub fn show(ui: &mut egui::Ui, world: &mut World) {
     let ctx = world.resource::<GpuContext>();
     let (adapter, timestamps) = (ctx.info.name.clone(), ctx.supports_timestamps());
     let cpu_adapter = ctx.info.device_type == wgpu::DeviceType::Cpu;
-    let renderer = world.resource::<Renderer>();
+    let view = world.resource::<ViewTargets>();
+    let samples = world.resource::<Accumulation>().samples;
     let bvh = world.resource::<BvhStats>();
     egui::Grid::new("stats").num_columns(2).show(ui, |ui| {
         ui.label("frame");
@@ -27,7 +28,7 @@ pub fn show(ui: &mut egui::Ui, world: &mut World) {
         ui.label("samples");
         ui.label(format!(
             "{} spp at {}x{}",
-            renderer.tracer.samples, renderer.tracer.width, renderer.tracer.height
+            samples, view.width, view.height
         ));
         ui.end_row();
         ui.label("CPU ms");
@@ -87,7 +88,7 @@ pub fn show(ui: &mut egui::Ui, world: &mut World) {
             .wrap(),
         );
         ui.end_row();
-        let memory = renderer.scene.memory;
+        let memory = world.resource::<GpuScene>().memory;
         ui.label("GPU memory");
         ui.add(
             egui::Label::new(format!(

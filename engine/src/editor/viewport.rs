@@ -4,8 +4,9 @@
 
 use super::{EditorState, merge_camera_input, scene_tree};
 use crate::camera::CameraInput;
-use crate::render::display::ImageCallback;
-use crate::render::{RenderSettings, Renderer, scene_buffers::transform_box};
+use crate::render::gpu_scene::transform_box;
+use crate::render::passes::display::ImageCallback;
+use crate::render::{Accumulation, GpuScene, RenderSettings};
 use crate::scene::{GlobalTransform, MeshInstance, SkinnedMesh};
 use bevy_ecs::hierarchy::Children;
 use bevy_ecs::prelude::*;
@@ -49,8 +50,8 @@ pub fn show(ui: &mut egui::Ui, world: &mut World, state: &mut EditorState) {
         }
     }
     let limit = (state.sample_limit > 0).then_some(state.sample_limit);
-    if world.resource::<Renderer>().sample_limit != limit {
-        world.resource_mut::<Renderer>().sample_limit = limit;
+    if world.resource::<Accumulation>().sample_limit != limit {
+        world.resource_mut::<Accumulation>().sample_limit = limit;
     }
     let rect_px = image_rect(area_px, size);
     state.image_rect_px = Some([
@@ -96,7 +97,7 @@ pub fn show(ui: &mut egui::Ui, world: &mut World, state: &mut EditorState) {
         && rect.contains(pos)
     {
         let local = (pos - rect.min) / rect.size();
-        let hit = crate::render::pick::pick_pixel(
+        let hit = crate::render::picking::pick_pixel(
             world,
             (local.x * size.0 as f32) as u32,
             (local.y * size.1 as f32) as u32,
@@ -154,7 +155,7 @@ pub fn selection_bounds(world: &World, state: &EditorState) -> Option<(Vec3, Vec
 }
 
 fn bounds_below(world: &World, entity: Entity) -> Option<(Vec3, Vec3)> {
-    let renderer = world.get_resource::<Renderer>()?;
+    let gpu_scene = world.get_resource::<GpuScene>()?;
     let mut lo = Vec3::MAX;
     let mut hi = Vec3::MIN;
     let mut stack = vec![entity];
@@ -162,7 +163,7 @@ fn bounds_below(world: &World, entity: Entity) -> Option<(Vec3, Vec3)> {
         if let (Some(mesh), Some(global)) = (
             world.get::<MeshInstance>(e),
             world.get::<GlobalTransform>(e),
-        ) && let Some(slot) = renderer.scene.mesh_slots.get(mesh.mesh)
+        ) && let Some(slot) = gpu_scene.mesh_slots.get(mesh.mesh)
         {
             let (a, b) = slot
                 .deformed_bounds

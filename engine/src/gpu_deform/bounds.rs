@@ -9,7 +9,7 @@
 //! gets its own group; morph-only meshes have one group in object space. The CPU reference's last-resort
 //! fallback (a non-finite result becomes the rest position) adds the rest box when it can happen.
 
-use crate::render::scene_buffers::transform_box;
+use crate::render::gpu_scene::transform_box;
 use crate::scene::MeshData;
 use glam::{Mat4, Vec3};
 

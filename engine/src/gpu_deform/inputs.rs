@@ -3,12 +3,9 @@
 //! u16 pairs + f32 weights, per influence set) and morph-target deltas. Per frame only joint matrices and
 //! morph weights go up (see [`super::GpuDeformer`]).
 
-use crate::render::layout::{GpuMesh, NONE};
+use crate::render::layout::{DEFORM_GROUP, GpuMesh, NONE};
 use crate::scene::MeshData;
 use bytemuck::{Pod, Zeroable};
-
-/// Threads per workgroup of `shaders/deform.wgsl` (one vertex each); every mesh starts on a group boundary.
-pub const DEFORM_GROUP: u32 = 64;
 
 /// `shaders/deform.wgsl` `DeformMesh`: offsets in 32-bit words (`NONE` = absent).
 #[repr(C)]

@@ -4,23 +4,28 @@
 //! flag per mesh go up; the top-level BVH gets conservative bounds from the pose ([`bounds`]), so nothing
 //! is read back on the frame's critical path. The rebuild guard runs a frame or two late ([`readback`]).
 //!
-//! The CPU path (`animation::deform_meshes` + `render::refit_deformed`) stays the reference and the
+//! The CPU path (`animation::deform_meshes` + `render::systems::refit_deformed`) stays the reference and the
 //! fallback: meshes with emissive triangles stay on it (next-event estimation weighs emitters by their
 //! world area on the CPU), and so does everything when the deform inputs exceed the GPU's binding limit.
 
 pub mod bounds;
 pub mod inputs;
 pub mod levels;
+mod plugin;
 pub mod readback;
+
+pub use plugin::{DeformPlugin, GpuDeformation, insert_resources};
 
 use crate::animation::MeshPoses;
 use crate::bvh::refit::BvhStats;
 use crate::bvh::{BvhQuality, MeshBvh};
 use crate::gpu::GpuContext;
-use crate::render::scene_buffers::{GpuScene, storage};
+use crate::gpu::bind::storage_with as storage;
+use crate::render::gpu_scene::GpuScene;
+use crate::render::passes::deform::{DeformBuffers, DeformParams, DeformPass};
+use crate::render::passes::refit::{RefitBuffers, RefitMeshGpu, RefitPass};
 use crate::scene::SceneAsset;
 use bounds::DeformBounds;
-use bytemuck::{Pod, Zeroable};
 use glam::Mat4;
 use inputs::{DeformInputs, DeformTarget};
 use levels::{LEVEL_SLOTS, LevelOrder};
@@ -51,35 +56,9 @@ impl DeformBackend {
     }
 }
 
-/// `shaders/refit.wgsl` `RefitMesh`: where a refit mesh's nodes, triangles, positions and level order are.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
-pub struct RefitMeshGpu {
-    pub blas_root: u32,
-    pub triangle_offset: u32,
-    pub position_offset: u32,
-    pub node_count: u32,
-    pub order_offset: u32,
-    pub level_offset: u32,
-    pub levels: u32,
-    pub _pad: u32,
-}
-
-/// `shaders/deform.wgsl` `DeformParams`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
-pub struct DeformParams {
-    pub mesh_count: u32,
-    pub groups_x: u32,
-    pub _pad: [u32; 2],
-}
-
 /// `active` flags: deform (and refit) this frame, or refit only (a rebuilt tree that landed).
 const DEFORM: u32 = 1;
 const REFIT: u32 = 2;
-
-/// Largest dispatch dimension.
-const MAX_GROUPS: u32 = 65535;
 
 /// Per GPU-deformed mesh, CPU side.
 struct Deformed {
@@ -119,8 +98,8 @@ pub struct GpuDeformer {
     meshes: Vec<Deformed>,
     /// By scene mesh: index among the GPU-deformed meshes.
     index_of: Vec<Option<usize>>,
-    deform_pipeline: wgpu::ComputePipeline,
-    refit_pipeline: wgpu::ComputePipeline,
+    deform_pass: DeformPass,
+    refit_pass: RefitPass,
     deform_group: wgpu::BindGroup,
     refit_group: wgpu::BindGroup,
     matrix_buffer: wgpu::Buffer,
@@ -142,63 +121,6 @@ pub struct GpuDeformer {
     timed: bool,
     /// Bytes of every buffer this deformer owns (inputs, per-frame data, refit tables, readbacks).
     pub gpu_bytes: u64,
-}
-
-fn layout_entry(binding: u32, ty: wgpu::BufferBindingType) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Buffer {
-            ty,
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
-    }
-}
-
-fn pipeline_and_group(
-    ctx: &GpuContext,
-    label: &str,
-    source: &str,
-    entry: &str,
-    buffers: &[(&wgpu::Buffer, wgpu::BufferBindingType)],
-) -> (wgpu::ComputePipeline, wgpu::BindGroup) {
-    let device = &ctx.device;
-    let entries: Vec<_> = buffers
-        .iter()
-        .enumerate()
-        .map(|(i, (_, ty))| layout_entry(i as u32, *ty))
-        .collect();
-    let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-        label: Some(label),
-        entries: &entries,
-    });
-    let pipeline =
-        crate::gpu::compute_pipeline(device, label, source.to_string(), &[Some(&layout)], entry);
-    let group_entries: Vec<_> = buffers
-        .iter()
-        .enumerate()
-        .map(|(i, (b, _))| wgpu::BindGroupEntry {
-            binding: i as u32,
-            resource: b.as_entire_binding(),
-        })
-        .collect();
-    let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some(label),
-        layout: &layout,
-        entries: &group_entries,
-    });
-    (pipeline, group)
-}
-
-/// A dispatch of `groups` workgroups as (x, y) within the per-dimension limit.
-fn grid(groups: u32) -> (u32, u32) {
-    if groups <= MAX_GROUPS {
-        (groups.max(1), 1)
-    } else {
-        (MAX_GROUPS, groups.div_ceil(MAX_GROUPS))
-    }
 }
 
 /// The skin's joint count of each mesh's (single) node, when that node is skinned.
@@ -324,54 +246,46 @@ impl GpuDeformer {
             bytemuck::cast_slice(&level_starts),
         );
         let sah_buffer = copy_dst("refit sah cost", meshes.len() as u64 * 4);
-        let (x, _) = grid(inputs.groups);
+        let (x, _) = crate::gpu::bind::grid(inputs.groups);
         let params = DeformParams {
             mesh_count: meshes.len() as u32,
             groups_x: x,
             _pad: [0; 2],
         };
-        let params_buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("deform params"),
-            size: std::mem::size_of::<DeformParams>() as u64,
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
+        let params_buffer = crate::gpu::bind::uniform_buffer(
+            ctx,
+            "deform params",
+            std::mem::size_of::<DeformParams>(),
+        );
         ctx.queue
             .write_buffer(&params_buffer, 0, bytemuck::bytes_of(&params));
 
-        use wgpu::BufferBindingType::{Storage, Uniform};
-        let read = Storage { read_only: true };
-        let write = Storage { read_only: false };
-        let (deform_pipeline, deform_group) = pipeline_and_group(
+        let deform_pass = DeformPass::new(ctx);
+        let deform_group = deform_pass.bind(
             ctx,
-            "deform",
-            &crate::render::shaders::deform_source(),
-            "deform",
-            &[
-                (&data_buffer, read),
-                (&mesh_buffer, read),
-                (&matrix_buffer, read),
-                (&weight_buffer, read),
-                (&active_buffer, read),
-                (&gpu.vertex_pool, write),
-                (&params_buffer, Uniform),
-            ],
+            &DeformBuffers {
+                data: &data_buffer,
+                meshes: &mesh_buffer,
+                joint_matrices: &matrix_buffer,
+                morph_weights: &weight_buffer,
+                mesh_flags: &active_buffer,
+                vertex_pool: &gpu.vertex_pool,
+                params: &params_buffer,
+            },
         );
-        let (refit_pipeline, refit_group) = pipeline_and_group(
+        let refit_pass = RefitPass::new(ctx);
+        let refit_group = refit_pass.bind(
             ctx,
-            "refit",
-            &crate::render::shaders::refit_source(),
-            "refit",
-            &[
-                (&gpu.blas_nodes, write),
-                (&gpu.triangles, read),
-                (&gpu.vertex_pool, read),
-                (&refit_mesh_buffer, read),
-                (&level_order_buffer, read),
-                (&level_start_buffer, read),
-                (&active_buffer, read),
-                (&sah_buffer, write),
-            ],
+            &RefitBuffers {
+                blas_nodes: &gpu.blas_nodes,
+                triangles: &gpu.triangles,
+                vertex_pool: &gpu.vertex_pool,
+                meshes: &refit_mesh_buffer,
+                level_order: &level_order_buffer,
+                level_starts: &level_start_buffer,
+                mesh_flags: &active_buffer,
+                sah_cost: &sah_buffer,
+            },
         );
         let timestamps = crate::gpu::PassTimestamps::new(ctx, "deform timestamps", 2);
         let gpu_bytes = [
@@ -397,8 +311,8 @@ impl GpuDeformer {
             groups: inputs.groups,
             meshes,
             index_of,
-            deform_pipeline,
-            refit_pipeline,
+            deform_pass,
+            refit_pass,
             deform_group,
             refit_group,
             matrix_buffer,
@@ -495,28 +409,19 @@ impl GpuDeformer {
         self.timed = false;
         if refitting {
             let ts = |pair: u32| self.timestamps.as_ref().map(|t| t.pass_writes(pair));
-            {
-                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                    label: Some("deform"),
-                    timestamp_writes: ts(0),
-                });
-                if deforming {
-                    let (x, y) = grid(self.groups);
-                    pass.set_pipeline(&self.deform_pipeline);
-                    pass.set_bind_group(0, &self.deform_group, &[]);
-                    pass.dispatch_workgroups(x, y, 1);
-                }
-            }
-            {
-                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                    label: Some("refit"),
-                    timestamp_writes: ts(1),
-                });
-                let (x, y) = grid(self.meshes.len() as u32);
-                pass.set_pipeline(&self.refit_pipeline);
-                pass.set_bind_group(0, &self.refit_group, &[]);
-                pass.dispatch_workgroups(x, y, 1);
-            }
+            self.deform_pass.encode(
+                &mut encoder,
+                &self.deform_group,
+                self.groups,
+                deforming,
+                ts(0),
+            );
+            self.refit_pass.encode(
+                &mut encoder,
+                &self.refit_group,
+                self.meshes.len() as u32,
+                ts(1),
+            );
             if let Some(t) = &self.timestamps {
                 t.resolve(&mut encoder, 2);
                 self.timed = true;

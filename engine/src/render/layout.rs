@@ -1,4 +1,6 @@
-//! GPU-side structs, byte-for-byte the WGSL structs in `shaders/common.wgsl`.
+//! The one source of everything Rust and WGSL share: the scene's GPU structs (byte for byte the structs of
+//! `shaders/scene/types.wgsl` and `shaders/view.wgsl`; the naga test checks sizes and field offsets) and every
+//! shared constant, emitted as the WGSL library's generated `constants` module ([`WGSL_CONSTANTS`]).
 
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3, Vec4};
@@ -100,7 +102,34 @@ pub struct GpuEmitter {
     pub pmf: f32,
 }
 
-/// Per-dispatch constants (a uniform buffer).
+/// Workgroup size of the skin + morph pass (`deform.wgsl`): vertices per workgroup.
+pub const DEFORM_GROUP: u32 = 64;
+/// Workgroup size of the refit pass (`refit.wgsl`): one workgroup sweeps one mesh.
+pub const REFIT_GROUP: u32 = 256;
+
+/// Every constant the WGSL library shares with Rust, by its WGSL name; `render::shaders` writes them as the
+/// `constants` module, so a kernel can never disagree with the code that fills its buffers.
+pub const WGSL_CONSTANTS: &[(&str, u32)] = &[
+    ("NONE", NONE),
+    ("INVALID_OCT", INVALID_OCT),
+    ("MATERIAL_DOUBLE_SIDED", MATERIAL_DOUBLE_SIDED),
+    ("MATERIAL_ALPHA_MASK", MATERIAL_ALPHA_MASK),
+    ("MATERIAL_ALPHA_BLEND", MATERIAL_ALPHA_BLEND),
+    ("TEXTURE_NEAREST", TEXTURE_NEAREST),
+    ("WIDE_BLAS", WIDE_BLAS),
+    ("FRAME_NEE", FRAME_NEE),
+    ("FRAME_HIT_AOV", FRAME_HIT_AOV),
+    ("FRAME_MOMENTS", FRAME_MOMENTS),
+    // A BVH2 traversal stack needs at most one entry per level below the root; builds deeper than
+    // MAX_TRAVERSAL_DEPTH are refused on the CPU, so neither stack can overflow.
+    ("BLAS_STACK_SIZE", crate::bvh::MAX_TRAVERSAL_DEPTH),
+    ("TLAS_STACK_SIZE", crate::bvh::MAX_TRAVERSAL_DEPTH),
+    ("WIDE_STACK_SIZE", crate::bvh::wide::MAX_WIDE_DEPTH),
+    ("DEFORM_GROUP", DEFORM_GROUP),
+    ("REFIT_GROUP", REFIT_GROUP),
+];
+
+/// Per-dispatch constants of the view (a uniform buffer, `shaders/view.wgsl` `Frame`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
 pub struct GpuFrame {

@@ -55,7 +55,7 @@ pub struct RenderSettings {
     #[serde(default)]
     pub denoise: bool,
     #[serde(default)]
-    pub denoise_params: super::denoise::DenoiseParams,
+    pub denoise_params: super::passes::denoise::DenoiseParams,
     /// BVH layout of static meshes (deformable meshes always refit a BVH2).
     pub static_bvh: crate::bvh::StaticLayout,
     /// Where deformable meshes are skinned, morphed and refit (`Auto`: GPU on real GPUs).

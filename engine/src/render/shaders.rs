@@ -1,93 +1,185 @@
-//! WGSL sources, assembled from the files in `shaders/` (WGSL has no includes). Tests validate exactly these
-//! strings with naga, so what CI checks is what runs.
+//! The WGSL shader library (`shaders/`, cut along pbrt-v4's interfaces) and its module table. WGSL has no
+//! includes: a kernel names the library modules it needs, and [`compose`] writes those modules and everything
+//! they need, each once, in dependency order, then the kernel. Tests validate exactly the composed strings with
+//! naga, so what CI checks is what runs.
+//!
+//! The `constants` module is generated from [`super::layout::WGSL_CONSTANTS`], the one source of every constant
+//! Rust and WGSL share.
 
-pub const COMMON: &str = include_str!("../../../shaders/common.wgsl");
-pub const BVH: &str = include_str!("../../../shaders/bvh.wgsl");
-pub const BRDF: &str = include_str!("../../../shaders/brdf.wgsl");
-pub const PATH_TRACE: &str = include_str!("../../../shaders/path_trace.wgsl");
-pub const TONEMAP: &str = include_str!("../../../shaders/tonemap.wgsl");
-pub const DISPLAY: &str = include_str!("../../../shaders/display.wgsl");
-pub const DENOISE: &str = include_str!("../../../shaders/denoise.wgsl");
-pub const RAYCAST: &str = include_str!("../../../shaders/raycast.wgsl");
-pub const PICK: &str = include_str!("../../../shaders/pick.wgsl");
-/// GPU skinning + morphing and the GPU BLAS refit (`crate::gpu_deform`); standalone modules.
-pub const DEFORM: &str = include_str!("../../../shaders/deform.wgsl");
-pub const REFIT: &str = include_str!("../../../shaders/refit.wgsl");
-
-/// The path tracer module: shared declarations, traversal, BRDF, then the kernel.
-pub fn path_trace_source() -> String {
-    scene_kernel_source("path_trace.wgsl", PATH_TRACE)
+/// One WGSL source and the library modules it uses.
+#[derive(Clone, Copy, Debug)]
+pub struct ShaderModule {
+    /// The library path without `.wgsl` (`bsdf/gltf`), or a kernel's name.
+    pub name: &'static str,
+    pub source: &'static str,
+    pub requires: &'static [&'static str],
 }
 
-/// The shading-free ray-casting benchmark kernel: the path tracer's scene bindings and traversal.
-pub fn raycast_source() -> String {
-    scene_kernel_source("raycast.wgsl", RAYCAST)
+macro_rules! library {
+    ($($name:literal => [$($dep:literal),* $(,)?]),* $(,)?) => {
+        &[$(ShaderModule {
+            name: $name,
+            source: include_str!(concat!("../../../shaders/", $name, ".wgsl")),
+            requires: &[$($dep),*],
+        }),*]
+    };
 }
 
-/// The viewer's picking pass: one ray through a pixel centre, the path tracer's bindings and traversal.
-pub fn pick_source() -> String {
-    scene_kernel_source("pick.wgsl", PICK)
+/// The library, `shaders/<name>.wgsl`. `constants` is generated and not listed.
+pub const LIBRARY: &[ShaderModule] = library! {
+    "math" => [],
+    "color" => [],
+    "sampler" => [],
+    "sampling" => ["math"],
+    "octahedral" => ["constants", "math"],
+    "view" => [],
+    "camera" => ["view", "traversal/ray"],
+    "scene/types" => [],
+    "scene/bindings" => ["scene/types"],
+    "scene/vertex" => ["constants", "math", "octahedral", "scene/bindings"],
+    "scene/texture" => ["constants", "scene/bindings"],
+    "scene/alpha" => ["scene/vertex", "scene/texture"],
+    "scene/interaction" => ["scene/vertex", "scene/texture", "color", "bsdf/gltf", "traversal/ray"],
+    "traversal/ray" => ["scene/types"],
+    "traversal/primitive" => ["traversal/ray", "scene/alpha"],
+    "traversal/bvh2" => ["traversal/primitive"],
+    "traversal/cwbvh" => ["traversal/primitive"],
+    "traversal/tlas" => ["traversal/bvh2", "traversal/cwbvh", "math"],
+    "bsdf/bsdf" => [],
+    "bsdf/microfacet" => ["math"],
+    "bsdf/gltf" => ["bsdf/bsdf", "bsdf/microfacet", "sampling", "color"],
+    "lights/environment" => ["view"],
+    "lights/area" => ["scene/interaction", "sampler", "sampling", "view", "math"],
+    "integrator/path" => [
+        "traversal/tlas",
+        "scene/interaction",
+        "lights/area",
+        "lights/environment",
+        "sampler",
+        "math",
+    ],
+};
+
+/// The generated module of shared constants.
+pub fn constants_source() -> String {
+    let mut out = String::from(
+        "// Generated from engine/src/render/layout.rs `WGSL_CONSTANTS`: do not edit in WGSL.\n",
+    );
+    for (name, value) in super::layout::WGSL_CONSTANTS {
+        out.push_str(&format!("const {name}: u32 = {value}u;\n"));
+    }
+    out
 }
 
-/// A kernel over the scene bindings: shared declarations, traversal and BRDF, then `kernel` (WGSL has no
-/// includes).
-fn scene_kernel_source(name: &str, kernel: &str) -> String {
-    [
-        file("common.wgsl", COMMON),
-        file("bvh.wgsl", BVH),
-        file("brdf.wgsl", BRDF),
-        file(name, kernel),
-    ]
-    .join("\n")
+/// A kernel's full source: the library modules it requires (transitively, each once, dependencies first), then
+/// the kernel itself.
+///
+/// # Panics
+/// When a module names a library module that does not exist (a programming error the naga test catches).
+pub fn compose(kernel: &ShaderModule) -> String {
+    let mut order: Vec<&str> = Vec::new();
+    for name in kernel.requires {
+        visit(name, &mut order, &mut Vec::new());
+    }
+    let mut out = String::new();
+    for name in order {
+        let text = if name == "constants" {
+            constants_source()
+        } else {
+            let module = find(name);
+            override_or(module.name, module.source)
+        };
+        out.push_str(&format!("// ---- {name}.wgsl ----\n{text}\n"));
+    }
+    out.push_str(&format!(
+        "// ---- {}.wgsl ----\n{}",
+        kernel.name,
+        override_or(kernel.name, kernel.source)
+    ));
+    out
 }
 
-pub fn tonemap_source() -> String {
-    file("tonemap.wgsl", TONEMAP)
+fn find(name: &str) -> &'static ShaderModule {
+    LIBRARY
+        .iter()
+        .find(|m| m.name == name)
+        .unwrap_or_else(|| panic!("shader library has no module `{name}`"))
 }
 
-pub fn deform_source() -> String {
-    file("deform.wgsl", DEFORM)
+/// Depth-first, post-order: a module after everything it requires. `path` catches require cycles.
+fn visit<'a>(name: &'a str, order: &mut Vec<&'a str>, path: &mut Vec<&'a str>) {
+    if order.contains(&name) {
+        return;
+    }
+    assert!(
+        !path.contains(&name),
+        "shader modules require each other: {} -> {name}",
+        path.join(" -> ")
+    );
+    if name != "constants" {
+        path.push(name);
+        for dep in find(name).requires {
+            visit(dep, order, path);
+        }
+        path.pop();
+    }
+    order.push(name);
 }
 
-pub fn refit_source() -> String {
-    file("refit.wgsl", REFIT)
-}
-
-/// Kernel development: with `RAYKIN_SHADER_DIR` set, WGSL files found in that folder replace the built-in
-/// copies (edit a kernel and rerun without rebuilding; A/B variants in one GPU session). Unset in normal use.
-fn file(name: &str, built_in: &str) -> String {
+/// Kernel development: with `RAYKIN_SHADER_DIR` set, `<dir>/<name>.wgsl` (e.g. `bsdf/gltf.wgsl`, `trace.wgsl`)
+/// replaces the built-in copy (edit a kernel and rerun without rebuilding; A/B variants in one GPU session).
+/// Unset in normal use.
+fn override_or(name: &str, built_in: &str) -> String {
     let Some(dir) = std::env::var_os("RAYKIN_SHADER_DIR") else {
         return built_in.to_string();
     };
-    let path = std::path::Path::new(&dir).join(name);
+    let path = std::path::Path::new(&dir).join(format!("{name}.wgsl"));
     match std::fs::read_to_string(&path) {
         Ok(text) => {
-            tracing::warn!("shader {name} read from {}", path.display());
+            tracing::warn!("shader {name}.wgsl read from {}", path.display());
             text
         }
         Err(_) => built_in.to_string(),
     }
 }
 
-pub fn denoise_source() -> String {
-    file("denoise.wgsl", DENOISE)
-}
+#[cfg(test)]
+mod tests {
+    use super::*;
 
-/// The viewer's display pass (a render pipeline: the tone-mapped image drawn into the window).
-pub fn display_source() -> String {
-    file("display.wgsl", DISPLAY)
-}
+    #[test]
+    fn every_library_module_composes_once_after_its_requirements() {
+        for module in LIBRARY {
+            let kernel = ShaderModule {
+                name: "probe",
+                source: "",
+                requires: std::slice::from_ref(&module.name),
+            };
+            let text = compose(&kernel);
+            let headers: Vec<&str> = text.lines().filter(|l| l.starts_with("// ---- ")).collect();
+            let mut seen = std::collections::HashSet::new();
+            for h in &headers {
+                assert!(seen.insert(*h), "{} composed twice for {}", h, module.name);
+            }
+            for dep in module.requires {
+                let dep_at = headers
+                    .iter()
+                    .position(|h| h.contains(&format!(" {dep}.wgsl")));
+                let at = headers
+                    .iter()
+                    .position(|h| h.contains(&format!(" {}.wgsl", module.name)));
+                assert!(dep_at < at, "{dep} must come before {}", module.name);
+            }
+        }
+    }
 
-/// Every module the renderer builds, by name, for validation.
-pub fn all_modules() -> Vec<(&'static str, String)> {
-    vec![
-        ("path_trace", path_trace_source()),
-        ("tonemap", tonemap_source()),
-        ("display", display_source()),
-        ("denoise", denoise_source()),
-        ("raycast", raycast_source()),
-        ("pick", pick_source()),
-        ("deform", deform_source()),
-        ("refit", refit_source()),
-    ]
+    #[test]
+    fn constants_carry_the_rust_values() {
+        let text = constants_source();
+        assert!(text.contains(&format!("const NONE: u32 = {}u;", u32::MAX)));
+        assert!(text.contains(&format!(
+            "const TLAS_STACK_SIZE: u32 = {}u;",
+            crate::bvh::MAX_TRAVERSAL_DEPTH
+        )));
+    }
 }

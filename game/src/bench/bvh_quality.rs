@@ -75,7 +75,7 @@ fn trace_times(app: &mut HeadlessApp, warmup: usize, frames: usize) -> Vec<f64> 
     for f in 0..warmup + frames {
         let start = Instant::now();
         app.step();
-        let t = app.renderer().last_pass_times.map_or_else(
+        let t = app.pass_times().map_or_else(
             || {
                 app.ctx.wait_idle();
                 start.elapsed().as_secs_f64() * 1e3
@@ -174,7 +174,7 @@ pub fn refit_vs_rebuild(
             let ratio = stats.sah_ratio.iter().copied().fold(0.0, f32::max);
             // The pose frame's own GPU time counts; without timestamps its wall time would include the BVH
             // update, so only the repeats (at least one) are timed then.
-            let pose_trace = app.renderer().last_pass_times.map(|p| p.trace_ms);
+            let pose_trace = app.pass_times().map(|p| p.trace_ms);
             let repeats = repeats
                 .saturating_sub(1)
                 .max(usize::from(pose_trace.is_none()));

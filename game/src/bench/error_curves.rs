@@ -123,19 +123,14 @@ pub fn measure(
             // The first dispatch also compiles the kernel on some drivers (lavapipe): trace one untimed frame
             // and start the curve from a cleared accumulation.
             app.step();
-            let gpu = app.ctx.clone();
-            app.app
-                .world_mut()
-                .resource_mut::<raykin::render::Renderer>()
-                .tracer
-                .reset(&gpu);
+            app.restart_accumulation();
             let (mut elapsed_ms, mut run) = (0.0, Vec::new());
             let mut denoise_times = Vec::new();
             for &target in &checkpoints {
                 while app.samples() < target {
                     let start = std::time::Instant::now();
                     app.step();
-                    match app.renderer().last_pass_times {
+                    match app.pass_times() {
                         Some(p) => elapsed_ms += p.trace_ms,
                         None => {
                             app.ctx.wait_idle();
@@ -148,7 +143,7 @@ pub fn measure(
                     let start = std::time::Instant::now();
                     let image = app.denoised_radiance();
                     let wall = start.elapsed().as_secs_f64() * 1e3;
-                    let gpu = app.renderer().tracer.read_denoise_ms(&app.ctx);
+                    let gpu = app.frame_stats().read_denoise_ms(&app.ctx);
                     (image, gpu.unwrap_or(wall))
                 } else {
                     (app.radiance(), 0.0)
@@ -275,7 +270,9 @@ fn reference_key(scene: &BenchScene, base: &RenderSettings, spp: u32) -> Result<
     hasher.update(format!("{:?}", scene.camera).as_bytes());
     hasher.update(serde_json::to_vec(&image_settings)?);
     hasher.update(format!("{spp} {REFERENCE_SEEDS:?}").as_bytes());
-    hasher.update(raykin::render::shaders::path_trace_source().as_bytes());
+    hasher.update(
+        raykin::render::shaders::compose(&raykin::render::passes::trace::KERNEL).as_bytes(),
+    );
     let digest = hasher.finalize();
     Ok(digest[..12].iter().map(|b| format!("{b:02x}")).collect())
 }

@@ -89,7 +89,7 @@ pub struct FrameRow {
     pub skin_refit_ms_per_100k_tris: f64,
     pub bvh_rebuilds: u64,
     pub max_sah_ratio_last_frame: f32,
-    /// Shading-free ray casting (`PathTracer::cast_rays`) on the last pose: camera rays per second, and
+    /// Shading-free ray casting (`HeadlessApp::cast_rays`) on the last pose: camera rays per second, and
     /// diffuse bounce rays per second (the extra rays over the extra time when one bounce is added); 0 without
     /// timestamp queries.
     pub raycast_camera_rays_per_s: f64,
@@ -106,10 +106,7 @@ pub fn measure(
 ) -> Result<FrameRow> {
     let (width, height) = (settings.width, settings.height);
     let mut app = super::open_app(ctx, scene, settings.clone())?;
-    app.app
-        .world_mut()
-        .resource_mut::<raykin::render::Renderer>()
-        .tonemap_each_frame = true;
+    app.accumulation_mut().display_each_frame = true;
     let mut samples: Vec<[f64; SAMPLE_COLUMNS]> = Vec::with_capacity(frames);
     let mut rays = 0u64;
     for f in 0..warmup + frames {
@@ -119,7 +116,7 @@ pub fn measure(
         if f < warmup {
             continue;
         }
-        rays += app.renderer().tracer.read_ray_count(&app.ctx);
+        rays += app.view().read_ray_count(&app.ctx);
         samples.push(frame_sample(&app, wall));
     }
     let column = |i: usize| Spread::of(&samples.iter().map(|s| s[i]).collect::<Vec<_>>());
@@ -137,7 +134,7 @@ pub fn measure(
         skinning_gpu: column(11).median,
         refit_gpu: column(12).median,
     };
-    let gpu_timed = app.renderer().last_pass_times.is_some();
+    let gpu_timed = app.pass_times().is_some();
     // Without timestamps the trace column holds whole-frame wall times.
     let trace = if gpu_timed { column(8) } else { column(10) };
     let frame = column(10);
@@ -149,8 +146,7 @@ pub fn measure(
     let pixels = width as f64 * height as f64;
     let spp = settings.spp_per_frame as f64;
     let (raycast_camera, raycast_diffuse) = raycast_rates(&mut app, frames.clamp(1, 50));
-    let renderer = app.renderer();
-    let memory = renderer.scene.memory;
+    let memory = app.gpu_scene().memory;
     let triangles = scene.scene.triangle_count();
     let deformable_triangles: usize = scene
         .scene
@@ -159,13 +155,13 @@ pub fn measure(
         .filter(|m| m.is_deformable())
         .map(|m| m.triangles.len())
         .sum();
-    let gpu_deform = renderer.deformer.is_some();
+    let gpu_deform = app.deformation().deformer.is_some();
     let skin_refit_ms = if gpu_deform {
         passes.skinning_gpu + passes.refit_gpu
     } else {
         passes.skinning + passes.refit
     };
-    let deform_backend = format!("{:?}", renderer.deform_backend);
+    let deform_backend = format!("{:?}", app.deformation().backend);
     let stats = app.bvh_stats();
     Ok(FrameRow {
         scene: scene.name.clone(),
@@ -175,7 +171,7 @@ pub fn measure(
         spp_per_frame: settings.spp_per_frame,
         max_depth: settings.max_depth,
         frames,
-        bvh_build_and_upload_ms: renderer.scene.build_seconds * 1e3,
+        bvh_build_and_upload_ms: app.gpu_scene().build_seconds * 1e3,
         gpu_memory_geometry_bvh_mib: memory.geometry_and_bvh() as f64 / 1048576.0,
         bytes_per_triangle_geometry_bvh: memory.geometry_and_bvh() as f64 / triangles.max(1) as f64,
         trace_ms_median: trace.median,
@@ -239,7 +235,7 @@ fn frame_sample(app: &HeadlessApp, wall_ms: f64) -> [f64; SAMPLE_COLUMNS] {
     let stats = app.bvh_stats();
     let refit = stats.last_refit_seconds * 1e3;
     let rebuild = stats.last_rebuild_seconds * 1e3;
-    let gpu = app.renderer().last_pass_times;
+    let gpu = app.pass_times();
     let (trace, tonemap) = gpu.map_or((f64::NAN, f64::NAN), |p| (p.trace_ms, p.tonemap_ms));
     let (skin_gpu, refit_gpu) = gpu.map_or((0.0, 0.0), |p| (p.skin_ms, p.refit_ms));
     let gpu_total = gpu.map_or(0.0, |p| p.trace_ms + p.tonemap_ms + p.skin_ms + p.refit_ms);

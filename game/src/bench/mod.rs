@@ -97,7 +97,7 @@ fn open_app(ctx: &GpuContext, scene: &BenchScene, settings: RenderSettings) -> R
             .map_err(|e| anyhow::anyhow!("{}: scene root: {e}", scene.name))?;
         raykin::animation::attach_players(world, root, &scene.players);
     }
-    world.resource_mut::<raykin::render::Renderer>().time_passes = true;
+    app.set_time_passes(true);
     Ok(app)
 }
 

@@ -11,7 +11,6 @@ use crate::bench::stats::Spread;
 use anyhow::{Context, Result};
 use raykin::frame_timing::FrameTimings;
 use raykin::gpu::GpuContext;
-use raykin::render::Renderer;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -132,7 +131,7 @@ pub fn run(ctx: GpuContext, setup: OffscreenSetup) -> Result<()> {
             &mut output,
             &view,
             size,
-            &session.engine.renderer().tracer,
+            session.engine.view(),
         );
         let paint_ms = t1.elapsed().as_secs_f64() * 1e3;
         let waited_ui = setup.sync_passes.then(|| wait_ms(&ctx));
@@ -192,7 +191,7 @@ pub fn run(ctx: GpuContext, setup: OffscreenSetup) -> Result<()> {
     let wall_s = start.elapsed().as_secs_f64();
     let rss_end = rss_kib();
     let world = session.engine.app.world();
-    let renderer = world.resource::<Renderer>();
+    let samples_at_end = world.resource::<raykin::render::Accumulation>().samples;
     let settings = world.resource::<raykin::render::RenderSettings>();
     let report = serde_json::json!({
         "scene": session.scene().source,
@@ -208,7 +207,7 @@ pub fn run(ctx: GpuContext, setup: OffscreenSetup) -> Result<()> {
         "wall_s": wall_s,
         "spp_per_frame": settings.spp_per_frame,
         "max_depth": settings.max_depth,
-        "samples_at_end": renderer.tracer.samples,
+        "samples_at_end": samples_at_end,
         "timing": "CPU: Instant around each frame-schedule phase and the UI passes; GPU: timestamp queries per pass, read back asynchronously (a few frames may go unreported); gpu_wait_ms (--sync-passes): wall time of waiting for the GPU after the schedule and after the UI pass",
         "cpu_ms": {
             "editor_ui": spread(&cpu.ui),
@@ -236,7 +235,7 @@ pub fn run(ctx: GpuContext, setup: OffscreenSetup) -> Result<()> {
             "rss_kib_after_warmup": rss_after_warmup,
             "rss_kib_end": rss_end,
             "rss_kib_by_frame": rss_samples,
-            "gpu_scene_bytes": renderer.scene.memory.total(),
+            "gpu_scene_bytes": world.resource::<raykin::render::GpuScene>().memory.total(),
         },
     });
     let frame = spread(&cpu.frame);

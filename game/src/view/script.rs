@@ -7,7 +7,7 @@ use anyhow::{Context, Result, bail};
 use raykin::animation::AnimationPlayer;
 use raykin::camera::{CameraInput, CameraMode, CameraRig};
 use raykin::editor::EditorState;
-use raykin::render::{AovView, Environment, RenderSettings, Renderer, Tonemapper};
+use raykin::render::{Accumulation, AovView, Environment, RenderSettings, Tonemapper};
 use raykin::scene::{AlphaMode, Materials};
 use std::path::{Path, PathBuf};
 
@@ -284,7 +284,7 @@ impl ScriptRunner {
                 return Ok(Flow::Continue);
             }
             Waiting::Samples { target, frames } => {
-                let samples = session.tracer().samples;
+                let samples = session.samples();
                 if samples < *target {
                     *frames += 1;
                     if *frames > MAX_WAIT_FRAMES {
@@ -384,7 +384,7 @@ fn run(session: &mut Session, host: &mut dyn ScriptHost, command: &Command) -> R
         ),
         Command::Pick(x, y) => {
             let world = session.world();
-            let hit = raykin::render::pick::pick_pixel(world, *x, *y);
+            let hit = raykin::render::picking::pick_pixel(world, *x, *y);
             let mut state = world.resource_mut::<EditorState>();
             state.selection.entity = hit.map(|h| h.entity);
             state.selection.material = hit.and_then(|h| h.material);
@@ -454,7 +454,7 @@ fn apply_setting(session: &mut Session, setting: &Setting) {
     if let Setting::SampleLimit(n) = setting {
         world.resource_mut::<EditorState>().sample_limit = *n;
         // The viewport applies it during the UI pass; set it now too so the next frame already stops.
-        world.resource_mut::<Renderer>().sample_limit = (*n > 0).then_some(*n);
+        world.resource_mut::<Accumulation>().sample_limit = (*n > 0).then_some(*n);
         return;
     }
     let mut s = world.resource_mut::<RenderSettings>();

@@ -8,7 +8,7 @@ use raykin::camera::CameraChoice;
 use raykin::editor::{EditorAction, EditorPlugin, EditorState, Severity, ViewerPrefs, ViewerStats};
 use raykin::gpu::GpuContext;
 use raykin::headless::HeadlessApp;
-use raykin::render::{RenderSettings, Renderer};
+use raykin::render::{Accumulation, FrameStats, RenderSettings};
 use raykin::scene::{LoadOptions, Materials, SceneAsset};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -350,7 +350,7 @@ impl Session {
         let ctx = self.ctx.clone();
         let cpu_adapter = ctx.info.device_type == wgpu::DeviceType::Cpu;
         let world = self.world();
-        let gpu = world.resource_mut::<Renderer>().tracer.poll_stats(&ctx);
+        let gpu = world.resource_mut::<FrameStats>().poll(&ctx);
         let mut stats = world.resource_mut::<ViewerStats>();
         stats.frames += 1;
         if measured_dt {
@@ -375,9 +375,9 @@ impl Session {
         gpu
     }
 
-    /// The tracer whose image the display shows.
-    pub fn tracer(&self) -> &raykin::render::PathTracer {
-        &self.engine.renderer().tracer
+    /// Samples per pixel in the image the display shows.
+    pub fn samples(&self) -> u32 {
+        self.engine.samples()
     }
 
     /// Writes the settings file (when persistence is on).
@@ -401,10 +401,7 @@ impl Session {
     /// animation plays.
     pub fn idle(&mut self) -> bool {
         let world = self.world();
-        let renderer = world.resource::<Renderer>();
-        let converged = renderer
-            .sample_limit
-            .is_some_and(|l| renderer.tracer.samples >= l);
+        let converged = world.resource::<Accumulation>().converged();
         let playing = world
             .query::<&AnimationPlayer>()
             .iter(world)
@@ -472,9 +469,8 @@ fn build_engine(
         }
     }
     {
-        let mut renderer = world.resource_mut::<Renderer>();
-        renderer.tonemap_each_frame = true;
-        renderer.tracer.enable_async_stats(ctx);
+        world.resource_mut::<Accumulation>().display_each_frame = true;
+        world.resource_mut::<FrameStats>().enable_async(ctx);
     }
     let notes = engine.notes.clone();
     let world = engine.app.world_mut();

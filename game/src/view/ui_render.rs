@@ -4,7 +4,7 @@
 
 use raykin::gpu::GpuContext;
 use raykin::gpu::readback::AsyncReadback;
-use raykin::render::PathTracer;
+use raykin::render::ViewTargets;
 
 struct PassTimer {
     set: wgpu::QuerySet,
@@ -30,7 +30,7 @@ impl UiRenderer {
                 ..Default::default()
             },
         );
-        raykin::render::display::install(&mut renderer, ctx, format);
+        raykin::render::passes::display::install(&mut renderer, ctx, format);
         let timer = ctx.supports_timestamps().then(|| PassTimer {
             set: ctx.device.create_query_set(&wgpu::QuerySetDescriptor {
                 label: Some("ui pass timestamps"),
@@ -54,7 +54,7 @@ impl UiRenderer {
     }
 
     /// Paints `output` (this frame's egui output; its texture deltas are applied and consumed) into `target`
-    /// of `size_px`, with the tracer's current image in the image area. Returns the submission, which ends
+    /// of `size_px`, with the view's current image in the image area. Returns the submission, which ends
     /// the frame's GPU work.
     pub fn render(
         &mut self,
@@ -63,10 +63,10 @@ impl UiRenderer {
         output: &mut egui::FullOutput,
         target: &wgpu::TextureView,
         size_px: [u32; 2],
-        tracer: &PathTracer,
+        image: &ViewTargets,
     ) -> wgpu::SubmissionIndex {
         let (device, queue) = (&ctx.device, &ctx.queue);
-        raykin::render::display::set_source(&mut self.renderer, tracer);
+        raykin::render::passes::display::set_source(&mut self.renderer, image);
         for (id, deltas) in output.textures_delta.set.drain() {
             for delta in deltas {
                 self.renderer.update_texture(device, queue, id, &delta);

@@ -232,10 +232,10 @@ impl Running {
             Some(frame) => {
                 let view = frame.texture.create_view(&Default::default());
                 let size = [self.config.width, self.config.height];
-                let tracer = &self.session.engine.renderer().tracer;
+                let image = self.session.engine.view();
                 let submission =
                     self.ui
-                        .render(&ctx, &self.session.egui, &mut output, &view, size, tracer);
+                        .render(&ctx, &self.session.egui, &mut output, &view, size, image);
                 ctx.queue.present(frame);
                 self.pacer.submitted(&ctx, submission);
             }

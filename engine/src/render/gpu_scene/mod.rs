@@ -1,0 +1,319 @@
+//! Packs a scene's meshes, materials and textures into the GPU buffers the kernels read.
+//! Static data is uploaded once; instances, the top-level BVH and emitters are rewritten when they change;
+//! a deformed mesh rewrites only its own positions/normals and BLAS nodes.
+
+mod deformed;
+mod instances;
+mod packing;
+
+pub use instances::{InstanceInput, transform_box};
+pub use packing::{gpu_material, luminance};
+
+use super::layout::*;
+use crate::bvh::{Blas, MeshBvh, StaticLayout};
+use crate::gpu::GpuContext;
+use crate::gpu::bind::storage_with as storage;
+use crate::scene::{MeshData, SceneAsset};
+use glam::Vec3;
+use packing::{OrderedTriangles, order_triangles, pack_vertices};
+use rayon::prelude::*;
+
+#[derive(Debug, thiserror::Error)]
+pub enum UploadError {
+    #[error(
+        "{scene}: the scene is over this GPU's limits: the {what} buffer needs {needed_mib:.1} MiB, but `{adapter}` binds at most {limit_mib:.1} MiB per buffer"
+    )]
+    OverLimit {
+        scene: String,
+        what: &'static str,
+        needed_mib: f64,
+        limit_mib: f64,
+        adapter: String,
+    },
+    #[error("{scene}: mesh `{mesh}`: {source}")]
+    Bvh {
+        scene: String,
+        mesh: String,
+        source: crate::bvh::BvhTooDeep,
+    },
+}
+
+/// Where one mesh's data sits, CPU side, so that deformations can rewrite just that range.
+#[derive(Clone, Debug)]
+pub struct MeshSlot {
+    pub gpu: GpuMesh,
+    /// Triangles in BVH order (vertex indices).
+    pub gpu_triangles: Vec<[u32; 3]>,
+    pub blas_node_offset: u32,
+    pub blas: Blas,
+    /// Current vertex positions of a deformed mesh; `None` while it is in its rest pose.
+    pub positions: Option<Vec<Vec3>>,
+    /// BLAS nodes reserved for this mesh (a deformable mesh reserves room for any rebuilt tree).
+    pub blas_capacity: u32,
+    /// Conservative bounds of a GPU-deformed mesh at its current pose (its CPU tree's boxes are stale);
+    /// the top-level BVH uses them instead of the tree's root box.
+    pub deformed_bounds: Option<(Vec3, Vec3)>,
+    /// The tree was rebuilt since upload (its topology and triangle order are no longer the upload's).
+    pub rebuilt: bool,
+    /// The tree built at upload, kept once [`RebuildPolicy::PoseDetermined`] first needs it.
+    upload_bvh: Option<MeshBvh>,
+}
+
+impl MeshSlot {
+    /// Puts back the tree built at upload (keeping a copy the first time); returns the upload triangle order
+    /// to write when the current tree was a rebuilt one. The tree's bounds are stale until the next refit.
+    fn restore_upload_tree(
+        &mut self,
+        mesh: &MeshData,
+        materials: &[GpuMaterial],
+        quality: crate::bvh::BvhQuality,
+    ) -> Option<OrderedTriangles> {
+        if self.upload_bvh.is_none() {
+            // Until the first rebuild the current tree has the upload topology; after one, the same
+            // deterministic build over the rest positions gives it back.
+            let upload = if self.rebuilt {
+                MeshBvh::build(&mesh.positions, &mesh.triangles, quality).ok()?
+            } else {
+                self.blas.binary()?.clone()
+            };
+            self.upload_bvh = Some(upload);
+        }
+        if !self.rebuilt {
+            return None;
+        }
+        let upload = self.upload_bvh.clone()?;
+        let ordered = order_triangles(
+            mesh,
+            &upload.flat.order,
+            self.gpu.triangle_offset,
+            materials,
+        );
+        self.blas = Blas::Binary(upload);
+        self.gpu_triangles = ordered.indices.clone();
+        self.rebuilt = false;
+        Some(ordered)
+    }
+}
+
+/// Byte counts of what the scene occupies on the GPU.
+#[derive(Clone, Copy, Debug, Default, serde::Serialize)]
+pub struct GpuMemory {
+    /// Child-pair BVH2 nodes and compressed wide nodes together.
+    pub blas_nodes: u64,
+    pub triangles: u64,
+    pub vertex_pool: u64,
+    pub materials: u64,
+    pub texels: u64,
+    pub instances_and_tlas: u64,
+    /// GPU deformation: rest attributes, influences, morph deltas, per-frame matrices/weights and refit
+    /// tables of the meshes the GPU deforms (0 on the CPU backend).
+    pub deform: u64,
+}
+
+impl GpuMemory {
+    /// Geometry + BVH: the figure the memory target counts (no textures).
+    pub fn geometry_and_bvh(&self) -> u64 {
+        self.blas_nodes + self.triangles + self.vertex_pool + self.instances_and_tlas + self.deform
+    }
+    pub fn total(&self) -> u64 {
+        self.geometry_and_bvh() + self.materials + self.texels
+    }
+}
+
+#[derive(bevy_ecs::prelude::Resource)]
+pub struct GpuScene {
+    pub blas_nodes: wgpu::Buffer,
+    /// Compressed wide nodes of static meshes (`GpuMesh::blas_root` has [`WIDE_BLAS`] set).
+    pub wide_nodes: wgpu::Buffer,
+    pub triangles: wgpu::Buffer,
+    pub vertex_pool: wgpu::Buffer,
+    pub materials: wgpu::Buffer,
+    pub texels: wgpu::Buffer,
+    pub texture_infos: wgpu::Buffer,
+    pub tlas_nodes: wgpu::Buffer,
+    pub instances: wgpu::Buffer,
+    pub emitters: wgpu::Buffer,
+    pub meshes: wgpu::Buffer,
+    pub mesh_slots: Vec<MeshSlot>,
+    pub material_data: Vec<GpuMaterial>,
+    pub memory: GpuMemory,
+    pub emitter_count: u32,
+    pub emitter_total_power: f32,
+    /// For each GPU instance (TLAS leaf order), its index in the last [`Self::update_instances`] input.
+    pub instance_order: Vec<u32>,
+    /// Emissive triangles per mesh (triangle slot, material), for building the emitter list.
+    emissive_triangles: Vec<Vec<(u32, u32)>>,
+    /// Instances as last uploaded (TLAS leaf order): material edits rebuild the emitter list from them.
+    uploaded_instances: Vec<GpuInstance>,
+    /// Bumped whenever buffers are recreated, so bind groups are rebuilt.
+    pub generation: u64,
+    /// Build quality of the upload (rebuilds of the upload tree use it).
+    bvh_quality: crate::bvh::BvhQuality,
+    pub build_seconds: f64,
+}
+
+impl GpuScene {
+    /// Builds every mesh's BVH and uploads the static data. `binding_limit` overrides the adapter's storage
+    /// binding limit (tests use it to exercise the over-limit path).
+    pub fn new(
+        ctx: &GpuContext,
+        scene: &SceneAsset,
+        quality: crate::bvh::BvhQuality,
+        layout: StaticLayout,
+        binding_limit: Option<u64>,
+    ) -> Result<(Self, Vec<String>), UploadError> {
+        let start = std::time::Instant::now();
+        let mut notes = Vec::new();
+        let limit = binding_limit
+            .unwrap_or(ctx.limits.max_storage_buffer_binding_size)
+            .min(ctx.limits.max_buffer_size);
+        let check = |what: &'static str, bytes: u64| -> Result<(), UploadError> {
+            if bytes > limit {
+                return Err(UploadError::OverLimit {
+                    scene: scene.source.clone(),
+                    what,
+                    needed_mib: bytes as f64 / 1048576.0,
+                    limit_mib: limit as f64 / 1048576.0,
+                    adapter: ctx.info.name.clone(),
+                });
+            }
+            Ok(())
+        };
+
+        let mut pool = Vec::new();
+        let mut blas_nodes = Vec::new();
+        let mut wide_nodes: Vec<obvhs::cwbvh::node::CwBvhNode> = Vec::new();
+        let mut triangles: Vec<[u32; 4]> = Vec::new();
+        let mut slots = Vec::with_capacity(scene.meshes.len());
+        let mut emissive_triangles = Vec::with_capacity(scene.meshes.len());
+        let materials: Vec<GpuMaterial> = scene
+            .materials
+            .iter()
+            .chain(std::iter::once(&crate::scene::Material::default()))
+            .map(gpu_material)
+            .collect();
+        // Meshes build their trees in parallel (obvhs also parallelises within one large mesh).
+        let blases: Vec<Blas> = scene
+            .meshes
+            .par_iter()
+            .map(|mesh| {
+                Blas::build(
+                    &mesh.positions,
+                    &mesh.triangles,
+                    quality,
+                    layout,
+                    mesh.is_deformable(),
+                )
+                .map_err(|source| UploadError::Bvh {
+                    scene: scene.source.clone(),
+                    mesh: mesh.name.clone(),
+                    source,
+                })
+            })
+            .collect::<Result<_, _>>()?;
+        for (mesh, blas) in scene.meshes.iter().zip(blases) {
+            let mut gpu = pack_vertices(mesh, &mut pool);
+            gpu.triangle_offset = triangles.len() as u32;
+            let ordered = order_triangles(mesh, blas.order(), gpu.triangle_offset, &materials);
+            triangles.extend_from_slice(&ordered.packed);
+            let (gpu_triangles, emissive) = (ordered.indices, ordered.emissive);
+            emissive_triangles.push(emissive);
+            match &blas {
+                Blas::Wide(wide) => {
+                    gpu.blas_root = wide_nodes.len() as u32 | WIDE_BLAS;
+                    wide_nodes.extend_from_slice(&wide.nodes);
+                }
+                Blas::Binary(bvh) => {
+                    gpu.blas_root = blas_nodes.len() as u32;
+                    blas_nodes.extend_from_slice(&bvh.flat.nodes);
+                    // Deformable meshes reserve the largest tree a rebuild can produce, so it rewrites in place.
+                    if mesh.is_deformable() {
+                        let capacity = crate::bvh::refit::node_capacity(mesh.triangles.len())
+                            .max(bvh.flat.nodes.len());
+                        blas_nodes.resize(
+                            gpu.blas_root as usize + capacity,
+                            crate::bvh::GpuBvhNode::EMPTY,
+                        );
+                    }
+                }
+            }
+            let blas_capacity = match &blas {
+                Blas::Wide(w) => w.nodes.len() as u32,
+                Blas::Binary(_) => (blas_nodes.len() - gpu.blas_root as usize) as u32,
+            };
+            slots.push(MeshSlot {
+                gpu,
+                gpu_triangles,
+                blas_node_offset: gpu.blas_root,
+                blas,
+                positions: None,
+                blas_capacity,
+                deformed_bounds: None,
+                rebuilt: false,
+                upload_bvh: None,
+            });
+        }
+        if wide_nodes.len() as u32 >= WIDE_BLAS {
+            return Err(UploadError::OverLimit {
+                scene: scene.source.clone(),
+                what: "wide BVH node",
+                needed_mib: (wide_nodes.len() * 80) as f64 / 1048576.0,
+                limit_mib: (WIDE_BLAS as usize * 80) as f64 / 1048576.0,
+                adapter: ctx.info.name.clone(),
+            });
+        }
+
+        let (texels, texture_infos, note) =
+            packing::pack_textures(scene, limit.min(ctx.limits.max_buffer_size));
+        notes.extend(note);
+
+        let meshes: Vec<GpuMesh> = slots.iter().map(|s| s.gpu).collect();
+        check("BLAS node", (blas_nodes.len() * 64) as u64)?;
+        check("wide BLAS node", (wide_nodes.len() * 80) as u64)?;
+        check("triangle", (triangles.len() * 16) as u64)?;
+        check("vertex", (pool.len() * 4) as u64)?;
+        check("texel", (texels.len() * 4) as u64)?;
+
+        let memory = GpuMemory {
+            blas_nodes: (blas_nodes.len() * 64 + wide_nodes.len() * 80) as u64,
+            triangles: (triangles.len() * 16) as u64,
+            vertex_pool: (pool.len() * 4) as u64,
+            materials: (materials.len() * 64 + texture_infos.len() * 16) as u64,
+            texels: (texels.len() * 4) as u64,
+            instances_and_tlas: 0,
+            deform: 0,
+        };
+        let gpu_scene = Self {
+            blas_nodes: storage(ctx, "blas nodes", bytemuck::cast_slice(&blas_nodes)),
+            wide_nodes: storage(ctx, "wide blas nodes", bytemuck::cast_slice(&wide_nodes)),
+            triangles: storage(ctx, "triangles", bytemuck::cast_slice(&triangles)),
+            vertex_pool: storage(ctx, "vertex pool", bytemuck::cast_slice(&pool)),
+            materials: storage(ctx, "materials", bytemuck::cast_slice(&materials)),
+            texels: storage(ctx, "texels", bytemuck::cast_slice(&texels)),
+            texture_infos: storage(ctx, "texture infos", bytemuck::cast_slice(&texture_infos)),
+            tlas_nodes: storage(ctx, "tlas nodes", &[0; 64]),
+            instances: storage(ctx, "instances", &[0; 112]),
+            emitters: storage(ctx, "emitters", &[0; 16]),
+            meshes: storage(ctx, "meshes", bytemuck::cast_slice(&meshes)),
+            mesh_slots: slots,
+            material_data: materials,
+            memory,
+            emitter_count: 0,
+            emitter_total_power: 0.0,
+            instance_order: Vec::new(),
+            emissive_triangles,
+            uploaded_instances: Vec::new(),
+            generation: 1,
+            bvh_quality: quality,
+            build_seconds: start.elapsed().as_secs_f64(),
+        };
+        Ok((gpu_scene, notes))
+    }
+
+    /// Whether a mesh has emissive triangles (next-event estimation needs their world areas on the CPU).
+    pub fn has_emitters(&self, mesh: usize) -> bool {
+        self.emissive_triangles
+            .get(mesh)
+            .is_some_and(|e| !e.is_empty())
+    }
+}

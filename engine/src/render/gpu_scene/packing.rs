@@ -1,0 +1,223 @@
+//! Packing the scene asset into GPU layouts: materials, vertex attributes, triangles in BVH leaf order,
+//! emissive-triangle lists and texels.
+
+use crate::render::layout::*;
+use crate::scene::{AlphaMode, MeshData, SceneAsset, Wrap};
+use glam::Vec3;
+
+fn texture_slot(t: Option<crate::scene::TextureRef>) -> u32 {
+    t.map_or(NONE, |t| t.texture | (t.tex_coord << 24))
+}
+
+pub fn gpu_material(m: &crate::scene::Material) -> GpuMaterial {
+    let (cutoff, alpha_flags) = match m.alpha_mode {
+        AlphaMode::Opaque => (0.0, 0),
+        AlphaMode::Mask(c) => (c, MATERIAL_ALPHA_MASK),
+        AlphaMode::Blend => (0.0, MATERIAL_ALPHA_BLEND),
+    };
+    GpuMaterial {
+        base_color: m.base_color.to_array(),
+        emissive: m.emitted_radiance().to_array(),
+        metallic: m.metallic,
+        roughness: m.roughness,
+        alpha_cutoff: cutoff,
+        normal_scale: m.normal_scale,
+        flags: alpha_flags
+            | if m.double_sided {
+                MATERIAL_DOUBLE_SIDED
+            } else {
+                0
+            },
+        base_color_texture: texture_slot(m.base_color_texture),
+        metallic_roughness_texture: texture_slot(m.metallic_roughness_texture),
+        normal_texture: texture_slot(m.normal_texture),
+        emissive_texture: texture_slot(m.emissive_texture),
+    }
+}
+
+pub fn luminance(c: Vec3) -> f32 {
+    c.dot(Vec3::new(0.2126, 0.7152, 0.0722))
+}
+
+/// Appends a mesh's attributes to the vertex pool; returns the mesh's offsets.
+pub(super) fn pack_vertices(mesh: &MeshData, pool: &mut Vec<u32>) -> GpuMesh {
+    let mut gpu = GpuMesh {
+        blas_root: 0,
+        triangle_offset: 0,
+        position_offset: pool.len() as u32,
+        normal_offset: NONE,
+        tangent_offset: NONE,
+        uv0_offset: NONE,
+        uv1_offset: NONE,
+        color_offset: NONE,
+    };
+    pool.extend(
+        mesh.positions
+            .iter()
+            .flat_map(|p| p.to_array().map(f32::to_bits)),
+    );
+    if let Some(n) = &mesh.normals {
+        gpu.normal_offset = pool.len() as u32;
+        pool.extend(n.iter().map(|n| oct_encode(*n)));
+    }
+    if let Some(t) = &mesh.tangents {
+        gpu.tangent_offset = pool.len() as u32;
+        pool.extend(t.iter().flat_map(|t| {
+            [
+                oct_encode(t.truncate()),
+                if t.w < 0.0 { -1f32 } else { 1f32 }.to_bits(),
+            ]
+        }));
+    }
+    for (uv, offset) in [
+        (&mesh.uv0, &mut gpu.uv0_offset),
+        (&mesh.uv1, &mut gpu.uv1_offset),
+    ] {
+        if let Some(uv) = uv {
+            *offset = pool.len() as u32;
+            pool.extend(uv.iter().flat_map(|v| v.to_array().map(f32::to_bits)));
+        }
+    }
+    if let Some(c) = &mesh.colors {
+        gpu.color_offset = pool.len() as u32;
+        pool.extend(c.iter().map(|c| pack_unorm4x8(*c)));
+    }
+    gpu
+}
+
+/// Halves images (box filter) until all texels fit `budget` bytes; returns the images and a note if any shrank.
+type FittedImage = (u32, u32, Vec<u8>);
+
+fn fit_images(scene: &SceneAsset, budget: u64) -> (Vec<FittedImage>, Option<String>) {
+    let mut images: Vec<(u32, u32, Vec<u8>)> = scene
+        .images
+        .iter()
+        .map(|i| (i.width, i.height, i.rgba8.clone()))
+        .collect();
+    let total = |imgs: &[(u32, u32, Vec<u8>)]| imgs.iter().map(|i| i.2.len() as u64).sum::<u64>();
+    let before = total(&images);
+    let mut halvings = 0;
+    while total(&images) > budget {
+        let Some(largest) = (0..images.len()).max_by_key(|&i| images[i].2.len()) else {
+            break;
+        };
+        let (w, h, px) = &images[largest];
+        if *w <= 1 && *h <= 1 {
+            break;
+        }
+        let (nw, nh) = ((w / 2).max(1), (h / 2).max(1));
+        let mut out = vec![0u8; (nw * nh * 4) as usize];
+        for y in 0..nh {
+            for x in 0..nw {
+                for c in 0..4 {
+                    let mut sum = 0u32;
+                    for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+                        let sx = (2 * x + dx).min(w - 1);
+                        let sy = (2 * y + dy).min(h - 1);
+                        sum += px[((sy * w + sx) * 4 + c) as usize] as u32;
+                    }
+                    out[((y * nw + x) * 4 + c) as usize] = ((sum + 2) / 4) as u8;
+                }
+            }
+        }
+        images[largest] = (nw, nh, out);
+        halvings += 1;
+    }
+    let note = (halvings > 0).then(|| {
+        format!(
+            "textures ({:.1} MiB) exceed the GPU's buffer limit; downscaled {halvings} time(s) to {:.1} MiB",
+            before as f64 / 1048576.0,
+            total(&images) as f64 / 1048576.0
+        )
+    });
+    (images, note)
+}
+
+/// Every image's texels in one RGBA8 buffer (downscaled to fit `budget` bytes) and each texture's GPU
+/// description; a note when images had to shrink.
+pub(super) fn pack_textures(
+    scene: &SceneAsset,
+    budget: u64,
+) -> (Vec<u32>, Vec<GpuTexture>, Option<String>) {
+    let (images, note) = fit_images(scene, budget);
+    let mut texels: Vec<u32> = Vec::new();
+    let mut image_offsets = Vec::new();
+    for (_, _, px) in &images {
+        image_offsets.push(texels.len() as u32);
+        texels.extend(
+            px.chunks_exact(4)
+                .map(|p| u32::from_le_bytes([p[0], p[1], p[2], p[3]])),
+        );
+    }
+    let wrap_bits = |w: Wrap| match w {
+        Wrap::Repeat => 0,
+        Wrap::MirroredRepeat => 1,
+        Wrap::ClampToEdge => 2,
+    };
+    let texture_infos: Vec<GpuTexture> = scene
+        .textures
+        .iter()
+        .map(|t| {
+            let i = (t.image as usize).min(images.len().saturating_sub(1));
+            let (w, h) = images.get(i).map_or((1, 1), |im| (im.0, im.1));
+            GpuTexture {
+                offset: image_offsets.get(i).copied().unwrap_or(0),
+                width: w,
+                height: h,
+                flags: wrap_bits(t.wrap_s)
+                    | (wrap_bits(t.wrap_t) << 2)
+                    | if t.nearest { TEXTURE_NEAREST } else { 0 },
+            }
+        })
+        .collect();
+
+    (texels, texture_infos, note)
+}
+
+/// A mesh's triangles in its BVH's leaf order, as the upload and an in-place rebuild both need them.
+pub(super) struct OrderedTriangles {
+    /// Vertex indices per triangle (kept on the CPU for refits).
+    pub indices: Vec<[u32; 3]>,
+    /// The GPU form: vertex indices + material.
+    pub packed: Vec<[u32; 4]>,
+    /// Emissive triangles: (slot in the triangle buffer, material).
+    pub emissive: Vec<(u32, u32)>,
+}
+
+pub(super) fn order_triangles(
+    mesh: &MeshData,
+    order: &[u32],
+    triangle_offset: u32,
+    materials: &[GpuMaterial],
+) -> OrderedTriangles {
+    let indices = crate::bvh::ordered_triangles(order, &mesh.triangles);
+    let packed = order
+        .iter()
+        .zip(&indices)
+        .map(|(&t, [a, b, c])| [*a, *b, *c, mesh.triangle_materials[t as usize]])
+        .collect();
+    OrderedTriangles {
+        indices,
+        packed,
+        emissive: emissive_slots(mesh, order, triangle_offset, materials),
+    }
+}
+
+/// A mesh's emissive triangles in BVH order (`order`: original triangle of each slot): (slot in the
+/// triangle buffer, material).
+pub(super) fn emissive_slots(
+    mesh: &MeshData,
+    order: &[u32],
+    triangle_offset: u32,
+    materials: &[GpuMaterial],
+) -> Vec<(u32, u32)> {
+    order
+        .iter()
+        .enumerate()
+        .filter_map(|(slot, &t)| {
+            let material = mesh.triangle_materials[t as usize];
+            (luminance(Vec3::from(materials[material as usize].emissive)) > 0.0)
+                .then_some((triangle_offset + slot as u32, material))
+        })
+        .collect()
+}

@@ -1,0 +1,339 @@
+//! The denoiser: an edge-avoiding a-trous wavelet filter in the SVGF style over the accumulated image
+//! (`denoise.wgsl` beside this file describes the passes). It is display-side: it reads the accumulation and writes its
+//! own output buffer, so turning it on or off never restarts accumulation, and its buffers are allocated the
+//! first time it runs at a view size.
+
+use crate::gpu::GpuContext;
+use crate::gpu::bind::{Binding, buffer_entries, layout_entries};
+use crate::render::shaders::{ShaderModule, compose};
+use crate::render::view::ViewTargets;
+use bevy_ecs::prelude::Resource;
+use bytemuck::{Pod, Zeroable};
+use serde::{Deserialize, Serialize};
+use std::sync::OnceLock;
+
+pub const KERNEL: ShaderModule = ShaderModule {
+    name: "denoise",
+    source: include_str!("denoise.wgsl"),
+    requires: &["color"],
+};
+
+/// Filter parameters; the defaults are SVGF's.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct DenoiseParams {
+    /// A-trous iterations; iteration k places its taps 2^k pixels apart (5 iterations: 125 pixels across).
+    pub iterations: u32,
+    /// Luminance edge-stopping, in standard deviations of the pixel's mean.
+    pub sigma_luminance: f32,
+    /// Exponent of the normal weight max(0, n_p . n_q)^sigma.
+    pub sigma_normal: f32,
+    /// Depth edge-stopping, in units of the depth change the centre's tangent plane predicts.
+    pub sigma_depth: f32,
+}
+
+impl Default for DenoiseParams {
+    fn default() -> Self {
+        Self {
+            iterations: 5,
+            sigma_luminance: 4.0,
+            sigma_normal: 128.0,
+            sigma_depth: 1.0,
+        }
+    }
+}
+
+impl DenoiseParams {
+    pub const MAX_ITERATIONS: u32 = 8;
+
+    /// Iterations clamped to 1..=[`Self::MAX_ITERATIONS`]; a sigma that is not a positive finite number
+    /// takes its default.
+    pub fn sanitized(&self) -> Self {
+        let d = Self::default();
+        let sigma = |v: f32, default: f32| if v.is_finite() && v > 0.0 { v } else { default };
+        Self {
+            iterations: self.iterations.clamp(1, Self::MAX_ITERATIONS),
+            sigma_luminance: sigma(self.sigma_luminance, d.sigma_luminance),
+            sigma_normal: sigma(self.sigma_normal, d.sigma_normal),
+            sigma_depth: sigma(self.sigma_depth, d.sigma_depth),
+        }
+    }
+}
+
+/// One pass's uniform (the `Params` struct of denoise.wgsl).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct DenoisePassParams {
+    pub width: u32,
+    pub height: u32,
+    pub step: u32,
+    pub last: u32,
+    pub sigma_luminance: f32,
+    pub sigma_normal: f32,
+    pub sigma_depth: f32,
+    pub _pad: u32,
+}
+
+/// The accumulation the denoiser reads: the view's targets.
+pub struct DenoiseInputs<'a> {
+    pub accum: &'a wgpu::Buffer,
+    pub albedo_depth: &'a wgpu::Buffer,
+    pub normal_hits: &'a wgpu::Buffer,
+    pub moments: &'a wgpu::Buffer,
+    pub width: u32,
+    pub height: u32,
+}
+
+impl<'a> DenoiseInputs<'a> {
+    pub fn of(view: &'a ViewTargets) -> Self {
+        Self {
+            accum: &view.accum,
+            albedo_depth: &view.albedo_depth,
+            normal_hits: &view.normal_hits,
+            moments: &view.moments,
+            width: view.width,
+            height: view.height,
+        }
+    }
+}
+
+/// Per-view buffers: guide, two illumination buffers (ping-pong) and the output.
+struct Targets {
+    output: wgpu::Buffer,
+    /// `[0]` reads illumination A and writes B, `[1]` the reverse.
+    groups: [wgpu::BindGroup; 2],
+    size: (u32, u32),
+    bytes: u64,
+}
+
+#[derive(Resource)]
+pub struct Denoiser {
+    prepare: wgpu::ComputePipeline,
+    variance: wgpu::ComputePipeline,
+    atrous: wgpu::ComputePipeline,
+    layout: wgpu::BindGroupLayout,
+    /// One [`DenoisePassParams`] per pass, `params_stride` apart (bound with a dynamic offset).
+    params: wgpu::Buffer,
+    params_stride: u64,
+    targets: OnceLock<Targets>,
+}
+
+/// Bytes per pixel of the denoiser's own buffers: guide, 2 x illumination, output.
+const BYTES_PER_PIXEL: u64 = 4 * 16;
+
+impl Denoiser {
+    pub fn new(ctx: &GpuContext) -> Self {
+        let device = &ctx.device;
+        use Binding::*;
+        // accum, albedo + depth, normal + hits, moments, guide, illumination in, out, denoised; params below
+        let mut entries = layout_entries(
+            &[
+                Read, Read, Read, Read, ReadWrite, Read, ReadWrite, ReadWrite,
+            ],
+            wgpu::ShaderStages::COMPUTE,
+        );
+        entries.push(wgpu::BindGroupLayoutEntry {
+            binding: 8,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Uniform,
+                has_dynamic_offset: true,
+                min_binding_size: wgpu::BufferSize::new(
+                    std::mem::size_of::<DenoisePassParams>() as u64
+                ),
+            },
+            count: None,
+        });
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("denoise"),
+            entries: &entries,
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("denoise"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("denoise"),
+            source: wgpu::ShaderSource::Wgsl(compose(&KERNEL).into()),
+        });
+        let pipeline = |entry: &str| {
+            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(entry),
+                layout: Some(&pipeline_layout),
+                module: &module,
+                entry_point: Some(entry),
+                compilation_options: Default::default(),
+                cache: None,
+            })
+        };
+        let params_stride = (std::mem::size_of::<DenoisePassParams>() as u64)
+            .next_multiple_of(ctx.limits.min_uniform_buffer_offset_alignment as u64);
+        let params = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("denoise params"),
+            size: params_stride * (2 + DenoiseParams::MAX_ITERATIONS as u64),
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        Self {
+            prepare: pipeline("prepare"),
+            variance: pipeline("variance"),
+            atrous: pipeline("atrous"),
+            layout,
+            params,
+            params_stride,
+            targets: OnceLock::new(),
+        }
+    }
+
+    /// Frees the per-view buffers (the view was resized; the next run allocates them again).
+    pub fn release(&mut self) {
+        self.targets = OnceLock::new();
+    }
+
+    /// GPU memory held for the current view (0 until the denoiser first runs).
+    pub fn memory_bytes(&self) -> u64 {
+        self.targets.get().map_or(0, |t| t.bytes)
+    }
+
+    fn targets(&self, ctx: &GpuContext, inputs: &DenoiseInputs) -> &Targets {
+        let targets =
+            self.targets.get_or_init(|| {
+                let pixels = (inputs.width as u64 * inputs.height as u64).max(1);
+                let buffer = |label| {
+                    ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                        label: Some(label),
+                        size: pixels * 16,
+                        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+                        mapped_at_creation: false,
+                    })
+                };
+                let guide = buffer("denoise guide");
+                let illum = [
+                    buffer("denoise illumination a"),
+                    buffer("denoise illumination b"),
+                ];
+                let output = buffer("denoised radiance");
+                let group = |read: &wgpu::Buffer, write: &wgpu::Buffer| {
+                    let buffers = [
+                        inputs.accum,
+                        inputs.albedo_depth,
+                        inputs.normal_hits,
+                        inputs.moments,
+                        &guide,
+                        read,
+                        write,
+                        &output,
+                    ];
+                    let mut entries = buffer_entries(&buffers);
+                    entries.push(wgpu::BindGroupEntry {
+                        binding: 8,
+                        resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                            buffer: &self.params,
+                            offset: 0,
+                            size: wgpu::BufferSize::new(
+                                std::mem::size_of::<DenoisePassParams>() as u64
+                            ),
+                        }),
+                    });
+                    ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                        label: Some("denoise"),
+                        layout: &self.layout,
+                        entries: &entries,
+                    })
+                };
+                Targets {
+                    groups: [group(&illum[0], &illum[1]), group(&illum[1], &illum[0])],
+                    output,
+                    size: (inputs.width, inputs.height),
+                    bytes: pixels * BYTES_PER_PIXEL,
+                }
+            });
+        assert_eq!(
+            targets.size,
+            (inputs.width, inputs.height),
+            "denoiser buffers not released after a resize"
+        );
+        targets
+    }
+
+    /// Records the denoising passes (one compute pass) over `inputs`; returns the output buffer, which holds
+    /// `vec4(rgb, 1)` per pixel once the encoder's commands ran.
+    pub fn encode(
+        &self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        inputs: &DenoiseInputs,
+        params: &DenoiseParams,
+        timestamp_writes: Option<wgpu::ComputePassTimestampWrites>,
+    ) -> &wgpu::Buffer {
+        let targets = self.targets(ctx, inputs);
+        let p = params.sanitized();
+        let stride = self.params_stride as usize;
+        let slots = 2 + p.iterations as usize;
+        let mut bytes = vec![0u8; stride * slots];
+        for slot in 0..slots {
+            let iteration = slot.saturating_sub(2) as u32;
+            let pass = DenoisePassParams {
+                width: inputs.width,
+                height: inputs.height,
+                step: 1 << iteration,
+                last: (slot == slots - 1) as u32,
+                sigma_luminance: p.sigma_luminance,
+                sigma_normal: p.sigma_normal,
+                sigma_depth: p.sigma_depth,
+                _pad: 0,
+            };
+            bytes[slot * stride..][..std::mem::size_of::<DenoisePassParams>()]
+                .copy_from_slice(bytemuck::bytes_of(&pass));
+        }
+        ctx.queue.write_buffer(&self.params, 0, &bytes);
+
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("denoise"),
+            timestamp_writes,
+        });
+        let workgroups = (inputs.width.div_ceil(8), inputs.height.div_ceil(8));
+        // prepare writes A; variance reads A, writes B; the iterations alternate from B.
+        let mut run = |slot: usize, pipeline: &wgpu::ComputePipeline, group: usize| {
+            pass.set_pipeline(pipeline);
+            pass.set_bind_group(0, &targets.groups[group], &[(slot * stride) as u32]);
+            pass.dispatch_workgroups(workgroups.0, workgroups.1, 1);
+        };
+        run(0, &self.prepare, 1);
+        run(1, &self.variance, 0);
+        for k in 0..p.iterations as usize {
+            run(2 + k, &self.atrous, if k % 2 == 0 { 1 } else { 0 });
+        }
+        &targets.output
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sanitized_params_are_usable() {
+        let bad = DenoiseParams {
+            iterations: 0,
+            sigma_luminance: f32::NAN,
+            sigma_normal: -1.0,
+            sigma_depth: f32::INFINITY,
+        };
+        assert_eq!(
+            bad.sanitized(),
+            DenoiseParams {
+                iterations: 1,
+                ..DenoiseParams::default()
+            }
+        );
+        let many = DenoiseParams {
+            iterations: 100,
+            sigma_luminance: 2.0,
+            ..Default::default()
+        };
+        assert_eq!(many.sanitized().iterations, DenoiseParams::MAX_ITERATIONS);
+        assert_eq!(many.sanitized().sigma_luminance, 2.0);
+    }
+}

@@ -1,0 +1,100 @@
+//! The trace pass: `spp` paths per pixel through the path integrator (`shaders/integrator/path.wgsl`), added to
+//! the view's accumulation targets with the first-hit AOVs and the denoiser's moments.
+
+use crate::gpu::GpuContext;
+use crate::gpu::bind::{Binding, CachedGroup, bind_group, compute_layout};
+use crate::render::shaders::{ShaderModule, compose};
+use crate::render::view::ViewTargets;
+use bevy_ecs::prelude::Resource;
+
+pub const KERNEL: ShaderModule = ShaderModule {
+    name: "trace",
+    source: include_str!("trace.wgsl"),
+    requires: &[
+        "constants",
+        "camera",
+        "color",
+        "math",
+        "sampler",
+        "integrator/path",
+    ],
+};
+
+#[derive(Resource)]
+pub struct TracePass {
+    pipeline: wgpu::ComputePipeline,
+    view_layout: wgpu::BindGroupLayout,
+    view_group: CachedGroup<u64>,
+}
+
+impl TracePass {
+    pub fn new(ctx: &GpuContext, scene_layout: &wgpu::BindGroupLayout) -> Self {
+        use Binding::*;
+        // frame, accum, albedo + depth, normal + hits, ray counter, primary hit, moments
+        let view_layout = compute_layout(
+            ctx,
+            "trace view",
+            &[
+                Uniform, ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite,
+            ],
+        );
+        let pipeline = crate::gpu::compute_pipeline(
+            &ctx.device,
+            "path trace",
+            compose(&KERNEL),
+            &[Some(scene_layout), Some(&view_layout)],
+            "trace_pixels",
+        );
+        Self {
+            pipeline,
+            view_layout,
+            view_group: CachedGroup::default(),
+        }
+    }
+
+    /// Binds the view's targets (again only when they were replaced).
+    pub fn prepare(&mut self, ctx: &GpuContext, view: &ViewTargets) {
+        let layout = &self.view_layout;
+        self.view_group.get_or_make(view.generation, || {
+            bind_group(
+                ctx,
+                "trace view",
+                layout,
+                &[
+                    &view.frame,
+                    &view.accum,
+                    &view.albedo_depth,
+                    &view.normal_hits,
+                    &view.ray_counter,
+                    &view.hit,
+                    &view.moments,
+                ],
+            )
+        });
+    }
+
+    /// Records the pass (after [`Self::prepare`] for this view); the view's frame uniform must hold this
+    /// dispatch's constants and its ray counter is reset first.
+    pub fn encode(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        scene: &wgpu::BindGroup,
+        view: &ViewTargets,
+        timestamp_writes: Option<wgpu::ComputePassTimestampWrites>,
+    ) {
+        let group = self
+            .view_group
+            .get(&view.generation)
+            .expect("TracePass::prepare ran for this view");
+        encoder.clear_buffer(&view.ray_counter, 0, None);
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("path trace"),
+            timestamp_writes,
+        });
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, scene, &[]);
+        pass.set_bind_group(1, group, &[]);
+        let (x, y) = view.workgroups();
+        pass.dispatch_workgroups(x, y, 1);
+    }
+}

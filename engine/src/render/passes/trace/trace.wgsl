@@ -1,0 +1,71 @@
+// The trace pass's kernel: one invocation per pixel runs `frame.spp` paths through the path integrator and adds
+// them to the view's accumulation targets (engine/src/render/view.rs), with the first-hit AOVs and the
+// denoiser's moments.
+
+@group(1) @binding(1) var<storage, read_write> accum: array<vec4<f32>>;
+// rgb: first-hit albedo sum, w: camera-space depth sum.
+@group(1) @binding(2) var<storage, read_write> aov_albedo_depth: array<vec4<f32>>;
+// xyz: first-hit shading normal sum, w: number of samples that hit a surface.
+@group(1) @binding(3) var<storage, read_write> aov_normal: array<vec4<f32>>;
+// Rays traced by the last dispatch (camera, bounce and shadow rays), for rays/s figures.
+@group(1) @binding(4) var<storage, read_write> ray_counter: array<atomic<u32>>;
+// What the ray through the pixel centre hits first: instance (NONE: nothing), triangle slot, barycentrics as
+// f32 bits. Written only with FRAME_HIT_AOV, once per accumulation (a 16-byte stub is bound otherwise).
+@group(1) @binding(5) var<storage, read_write> aov_hit: array<vec4<u32>>;
+// For the denoiser: rgb: radiance that reached the camera unscattered (emission seen directly, or the
+// environment where the camera ray missed) summed; w: sum of luminance(scattered radiance)^2.
+@group(1) @binding(6) var<storage, read_write> moments: array<vec4<f32>>;
+
+var<workgroup> workgroup_rays: atomic<u32>;
+
+@compute @workgroup_size(8, 8)
+fn trace_pixels(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
+    rays_traced = 0u;
+    if gid.x < frame.width && gid.y < frame.height {
+        trace_pixel(gid.xy);
+    }
+    // One global atomic per workgroup keeps the counter off the critical path.
+    atomicAdd(&workgroup_rays, rays_traced);
+    workgroupBarrier();
+    if lid == 0u {
+        atomicAdd(&ray_counter[0], atomicLoad(&workgroup_rays));
+    }
+}
+
+fn trace_pixel(gid: vec2<u32>) {
+    let pixel = gid.y * frame.width + gid.x;
+    let origin = camera_origin();
+    let forward = camera_forward();
+    if (frame.flags & FRAME_HIT_AOV) != 0u && frame.sample_base == 0u {
+        rays_traced++;
+        let hit = trace(Ray(origin, camera_ray_dir(gid, vec2<f32>(0.5))), MISS, false);
+        aov_hit[pixel] = vec4<u32>(hit.instance, hit.triangle, bitcast<u32>(hit.bary.x), bitcast<u32>(hit.bary.y));
+    }
+    var radiance = vec3<f32>(0.0);
+    var albedo_depth = vec4<f32>(0.0);
+    var normal_hits = vec4<f32>(0.0);
+    var unscattered_m2 = vec4<f32>(0.0);
+    for (var s = 0u; s < frame.spp; s++) {
+        var rng = rng_new(pixel, frame.sample_base + s, frame.seed);
+        // Box filter: a uniform point in the pixel.
+        let u_film = vec2<f32>(rand(&rng), rand(&rng));
+        let r = trace_path(generate_ray(gid, u_film, vec2<f32>(0.5)), forward, &rng);
+        // A non-finite sample would poison the pixel forever; it is dropped (it should never happen).
+        if finite3(r.radiance) {
+            radiance += r.radiance;
+            // Capped so that a firefly's square cannot overflow the sum.
+            let l = min(max(luminance(r.radiance - r.unscattered), 0.0), 1e15);
+            unscattered_m2 += vec4<f32>(r.unscattered, l * l);
+        }
+        if r.hit {
+            albedo_depth += vec4<f32>(r.albedo, r.depth);
+            normal_hits += vec4<f32>(r.normal, 1.0);
+        }
+    }
+    accum[pixel] += vec4<f32>(radiance, f32(frame.spp));
+    aov_albedo_depth[pixel] += albedo_depth;
+    aov_normal[pixel] += normal_hits;
+    if (frame.flags & FRAME_MOMENTS) != 0u {
+        moments[pixel] += unscattered_m2;
+    }
+}

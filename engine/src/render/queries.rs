@@ -1,0 +1,98 @@
+//! GPU work run outside the frame, on demand: one denoise of the current accumulation, one display transform,
+//! the ray-casting benchmark. Each records its pass, submits and reads the result back (blocking).
+
+use super::accumulation::Accumulation;
+use super::frame::{FrameConstants, encode_denoise, encode_display, write_frame_constants};
+use super::gpu_scene::GpuScene;
+use super::passes::OnFirstUse;
+use super::passes::denoise::Denoiser;
+use super::passes::raycast::RaycastPass;
+use super::passes::tonemap::TonemapPass;
+use super::scene_bindings::SceneBindings;
+use super::settings::RenderSettings;
+use super::stats::{FrameStats, RayCastTiming, TRACE_PAIR};
+use super::view::{ViewTargets, mean_rgb};
+use crate::camera::CameraView;
+use crate::gpu::GpuContext;
+use bevy_ecs::prelude::World;
+
+/// Denoises the current accumulation with the settings' `denoise_params` (whatever `RenderSettings::denoise`
+/// says) and reads it back: linear RGB per pixel, row-major from the top-left.
+pub fn denoised_radiance(world: &World) -> Vec<[f32; 3]> {
+    let ctx = world.resource::<GpuContext>();
+    let view = world.resource::<ViewTargets>();
+    let mut encoder = ctx.device.create_command_encoder(&Default::default());
+    let output = encode_denoise(
+        ctx,
+        &mut encoder,
+        view,
+        world.resource::<RenderSettings>(),
+        world.resource::<Denoiser>(),
+        world.resource::<FrameStats>(),
+    );
+    ctx.queue.submit([encoder.finish()]);
+    mean_rgb(&ctx.read_buffer(output, output.size()))
+}
+
+/// Tone-maps the current accumulation (denoised if the settings say so) and reads the sRGB RGBA8 image back.
+pub fn display_rgba8(world: &World) -> Vec<u8> {
+    let ctx = world.resource::<GpuContext>();
+    let view = world.resource::<ViewTargets>();
+    let mut encoder = ctx.device.create_command_encoder(&Default::default());
+    encode_display(
+        ctx,
+        &mut encoder,
+        view,
+        world.resource::<RenderSettings>(),
+        world.resource::<TonemapPass>(),
+        world.resource::<Denoiser>(),
+        world.resource::<FrameStats>(),
+    );
+    ctx.queue.submit([encoder.finish()]);
+    view.read_rgba8(ctx)
+}
+
+/// Casts one camera ray per pixel centre and, with `diffuse_bounce`, one cosine-distributed ray from each hit,
+/// without shading, through the current scene and camera. Blocks for the result; `None` without timestamp
+/// queries. Leaves the accumulation untouched.
+pub fn cast_rays(world: &World, diffuse_bounce: bool) -> Option<RayCastTiming> {
+    let stats = world.resource::<FrameStats>();
+    stats.timestamps.as_ref()?;
+    let ctx = world.resource::<GpuContext>();
+    let scene = world.resource::<GpuScene>();
+    let view = world.resource::<ViewTargets>();
+    let bindings = world.resource::<SceneBindings>();
+    let pass = world
+        .resource::<OnFirstUse<RaycastPass>>()
+        .get_or_init(|| RaycastPass::new(ctx, &bindings.layout));
+    write_frame_constants(
+        ctx,
+        view,
+        scene,
+        world.resource::<RenderSettings>(),
+        world.resource::<CameraView>(),
+        FrameConstants {
+            sample_base: world.resource::<Accumulation>().samples,
+            spp: 1,
+            max_depth: u32::from(diffuse_bounce),
+            keep_denoiser_inputs: false,
+        },
+    );
+    let mut encoder = ctx.device.create_command_encoder(&Default::default());
+    pass.encode(
+        ctx,
+        &mut encoder,
+        &bindings.fresh(ctx, scene),
+        view,
+        stats.pass_writes(TRACE_PAIR),
+    );
+    if let Some(t) = &stats.timestamps {
+        t.resolve(&mut encoder, 1);
+    }
+    ctx.queue.submit([encoder.finish()]);
+    let gpu_ms = stats.timestamps.as_ref()?.read_ms(ctx)[0];
+    Some(RayCastTiming {
+        gpu_ms,
+        rays: view.read_ray_count(ctx),
+    })
+}

@@ -1,0 +1,177 @@
+//! What the frame's passes cost on the GPU: timestamp pairs around the trace, tone-map and denoise passes, read
+//! back either blocking (benches: `time_passes`) or without stalling through a small ring of staging buffers
+//! (the viewer: [`FrameStats::enable_async`]).
+
+use crate::gpu::readback::AsyncReadback;
+use crate::gpu::{GpuContext, PassTimestamps};
+use bevy_ecs::prelude::Resource;
+
+/// GPU time of the last frame's passes, in milliseconds (0 for a pass that did not run).
+#[derive(Clone, Copy, Debug, Default, serde::Serialize)]
+pub struct PassTimes {
+    pub trace_ms: f64,
+    pub tonemap_ms: f64,
+    /// 0 when the last frame did not denoise.
+    pub denoise_ms: f64,
+    /// GPU skinning + morphing (`passes/deform`).
+    pub skin_ms: f64,
+    /// GPU BLAS refit + SAH cost (`passes/refit`).
+    pub refit_ms: f64,
+}
+
+/// What one frame cost on the GPU, read back without blocking.
+#[derive(Clone, Copy, Debug, Default, serde::Serialize)]
+pub struct GpuFrameStats {
+    /// Index of the frame (counts every traced frame).
+    pub dispatch: u64,
+    /// `None` without timestamp support.
+    pub passes: Option<PassTimes>,
+    /// Camera, bounce and shadow rays traced.
+    pub rays: u64,
+}
+
+/// Camera rays, and optionally one diffuse bounce ray per hit, cast without shading.
+#[derive(Clone, Copy, Debug, Default, serde::Serialize)]
+pub struct RayCastTiming {
+    /// GPU time of the pass, from timestamp queries.
+    pub gpu_ms: f64,
+    pub rays: u64,
+}
+
+/// Timestamp pair of each pass within the frame's query set.
+pub const TRACE_PAIR: u32 = 0;
+pub const TONEMAP_PAIR: u32 = 1;
+
+/// Bytes of one asynchronous statistics readback: trace + tonemap timestamps (32), denoise timestamps (16), ray
+/// counter (4), padded.
+const STATS_BYTES: u64 = 64;
+
+#[derive(Resource)]
+pub struct FrameStats {
+    /// Pairs: trace, tonemap.
+    pub timestamps: Option<PassTimestamps>,
+    /// One pair around the denoiser's pass, resolved by every denoise (in a frame or not).
+    pub denoise_timestamps: Option<PassTimestamps>,
+    /// GPU pass times of the last frame when `time_passes` is set (blocks the CPU each frame).
+    pub time_passes: bool,
+    pub last_pass_times: Option<PassTimes>,
+    /// Whether the last frame ran the denoiser.
+    pub denoised_last_frame: bool,
+    /// Frames traced so far.
+    pub frames: u64,
+    async_stats: Option<AsyncReadback>,
+}
+
+impl FrameStats {
+    pub fn new(ctx: &GpuContext) -> Self {
+        Self {
+            timestamps: PassTimestamps::new(ctx, "pass timestamps", 2),
+            denoise_timestamps: PassTimestamps::new(ctx, "denoise timestamps", 1),
+            time_passes: false,
+            last_pass_times: None,
+            denoised_last_frame: false,
+            frames: 0,
+            async_stats: None,
+        }
+    }
+
+    pub fn pass_writes(&self, pair: u32) -> Option<wgpu::ComputePassTimestampWrites<'_>> {
+        self.timestamps.as_ref().map(|t| t.pass_writes(pair))
+    }
+
+    pub fn denoise_writes(&self) -> Option<wgpu::ComputePassTimestampWrites<'_>> {
+        self.denoise_timestamps.as_ref().map(|t| t.pass_writes(0))
+    }
+
+    /// From now on every frame also copies its pass times and ray count into a small ring of staging buffers,
+    /// read by [`Self::poll`] without stalling (the viewer's frame loop).
+    pub fn enable_async(&mut self, ctx: &GpuContext) {
+        if self.async_stats.is_none() {
+            self.async_stats = Some(AsyncReadback::new(
+                ctx,
+                "frame stats readback",
+                STATS_BYTES,
+                3,
+            ));
+        }
+    }
+
+    /// Records this frame's copies into the asynchronous ring (when enabled).
+    pub fn encode_async(
+        &mut self,
+        encoder: &mut wgpu::CommandEncoder,
+        ray_counter: &wgpu::Buffer,
+        denoised: bool,
+    ) {
+        let Some(stats) = &mut self.async_stats else {
+            return;
+        };
+        let mut sources = Vec::new();
+        // Fixed offsets: timestamps at 0 (32 bytes), denoise at 32 (16), rays at 48 (4).
+        if let Some(t) = &self.timestamps {
+            sources.push((t.resolve_buffer(), 0, 32));
+        }
+        if let (true, Some(t)) = (denoised, &self.denoise_timestamps) {
+            sources.push((t.resolve_buffer(), 32, 16));
+        }
+        sources.push((ray_counter, 48, 4));
+        stats.encode(encoder, &sources, self.frames);
+    }
+
+    /// Call after the frame's submission: starts mapping the asynchronous copies.
+    pub fn after_submit(&mut self) {
+        if let Some(stats) = &mut self.async_stats {
+            stats.after_submit();
+        }
+    }
+
+    /// Statistics of finished frames since the last call, oldest first.
+    pub fn poll(&mut self, ctx: &GpuContext) -> Vec<GpuFrameStats> {
+        let Some(stats) = &mut self.async_stats else {
+            return Vec::new();
+        };
+        let timestamps = self.timestamps.as_ref();
+        stats
+            .poll(ctx)
+            .into_iter()
+            .map(|(dispatch, bytes)| {
+                let passes = timestamps.map(|t| {
+                    let ms = t.ms_from_bytes(&bytes[..48]);
+                    PassTimes {
+                        trace_ms: ms[0],
+                        tonemap_ms: ms[1],
+                        denoise_ms: ms[2],
+                        ..Default::default()
+                    }
+                });
+                let rays = u32::from_le_bytes(bytes[48..52].try_into().unwrap_or_default());
+                GpuFrameStats {
+                    dispatch,
+                    passes,
+                    rays: rays as u64,
+                }
+            })
+            .collect()
+    }
+
+    /// GPU times of the last frame (blocks until it finished); `None` without timestamp support.
+    pub fn read_pass_times(&self, ctx: &GpuContext) -> Option<PassTimes> {
+        let ms = self.timestamps.as_ref()?.read_ms(ctx);
+        Some(PassTimes {
+            trace_ms: ms[0],
+            tonemap_ms: ms[1],
+            denoise_ms: if self.denoised_last_frame {
+                self.read_denoise_ms(ctx).unwrap_or(0.0)
+            } else {
+                0.0
+            },
+            ..Default::default()
+        })
+    }
+
+    /// GPU time of the last denoise, in a frame or on its own (blocks until it finished); `None` without
+    /// timestamp support.
+    pub fn read_denoise_ms(&self, ctx: &GpuContext) -> Option<f64> {
+        Some(self.denoise_timestamps.as_ref()?.read_ms(ctx)[0])
+    }
+}

@@ -1,0 +1,158 @@
+//! The render plugin's systems before the frame: the CPU backend's refit of deformed meshes, the top-level
+//! structure over this frame's placements, and edited materials.
+
+use super::accumulation::Accumulation;
+use super::gpu_scene::{GpuScene, InstanceInput};
+use crate::animation::{DeformedElsewhere, DeformedMeshes};
+use crate::bvh::MeshBvh;
+use crate::bvh::refit::BvhStats;
+use crate::gpu::GpuContext;
+use crate::scene::{GlobalTransform, Materials, MeshInstance, SceneAssets, SkinnedMesh};
+use bevy_ecs::prelude::*;
+
+/// Deformed geometry moved this frame (set by whichever backend deformed it): the top-level BVH must be rebuilt
+/// over the new bounds. Read and cleared by [`update_instances`].
+#[derive(Resource, Default)]
+pub struct GeometryChanged(pub bool);
+
+/// The scene's instances as last uploaded, and the entity behind each GPU instance (TLAS leaf order), to map
+/// primary hits back to scene nodes.
+#[derive(Resource, Default)]
+pub struct InstanceMap {
+    last_inputs: Vec<InstanceInput>,
+    pub entities: Vec<Entity>,
+}
+
+/// Collects mesh instances; rebuilds the TLAS and re-uploads instances when any placement or deformed mesh
+/// changed, and restarts accumulation.
+#[allow(clippy::too_many_arguments)]
+pub fn update_instances(
+    ctx: Res<GpuContext>,
+    assets: Res<SceneAssets>,
+    mut scene: ResMut<GpuScene>,
+    mut map: ResMut<InstanceMap>,
+    mut geometry: ResMut<GeometryChanged>,
+    mut accumulation: ResMut<Accumulation>,
+    mut stats: ResMut<BvhStats>,
+    instances: Query<(
+        Entity,
+        &GlobalTransform,
+        &MeshInstance,
+        Option<&SkinnedMesh>,
+    )>,
+) {
+    let start = std::time::Instant::now();
+    stats.last_tlas_seconds = 0.0;
+    // Skinned vertices are already in world space (the joint matrices place them).
+    let mut placed: Vec<(InstanceInput, Entity)> = instances
+        .iter()
+        .map(|(e, g, m, skinned)| {
+            let world = if skinned.is_some() {
+                glam::Mat4::IDENTITY
+            } else {
+                g.0
+            };
+            let input = InstanceInput {
+                world,
+                mesh: m.mesh as u32,
+            };
+            (input, e)
+        })
+        .collect();
+    // Query order is not stable across archetype changes; sort for a deterministic TLAS.
+    placed.sort_by(|(a, _), (b, _)| {
+        a.mesh.cmp(&b.mesh).then_with(|| {
+            a.world
+                .to_cols_array()
+                .partial_cmp(&b.world.to_cols_array())
+                .unwrap_or(std::cmp::Ordering::Equal)
+        })
+    });
+    let (inputs, entities): (Vec<InstanceInput>, Vec<Entity>) = placed.into_iter().unzip();
+    let moved = std::mem::take(&mut geometry.0);
+    if inputs == map.last_inputs && !moved {
+        return;
+    }
+    if let Err(e) = scene.update_instances(&ctx, &assets.0, &inputs) {
+        tracing::error!("top-level BVH: {e}");
+    }
+    map.entities = scene
+        .instance_order
+        .iter()
+        .map(|&i| entities[i as usize])
+        .collect();
+    map.last_inputs = inputs;
+    accumulation.restart();
+    stats.last_tlas_seconds = start.elapsed().as_secs_f64();
+}
+
+/// CPU backend: uploads this frame's deformed meshes (only their vertex ranges), refits their BLAS, and rebuilds
+/// the worst ones past the SAH-ratio threshold (at most `max_rebuilds_per_frame`). Any change sets
+/// [`GeometryChanged`].
+#[allow(clippy::too_many_arguments)]
+pub fn refit_deformed(
+    ctx: Res<GpuContext>,
+    assets: Res<SceneAssets>,
+    settings: Res<super::RenderSettings>,
+    deformed: Res<DeformedMeshes>,
+    elsewhere: Res<DeformedElsewhere>,
+    mut stats: ResMut<BvhStats>,
+    mut scene: ResMut<GpuScene>,
+    mut geometry: ResMut<GeometryChanged>,
+) {
+    let asset = &assets.0;
+    stats.ensure_len(asset.meshes.len());
+    let start = std::time::Instant::now();
+    let (ratios, upload_seconds) = if deformed.changed.is_empty() {
+        (Vec::new(), 0.0)
+    } else {
+        scene.apply_deformations(&ctx, asset, &deformed, stats.policy)
+    };
+    for (m, ratio) in ratios {
+        stats.sah_ratio[m] = ratio;
+        stats.refits += 1;
+        geometry.0 = true;
+    }
+    stats.last_upload_seconds = upload_seconds;
+    stats.last_refit_seconds = start.elapsed().as_secs_f64() - upload_seconds;
+    let start = std::time::Instant::now();
+    // Meshes the GPU deforms are rebuilt by the GPU deformer, from their GPU positions.
+    let cpu_owned = |m: usize| !elsewhere.0.get(m).copied().unwrap_or(false);
+    for m in stats.due(cpu_owned) {
+        match scene.rebuild_mesh(&ctx, asset, m, settings.bvh_quality) {
+            Ok(()) => {
+                stats.sah_ratio[m] = scene.mesh_slots[m]
+                    .blas
+                    .binary()
+                    .map_or(1.0, MeshBvh::sah_ratio);
+                stats.mesh_rebuilds[m] += 1;
+                stats.rebuilds += 1;
+                geometry.0 = true;
+            }
+            Err(e) => {
+                tracing::error!(
+                    "mesh `{}`: BVH rebuild: {e}; keeping the refit tree",
+                    asset.meshes[m].name
+                );
+                stats.sah_ratio[m] = 1.0;
+            }
+        }
+    }
+    stats.last_rebuild_seconds = start.elapsed().as_secs_f64();
+}
+
+/// Uploads edited materials (only those that differ from the GPU's copy) and restarts accumulation.
+pub fn upload_materials(
+    ctx: Res<GpuContext>,
+    assets: Res<SceneAssets>,
+    materials: Res<Materials>,
+    mut scene: ResMut<GpuScene>,
+    mut accumulation: ResMut<Accumulation>,
+) {
+    if !materials.is_changed() {
+        return;
+    }
+    if scene.update_materials(&ctx, &assets.0, &materials.0) > 0 {
+        accumulation.restart();
+    }
+}

@@ -1,0 +1,19 @@
+// Alpha-mask cut-outs, tested during traversal so that masked-out texels are never hit.
+
+// False when the hit point's base-colour alpha is below the material's cutoff.
+fn alpha_passes(mesh: Mesh, tri: vec4<u32>, bary: vec2<f32>) -> bool {
+    let m = materials[tri.w];
+    if (m.flags & MATERIAL_ALPHA_MASK) == 0u { return true; }
+    let w = vec3<f32>(1.0 - bary.x - bary.y, bary.x, bary.y);
+    var alpha = m.base_color.a;
+    if m.base_color_texture != NONE {
+        let set_offset = select(mesh.uv0_offset, mesh.uv1_offset, (m.base_color_texture >> 24u) == 1u);
+        if set_offset != NONE {
+            alpha *= sample_texture(m.base_color_texture, interpolate_uv(set_offset, tri, w)).a;
+        }
+    }
+    if mesh.color_offset != NONE {
+        alpha *= vertex_color(mesh, tri, w).a;
+    }
+    return alpha >= m.alpha_cutoff;
+}

@@ -1,0 +1,102 @@
+// A ray's hit resolved into what shading needs (pbrt-v4 `SurfaceInteraction`): the position, geometric and
+// shading normals (normal map applied) facing the incoming ray, the material's BSDF parameters at the point
+// (textures and vertex colours applied), coverage alpha and emission.
+
+struct SurfaceInteraction {
+    p: vec3<f32>,
+    ng: vec3<f32>,      // geometric normal, facing the incoming ray
+    n: vec3<f32>,       // shading normal, facing the incoming ray
+    front: bool,        // hit the side the triangle's winding faces
+    bsdf: BsdfParams,
+    alpha: f32,
+    emission: vec3<f32>,
+    flags: u32,         // MATERIAL_* flags
+    material: u32,
+}
+
+fn resolve_hit(hit: Hit, ray: Ray) -> SurfaceInteraction {
+    let inst = instances[hit.instance];
+    let mesh = meshes[inst.mesh];
+    let tri = triangles[hit.triangle];
+    let m = materials[tri.w];
+    let w = vec3<f32>(1.0 - hit.bary.x - hit.bary.y, hit.bary.x, hit.bary.y);
+    let p0 = transform_point(inst.world_from_object, vertex_position(mesh, tri.x));
+    let p1 = transform_point(inst.world_from_object, vertex_position(mesh, tri.y));
+    let p2 = transform_point(inst.world_from_object, vertex_position(mesh, tri.z));
+    var s: SurfaceInteraction;
+    s.material = tri.w;
+    // The hit point from world-space barycentrics is more precise than origin + t * dir.
+    s.p = p0 * w.x + p1 * w.y + p2 * w.z;
+    var ng = normalize(cross(p1 - p0, p2 - p0));
+    s.front = dot(ng, ray.dir) < 0.0;
+    if !s.front { ng = -ng; }
+    s.ng = ng;
+
+    var n = ng;
+    if mesh.normal_offset != NONE {
+        let a = vertex_pool[mesh.normal_offset + tri.x];
+        let b = vertex_pool[mesh.normal_offset + tri.y];
+        let c = vertex_pool[mesh.normal_offset + tri.z];
+        if a != INVALID_OCT && b != INVALID_OCT && c != INVALID_OCT {
+            let interpolated = transform_normal(inst.object_from_world, oct_decode(a) * w.x + oct_decode(b) * w.y + oct_decode(c) * w.z);
+            if dot(interpolated, interpolated) > 1e-12 {
+                n = normalize(interpolated);
+                if !s.front { n = -n; }
+            }
+        }
+    }
+
+    var base = m.base_color;
+    if m.base_color_texture != NONE {
+        let t = sample_texture(m.base_color_texture, texture_uv(m.base_color_texture, mesh, tri, w));
+        base *= vec4<f32>(srgb_to_linear(t.rgb), t.a);
+    }
+    if mesh.color_offset != NONE {
+        base *= vertex_color(mesh, tri, w);
+    }
+    var metallic = m.metallic;
+    var roughness = m.roughness;
+    if m.metallic_roughness_texture != NONE {
+        let t = sample_texture(m.metallic_roughness_texture, texture_uv(m.metallic_roughness_texture, mesh, tri, w));
+        roughness *= t.g;
+        metallic *= t.b;
+    }
+    if m.normal_texture != NONE && mesh.tangent_offset != NONE {
+        let ta = vertex_pool[mesh.tangent_offset + 2u * tri.x];
+        let tb = vertex_pool[mesh.tangent_offset + 2u * tri.y];
+        let tc = vertex_pool[mesh.tangent_offset + 2u * tri.z];
+        if ta != INVALID_OCT && tb != INVALID_OCT && tc != INVALID_OCT {
+            let sign = bitcast<f32>(vertex_pool[mesh.tangent_offset + 2u * tri.x + 1u]);
+            var t = transform_vector(inst.world_from_object, oct_decode(ta) * w.x + oct_decode(tb) * w.y + oct_decode(tc) * w.z);
+            t = t - n * dot(n, t);
+            if dot(t, t) > 1e-12 {
+                t = normalize(t);
+                // On back faces n was flipped; the bitangent must follow the surface's own orientation.
+                let b = cross(select(-n, n, s.front), t) * sign;
+                let tex = sample_texture(m.normal_texture, texture_uv(m.normal_texture, mesh, tri, w)).xyz * 2.0 - 1.0;
+                let local = vec3<f32>(tex.xy * m.normal_scale, tex.z);
+                let mapped = t * local.x + b * local.y + n * local.z;
+                if dot(mapped, mapped) > 1e-12 { n = normalize(mapped); }
+            }
+        }
+    }
+    // A shading normal facing away from the viewer would make the BRDF vanish: bend it back just enough.
+    let v = -ray.dir;
+    let nv = dot(n, v);
+    if nv < 1e-3 { n = normalize(n + (1e-3 - nv) * v); }
+    s.n = n;
+
+    var emission = m.emissive;
+    if m.emissive_texture != NONE && any(emission > vec3<f32>(0.0)) {
+        emission *= srgb_to_linear(sample_texture(m.emissive_texture, texture_uv(m.emissive_texture, mesh, tri, w)).rgb);
+    }
+    s.emission = emission;
+    s.bsdf = BsdfParams(base.rgb, clamp(metallic, 0.0, 1.0), max(roughness * roughness, MIN_ALPHA));
+    s.alpha = base.a;
+    s.flags = m.flags;
+    return s;
+}
+
+fn emits_towards_viewer(s: SurfaceInteraction) -> bool {
+    return s.front || (s.flags & MATERIAL_DOUBLE_SIDED) != 0u;
+}

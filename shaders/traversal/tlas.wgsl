@@ -1,0 +1,59 @@
+// Two-level traversal: the top-level BVH2 over instances (rebuilt on the CPU when placements change), then each
+// instance's mesh in its own BLAS layout. TLAS_STACK_SIZE is the deepest tree the CPU build accepts, so no push
+// is ever dropped.
+
+// Closest hit within the instance's mesh (or any hit, for shadow rays), in whichever layout the mesh's BLAS
+// has. Object-space ray: t stays comparable with world space because the direction is transformed, not
+// renormalised.
+fn trace_blas(instance: u32, ray_world: Ray, hit: ptr<function, Hit>, any_hit: bool) -> bool {
+    let inst = instances[instance];
+    let mesh = meshes[inst.mesh];
+    let o = transform_point(inst.object_from_world, ray_world.origin);
+    let d = transform_vector(inst.object_from_world, ray_world.dir);
+    if (mesh.blas_root & WIDE_BLAS) != 0u {
+        return trace_blas_wide(mesh, instance, o, d, hit, any_hit);
+    }
+    return trace_blas_binary(mesh, instance, o, d, hit, any_hit);
+}
+
+fn trace(ray: Ray, t_max: f32, any_hit: bool) -> Hit {
+    var hit = Hit(t_max, NONE, 0u, vec2<f32>(0.0));
+    let inv_d = safe_inverse(ray.dir);
+    var stack: array<u32, TLAS_STACK_SIZE>;
+    var sp = 0u;
+    var node = 0u;
+    loop {
+        let n = tlas_nodes[node];
+        let ta = hit_child(n.a, ray.origin, inv_d, hit.t);
+        let tb = hit_child(n.b, ray.origin, inv_d, hit.t);
+        if n.a.count > 0u && ta < MISS {
+            for (var i = 0u; i < n.a.count; i++) {
+                if trace_blas(n.a.index + i, ray, &hit, any_hit) && any_hit { return hit; }
+            }
+        }
+        if n.b.count > 0u && tb < hit.t {
+            for (var i = 0u; i < n.b.count; i++) {
+                if trace_blas(n.b.index + i, ray, &hit, any_hit) && any_hit { return hit; }
+            }
+        }
+        let go_a = n.a.count == 0u && ta < hit.t;
+        let go_b = n.b.count == 0u && tb < hit.t;
+        if go_a && go_b {
+            let a_first = ta <= tb;
+            if sp < TLAS_STACK_SIZE {
+                stack[sp] = select(n.a.index, n.b.index, a_first);
+                sp++;
+            }
+            node = select(n.b.index, n.a.index, a_first);
+        } else if go_a {
+            node = n.a.index;
+        } else if go_b {
+            node = n.b.index;
+        } else {
+            if sp == 0u { break; }
+            sp--;
+            node = stack[sp];
+        }
+    }
+    return hit;
+}
