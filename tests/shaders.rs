@@ -43,11 +43,13 @@ impl WgslLayouts {
 
     fn offset(&self, name: &str, member: &str) -> usize {
         match &self.module.types[self.handle(name)].inner {
-            naga::TypeInner::Struct { members, .. } => members
-                .iter()
-                .find(|m| m.name.as_deref() == Some(member))
-                .unwrap_or_else(|| panic!("WGSL struct {name} has no member {member}"))
-                .offset as usize,
+            naga::TypeInner::Struct { members, .. } => {
+                members
+                    .iter()
+                    .find(|m| m.name.as_deref() == Some(member))
+                    .unwrap_or_else(|| panic!("WGSL struct {name} has no member {member}"))
+                    .offset as usize
+            }
             _ => panic!("{name} is not a struct"),
         }
     }
@@ -88,7 +90,12 @@ fn scene_structs_match_wgsl() {
     use raykin::render::layout::*;
     let l = WgslLayouts::of(&passes::trace::KERNEL);
     same_layout!(l, "BvhNode", raykin::bvh::GpuBvhNode, []);
-    same_layout!(l, "Instance", GpuInstance, [world_from_object, object_from_world, mesh]);
+    same_layout!(
+        l,
+        "Instance",
+        GpuInstance,
+        [world_from_object, object_from_world, mesh]
+    );
     same_layout!(
         l,
         "Mesh",

@@ -10,6 +10,12 @@ struct BsdfParams {
     alpha: f32,
 }
 
+// The lobes this material has (BSDF_* flags): the integrator accepts light from behind the surface only
+// when one of them transmits.
+fn bsdf_flags(p: BsdfParams) -> u32 {
+    return BSDF_REFLECTION | BSDF_DIFFUSE | BSDF_GLOSSY;
+}
+
 // f(wo, wi), without the cosine.
 fn bsdf_eval(v: vec3<f32>, l: vec3<f32>, p: BsdfParams) -> vec3<f32> {
     if v.z <= 0.0 || l.z <= 0.0 { return vec3<f32>(0.0); }

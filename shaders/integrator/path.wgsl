@@ -1,9 +1,67 @@
-// The path integrator: unidirectional path tracing with next-event estimation on the lights, combined with
-// BSDF sampling by multiple importance sampling (power heuristic), and Russian roulette. `max_depth` = surface
-// interactions after the camera ray. It only calls the library: traversal (`trace`), `resolve_hit`, the BSDF,
-// the lights and the environment. The kernel counts rays in `rays_traced`.
+// The path integrator (pbrt-v4 `PathIntegrator`): unidirectional path tracing with next-event estimation on the
+// lights, combined with BSDF sampling by multiple importance sampling (power heuristic), and Russian roulette.
+// `max_depth` = surface interactions after the camera ray. It only calls the library: traversal (`trace`),
+// `resolve_hit`, the BSDF, the light sampler and lights, the environment and the sampler. The kernel counts
+// rays in `rays_traced`.
 
 var<private> rays_traced: u32;
+
+// Sample dimensions (sampler.wgsl): the camera's, then a fixed block per bounce, so every decision of a path
+// has its own dimension whatever the path did before.
+const DIM_FILM: u32 = 0u; // 2D
+const DIM_LENS: u32 = 2u; // 2D
+const DIM_FIRST_BOUNCE: u32 = 4u;
+const DIMS_PER_BOUNCE: u32 = 8u;
+// Offsets within a bounce's block.
+const DIM_LIGHT_CHOICE: u32 = 0u;
+const DIM_LIGHT_POINT: u32 = 1u; // 2D
+const DIM_LOBE: u32 = 3u;
+const DIM_DIRECTION: u32 = 4u; // 2D
+const DIM_ROULETTE: u32 = 6u;
+// Alpha-blend pass-throughs, one dimension each, apart from the bounces' blocks: two transparent surfaces met at
+// the same depth must not share a number.
+const DIM_PASS_THROUGH: u32 = 0x40000000u;
+const MAX_PASS_THROUGHS: u32 = 16u;
+
+fn bounce_dimensions(depth: u32) -> u32 {
+    return DIM_FIRST_BOUNCE + depth * DIMS_PER_BOUNCE;
+}
+
+// A shadow ray to test and what the light adds when nothing blocks it.
+struct DirectLight {
+    ray: Ray,
+    t_max: f32,
+    // Unoccluded contribution: f x cos x Li x MIS weight / pdf; zero when there is nothing to test.
+    contribution: vec3<f32>,
+}
+
+// Next-event estimation at `s`: one light picked by the light sampler, one point on it, weighed against BSDF
+// sampling. The shadow ray is returned, not traced, so that the path loop traces every ray at one call site (a
+// smaller kernel).
+fn sample_direct(s: SurfaceInteraction, wo: vec3<f32>, tbn: mat3x3<f32>, sampler: Sampler, dims: u32) -> DirectLight {
+    let none = DirectLight(Ray(vec3<f32>(0.0), vec3<f32>(0.0, 0.0, 1.0)), 0.0, vec3<f32>(0.0));
+    let choice = light_sampler_sample(get_1d(sampler, dims + DIM_LIGHT_CHOICE));
+    let ls = area_light_sample_li(emitters[choice.light], s.p, get_2d(sampler, dims + DIM_LIGHT_POINT));
+    if ls.pdf <= 0.0 || choice.pmf <= 0.0 { return none; }
+    // Light from behind the surface counts only through a transmitting lobe.
+    let behind = dot(ls.wi, s.ng) <= 0.0;
+    if behind && (bsdf_flags(s.bsdf) & BSDF_TRANSMISSION) == 0u { return none; }
+    let origin = offset_ray_origin(s.p, select(s.ng, -s.ng, behind));
+    let wi = ls.wi * tbn;
+    let f = bsdf_eval(wo, wi, s.bsdf);
+    if all(f == vec3<f32>(0.0)) { return none; }
+    let pdf_light = choice.pmf * ls.pdf;
+    let weight = select(power_heuristic(pdf_light, bsdf_pdf(wo, wi, s.bsdf)), 1.0, ls.delta);
+    // Stop the shadow ray just short of the light so it cannot hit the light itself.
+    return DirectLight(Ray(origin, ls.wi), ls.distance * (1.0 - 1e-4), f * abs(wi.z) * ls.li * weight / pdf_light);
+}
+
+// Density with which next-event estimation would have produced the emissive hit `hit` seen along `dir`.
+fn direct_pdf_of_hit(hit: Hit, s: SurfaceInteraction, dir: vec3<f32>) -> f32 {
+    let area = triangle_area(world_triangle(hit.instance, hit.triangle));
+    let pmf = light_sampler_pmf_area(materials[s.material].emissive, area);
+    return pmf * area_light_pdf(area, hit.t * hit.t, abs(dot(s.ng, dir)));
+}
 
 struct PathResult {
     radiance: vec3<f32>,
@@ -15,16 +73,16 @@ struct PathResult {
     hit: bool,
 }
 
-fn trace_path(camera_ray: Ray, forward: vec3<f32>, rng: ptr<function, Rng>) -> PathResult {
+fn trace_path(camera_ray: Ray, forward: vec3<f32>, sampler: Sampler) -> PathResult {
     var result = PathResult(vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0), 0.0, false);
     var ray = camera_ray;
     var throughput = vec3<f32>(1.0);
     var depth = 0u;
     var pass_throughs = 0u;
     var last_bsdf_pdf = 0.0; // 0: camera ray, emission counts in full
-    let nee = (frame.flags & FRAME_NEE) != 0u && frame.emitter_count > 0u;
+    let nee = (frame.flags & FRAME_NEE) != 0u && light_count() > 0u;
     // A shadow ray waiting to be traced before the next path ray, and whether the path goes on after it.
-    var shadow = LightSample(ray, 0.0, vec3<f32>(0.0));
+    var shadow = DirectLight(ray, 0.0, vec3<f32>(0.0));
     var shadow_pending = false;
     var path_alive = true;
     loop {
@@ -55,7 +113,8 @@ fn trace_path(camera_ray: Ray, forward: vec3<f32>, rng: ptr<function, Rng>) -> P
             result.depth = hit.t * dot(ray.dir, forward);
         }
         // Alpha blending as stochastic coverage: the path passes through with probability 1 - alpha.
-        if (s.flags & MATERIAL_ALPHA_BLEND) != 0u && rand(rng) >= s.alpha && pass_throughs < 16u {
+        if (s.flags & MATERIAL_ALPHA_BLEND) != 0u && pass_throughs < MAX_PASS_THROUGHS
+            && get_1d(sampler, DIM_PASS_THROUGH + depth * MAX_PASS_THROUGHS + pass_throughs) >= s.alpha {
             ray.origin = offset_ray_origin(s.p, -s.ng);
             pass_throughs++;
             continue;
@@ -63,39 +122,40 @@ fn trace_path(camera_ray: Ray, forward: vec3<f32>, rng: ptr<function, Rng>) -> P
         if any(s.emission > vec3<f32>(0.0)) && emits_towards_viewer(s) {
             var weight = 1.0;
             if nee && last_bsdf_pdf > 0.0 {
-                weight = power_heuristic(last_bsdf_pdf, light_pdf(hit, s, hit.t, ray.dir));
+                weight = power_heuristic(last_bsdf_pdf, direct_pdf_of_hit(hit, s, ray.dir));
             }
             result.radiance += throughput * s.emission * weight;
             if depth == 0u { result.unscattered += throughput * s.emission * weight; }
         }
         if depth >= frame.max_depth { break; }
 
+        let dims = bounce_dimensions(depth);
         let tbn = basis(s.n);
-        let v_local = -ray.dir * tbn;
+        let wo = -ray.dir * tbn;
         if nee {
-            shadow = sample_light(s, v_local, tbn, rng);
+            shadow = sample_direct(s, wo, tbn, sampler, dims);
             shadow.contribution *= throughput;
             shadow_pending = any(shadow.contribution != vec3<f32>(0.0));
         }
-        let u_lobe = rand(rng);
-        let u_dir = vec2<f32>(rand(rng), rand(rng));
-        let bs = bsdf_sample(v_local, s.bsdf, u_lobe, u_dir);
+        let bs = bsdf_sample(wo, s.bsdf, get_1d(sampler, dims + DIM_LOBE), get_2d(sampler, dims + DIM_DIRECTION));
         let dir = tbn * bs.wi;
-        // A direction above the shading normal's horizon but below the geometry's would leak light.
-        path_alive = bs.pdf > 0.0 && dot(dir, s.ng) > 0.0;
+        // The direction must leave on the side its lobe says: a reflection above the shading normal's horizon but
+        // below the geometry's would leak light (and a transmission the other way round).
+        let transmitted = (bs.flags & BSDF_TRANSMISSION) != 0u;
+        path_alive = bs.pdf > 0.0 && (dot(dir, s.ng) > 0.0) != transmitted;
         if path_alive {
             throughput *= bs.weight;
             last_bsdf_pdf = bs.pdf;
             depth++;
             if depth >= frame.rr_depth {
                 let survive = min(max(throughput.x, max(throughput.y, throughput.z)), 0.95);
-                if rand(rng) >= survive {
+                if get_1d(sampler, dims + DIM_ROULETTE) >= survive {
                     path_alive = false;
                 } else {
                     throughput /= survive;
                 }
             }
-            ray = Ray(offset_ray_origin(s.p, s.ng), dir);
+            ray = Ray(offset_ray_origin(s.p, select(s.ng, -s.ng, transmitted)), dir);
         }
         if !path_alive && !shadow_pending { break; }
     }

@@ -14,7 +14,7 @@ use bytemuck::{Pod, Zeroable};
 use glam::{Vec3, Vec3A};
 use obvhs::{BvhBuildParams, aabb::Aabb, bvh2::Bvh2, triangle::Triangle};
 
-/// Deepest BVH the GPU traversal stack holds (see `shaders/bvh.wgsl`).
+/// Deepest BVH the GPU traversal stack holds (`TLAS_STACK_SIZE`, `BLAS_STACK_SIZE` in the WGSL constants).
 pub const MAX_TRAVERSAL_DEPTH: u32 = 64;
 
 /// One child of a GPU node: its box, and either an inner node index (`count == 0`) or a leaf's first

@@ -5,13 +5,13 @@
 //! (the quantisation grid would move), so deformable meshes keep the child-pair BVH2 of [`super::MeshBvh`].
 //!
 //! obvhs builds the tree (PLOC + reinsertion, then the paper's SAH-optimal BVH2-to-BVH8 conversion); its node
-//! layout is uploaded as is and traversed by `trace_blas_wide` in `shaders/bvh.wgsl`.
+//! layout is uploaded as is and traversed by `trace_blas_wide` in `shaders/traversal/cwbvh.wgsl`.
 
 use super::{BvhQuality, BvhTooDeep};
 use glam::Vec3;
 use obvhs::cwbvh::{CwBvh, node::CwBvhNode};
 
-/// Deepest wide tree the GPU's node-group stack holds (one entry per level, see `shaders/bvh.wgsl`).
+/// Deepest wide tree the GPU's node-group stack holds (one entry per level: `WIDE_STACK_SIZE` in the WGSL constants).
 pub const MAX_WIDE_DEPTH: u32 = 32;
 
 /// A static mesh's compressed wide BVH and the triangle order its leaves expect.

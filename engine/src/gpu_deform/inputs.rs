@@ -7,7 +7,7 @@ use crate::render::layout::{DEFORM_GROUP, GpuMesh, NONE};
 use crate::scene::MeshData;
 use bytemuck::{Pod, Zeroable};
 
-/// `shaders/deform.wgsl` `DeformMesh`: offsets in 32-bit words (`NONE` = absent).
+/// `render/passes/deform/deform.wgsl` `DeformMesh`: offsets in 32-bit words (`NONE` = absent).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq)]
 pub struct DeformMeshGpu {
@@ -42,7 +42,7 @@ pub struct DeformTarget<'a> {
     pub joints: Option<usize>,
 }
 
-/// Everything `shaders/deform.wgsl` reads that does not change per frame.
+/// Everything `render/passes/deform/deform.wgsl` reads that does not change per frame.
 #[derive(Debug, Default)]
 pub struct DeformInputs {
     pub words: Vec<u32>,

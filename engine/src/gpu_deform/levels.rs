@@ -1,5 +1,5 @@
 //! A BVH's nodes grouped by depth, deepest level first: the order in which the GPU refit processes them
-//! (`shaders/refit.wgsl`), so that every inner child is refit before its parent reads it.
+//! (`render/passes/refit/refit.wgsl`), so that every inner child is refit before its parent reads it.
 
 use crate::bvh::{FlatBvh, MAX_TRAVERSAL_DEPTH};
 

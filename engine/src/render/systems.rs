@@ -23,6 +23,13 @@ pub struct InstanceMap {
     pub entities: Vec<Entity>,
 }
 
+impl InstanceMap {
+    /// The placements last uploaded, in the order the top-level build received them.
+    pub fn inputs(&self) -> &[InstanceInput] {
+        &self.last_inputs
+    }
+}
+
 /// Collects mesh instances; rebuilds the TLAS and re-uploads instances when any placement or deformed mesh
 /// changed, and restarts accumulation.
 #[allow(clippy::too_many_arguments)]

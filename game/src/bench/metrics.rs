@@ -20,7 +20,7 @@ pub fn rel_mse(image: &[[f32; 3]], reference: &[[f32; 3]]) -> f64 {
     sum / (3 * image.len().max(1)) as f64
 }
 
-/// The viewer's and PNG output's display transform (shaders/tonemap.wgsl: Hill's ACES fit, then sRGB), on the
+/// The viewer's and PNG output's display transform (render/passes/tonemap/tonemap.wgsl: Hill's ACES fit, then sRGB), on the
 /// CPU so that the reference (read from the cache) and each test image go through the same code. Values in
 /// 0..=1, not yet quantised.
 pub fn tonemap(image: &[[f32; 3]]) -> Vec<[f32; 3]> {

@@ -35,7 +35,20 @@ impl GpuScene {
                 transform_box(i.world, lo, hi)
             })
             .collect();
-        let tlas: FlatBvh = crate::bvh::build_tlas(&boxes)?;
+        let tlas = crate::bvh::build_tlas(&boxes)?;
+        self.upload_instances(ctx, scene, inputs, tlas);
+        Ok(())
+    }
+
+    /// Uploads instances in `tlas`'s leaf order, the tree itself and the emitter list. [`Self::update_instances`]
+    /// builds the tree; tests hand in pathological ones (a top-level tree deeper than any build makes).
+    pub fn upload_instances(
+        &mut self,
+        ctx: &GpuContext,
+        scene: &SceneAsset,
+        inputs: &[InstanceInput],
+        tlas: FlatBvh,
+    ) {
         let ordered: Vec<GpuInstance> = tlas
             .order
             .iter()
@@ -57,11 +70,10 @@ impl GpuScene {
             self.generation += 1;
         }
         self.emitter_count = emitters.len() as u32;
-        self.instance_order = tlas.order.clone();
+        self.instance_order = tlas.order;
         self.memory.instances_and_tlas =
             (instance_bytes.len() + tlas_bytes.len() + emitter_bytes.len()) as u64;
         self.uploaded_instances = ordered;
-        Ok(())
     }
 
     /// Uploads the materials that differ from what the GPU holds; returns how many changed. When the set of

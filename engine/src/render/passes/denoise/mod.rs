@@ -197,36 +197,35 @@ impl Denoiser {
     }
 
     fn targets(&self, ctx: &GpuContext, inputs: &DenoiseInputs) -> &Targets {
-        let targets =
-            self.targets.get_or_init(|| {
-                let pixels = (inputs.width as u64 * inputs.height as u64).max(1);
-                let buffer = |label| {
-                    ctx.device.create_buffer(&wgpu::BufferDescriptor {
-                        label: Some(label),
-                        size: pixels * 16,
-                        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-                        mapped_at_creation: false,
-                    })
-                };
-                let guide = buffer("denoise guide");
-                let illum = [
-                    buffer("denoise illumination a"),
-                    buffer("denoise illumination b"),
+        let targets = self.targets.get_or_init(|| {
+            let pixels = (inputs.width as u64 * inputs.height as u64).max(1);
+            let buffer = |label| {
+                ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some(label),
+                    size: pixels * 16,
+                    usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+                    mapped_at_creation: false,
+                })
+            };
+            let guide = buffer("denoise guide");
+            let illum = [
+                buffer("denoise illumination a"),
+                buffer("denoise illumination b"),
+            ];
+            let output = buffer("denoised radiance");
+            let group = |read: &wgpu::Buffer, write: &wgpu::Buffer| {
+                let buffers = [
+                    inputs.accum,
+                    inputs.albedo_depth,
+                    inputs.normal_hits,
+                    inputs.moments,
+                    &guide,
+                    read,
+                    write,
+                    &output,
                 ];
-                let output = buffer("denoised radiance");
-                let group = |read: &wgpu::Buffer, write: &wgpu::Buffer| {
-                    let buffers = [
-                        inputs.accum,
-                        inputs.albedo_depth,
-                        inputs.normal_hits,
-                        inputs.moments,
-                        &guide,
-                        read,
-                        write,
-                        &output,
-                    ];
-                    let mut entries = buffer_entries(&buffers);
-                    entries.push(wgpu::BindGroupEntry {
+                let mut entries = buffer_entries(&buffers);
+                entries.push(wgpu::BindGroupEntry {
                         binding: 8,
                         resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
                             buffer: &self.params,
@@ -236,19 +235,19 @@ impl Denoiser {
                             ),
                         }),
                     });
-                    ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
-                        label: Some("denoise"),
-                        layout: &self.layout,
-                        entries: &entries,
-                    })
-                };
-                Targets {
-                    groups: [group(&illum[0], &illum[1]), group(&illum[1], &illum[0])],
-                    output,
-                    size: (inputs.width, inputs.height),
-                    bytes: pixels * BYTES_PER_PIXEL,
-                }
-            });
+                ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("denoise"),
+                    layout: &self.layout,
+                    entries: &entries,
+                })
+            };
+            Targets {
+                groups: [group(&illum[0], &illum[1]), group(&illum[1], &illum[0])],
+                output,
+                size: (inputs.width, inputs.height),
+                bytes: pixels * BYTES_PER_PIXEL,
+            }
+        });
         assert_eq!(
             targets.size,
             (inputs.width, inputs.height),

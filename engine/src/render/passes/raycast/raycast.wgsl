@@ -24,8 +24,8 @@ fn cast_rays(@builtin(global_invocation_id) gid: vec3<u32>) {
         var ng = geometric_normal(hit);
         if dot(ng, ray.dir) > 0.0 { ng = -ng; }
         let p = ray.origin + ray.dir * hit.t;
-        var rng = rng_new(pixel, frame.sample_base, frame.seed);
-        let dir = basis(ng) * sample_cosine_hemisphere(vec2<f32>(rand(&rng), rand(&rng)));
+        let sampler = sampler_start(pixel, frame.sample_base, frame.seed);
+        let dir = basis(ng) * sample_cosine_hemisphere(get_2d(sampler, 0u));
         let bounce = trace(Ray(offset_ray_origin(p, ng), dir), MISS, false);
         distance += min(bounce.t, 1e30);
         rays += 1u;

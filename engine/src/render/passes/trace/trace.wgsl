@@ -46,10 +46,10 @@ fn trace_pixel(gid: vec2<u32>) {
     var normal_hits = vec4<f32>(0.0);
     var unscattered_m2 = vec4<f32>(0.0);
     for (var s = 0u; s < frame.spp; s++) {
-        var rng = rng_new(pixel, frame.sample_base + s, frame.seed);
+        let sampler = sampler_start(pixel, frame.sample_base + s, frame.seed);
         // Box filter: a uniform point in the pixel.
-        let u_film = vec2<f32>(rand(&rng), rand(&rng));
-        let r = trace_path(generate_ray(gid, u_film, vec2<f32>(0.5)), forward, &rng);
+        let ray = generate_ray(gid, get_2d(sampler, DIM_FILM), get_2d(sampler, DIM_LENS));
+        let r = trace_path(ray, forward, sampler);
         // A non-finite sample would poison the pixel forever; it is dropped (it should never happen).
         if finite3(r.radiance) {
             radiance += r.radiance;
