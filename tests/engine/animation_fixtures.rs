@@ -2,6 +2,7 @@
 //! through the real ECS systems (animate -> propagate_transforms -> deform_meshes) on a GPU-less world,
 //! plus the keyframe sampler cases and bad-input handling.
 
+use crate::common::{repo_root, shared_assets};
 use base64::Engine as _;
 use glam::{Mat4, Quat, Vec3};
 use raykin::animation::{
@@ -12,12 +13,8 @@ use raykin::scene::{
     SceneNodes, SceneRoot, SkinnedMesh, load_gltf, load_gltf_slice,
 };
 use serde_json::Value;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::sync::Arc;
-
-fn repo_root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
-}
 
 fn read_json(rel: &str) -> Value {
     let path = repo_root().join(rel);
@@ -302,7 +299,7 @@ fn several_players_at_once_with_explicit_clock() {
     // Two copies of RiggedSimple, one held at its first key, one playing from 0 for 30 frames of 1/60 s.
     let scene = Arc::new(
         load_gltf(
-            repo_root().join("../shared/assets/RiggedSimple/glTF-Binary/RiggedSimple.glb"),
+            shared_assets().join("RiggedSimple/glTF-Binary/RiggedSimple.glb"),
             &LoadOptions::default(),
         )
         .unwrap(),
@@ -614,7 +611,7 @@ fn posing_a_scene_without_clip_is_harmless() {
 
 #[test]
 fn crowd_scene_skins_every_instance() {
-    let crowd = raykin::scene::crowd_scene(repo_root().join("../shared/assets")).unwrap();
+    let crowd = raykin::scene::crowd_scene(shared_assets()).unwrap();
     assert_eq!(crowd.players.len(), 96);
     let skinned: Vec<usize> = (0..crowd.scene.meshes.len())
         .filter(|&m| crowd.scene.meshes[m].skin_weights.is_some())
