@@ -117,7 +117,7 @@ fn sah_ratio_curves() {
 #[test]
 #[ignore]
 fn cpu_skinning_time() {
-    let crowd = raykin::scene::crowd_scene(shared_assets()).unwrap();
+    let crowd = raykin::animation::crowd_scene(shared_assets()).unwrap();
     let scene: Arc<SceneAsset> = Arc::new(crowd.scene);
     let mut app = cpu_app(scene.clone());
     let r = root(&mut app);

@@ -5,9 +5,7 @@
 use crate::common::{repo_root, shared_assets};
 use base64::Engine as _;
 use glam::{Mat4, Quat, Vec3};
-use raykin::animation::{
-    AnimationPlayer, DeformedMeshes, Sampled, cpu_app, sample_channel, validate_channel,
-};
+use raykin::animation::{AnimationPlayer, DeformedMeshes, Sampled, cpu_app, sample_channel};
 use raykin::scene::{
     AnimationChannel, ChannelValues, GlobalTransform, Interpolation, LoadOptions, SceneAsset,
     SceneNodes, SceneRoot, SkinnedMesh, load_gltf, load_gltf_slice,
@@ -240,7 +238,7 @@ fn interpolation_cases() {
             times,
             values,
         };
-        validate_channel(&channel).unwrap();
+        channel.validate().unwrap();
         let name = case["name"].as_str().unwrap().to_string();
         for q in case["queries"].as_array().unwrap() {
             let t = q["t"].as_f64().unwrap() as f32;
@@ -611,7 +609,7 @@ fn posing_a_scene_without_clip_is_harmless() {
 
 #[test]
 fn crowd_scene_skins_every_instance() {
-    let crowd = raykin::scene::crowd_scene(shared_assets()).unwrap();
+    let crowd = raykin::animation::crowd_scene(shared_assets()).unwrap();
     assert_eq!(crowd.players.len(), 96);
     let skinned: Vec<usize> = (0..crowd.scene.meshes.len())
         .filter(|&m| crowd.scene.meshes[m].skin_weights.is_some())

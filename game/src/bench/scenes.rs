@@ -13,7 +13,7 @@ use std::sync::Arc;
 /// Where a named scene comes from, relative to the shared assets folder.
 enum Source {
     File(&'static str),
-    /// `raykin::scene::crowd_scene`: 64 CesiumMan + 32 Fox, animated.
+    /// `raykin::animation::crowd_scene`: 64 CesiumMan + 32 Fox, animated.
     Crowd,
 }
 
@@ -140,7 +140,7 @@ pub fn resolve(spec: &str, assets: &Path) -> Result<BenchScene> {
             (scene, Vec::new(), gltf_files(&path))
         }
         Source::Crowd => {
-            let crowd = raykin::scene::crowd_scene(assets).with_context(|| {
+            let crowd = raykin::animation::crowd_scene(assets).with_context(|| {
                 format!("bench scene `crowd` (from --assets {})", assets.display())
             })?;
             let files = [

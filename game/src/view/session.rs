@@ -96,7 +96,7 @@ fn load(source: &SceneSource) -> Result<LoadedScene> {
             players: Vec::new(),
         },
         SceneSource::Crowd(assets) => {
-            let crowd = raykin::scene::crowd_scene(assets)?;
+            let crowd = raykin::animation::crowd_scene(assets)?;
             LoadedScene {
                 scene: Arc::new(crowd.scene),
                 players: crowd.players,
