@@ -7,6 +7,7 @@ mod common;
 
 mod animation_bench;
 mod animation_fixtures;
+mod architecture;
 mod assets;
 mod bad_input;
 mod cornell_reference;
