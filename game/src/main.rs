@@ -1,10 +1,14 @@
 //! `raykin`: path-trace animated glTF scenes. With no arguments it opens the viewer on the embedded default
 //! scene when a display is present, else renders that scene to out/default.png.
 
+mod adapter;
 mod bench;
 mod cli;
+mod provenance;
 mod record_cmd;
 mod render_cmd;
+mod scenes;
+mod stats;
 mod view;
 
 use clap::Parser;

@@ -1,8 +1,10 @@
 //! `raykin record`: the command line around [`raykin::record::Recorder`]: arguments, a progress bar, Ctrl-C,
 //! a summary, `--merge` and the optional ffmpeg encode.
 
+use crate::adapter::open_gpu;
 use crate::cli::RecordArgs;
-use crate::render_cmd::{camera_spec, load_scene, open_gpu, settings_from};
+use crate::render_cmd::{camera_spec, settings_from};
+use crate::scenes::load_scene;
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressStyle};
 use raykin::record::{

@@ -1,6 +1,8 @@
 //! `raykin render` and the no-argument default job.
 
+use crate::adapter::open_gpu;
 use crate::cli::{RenderArgs, SceneArgs};
+use crate::scenes::{embedded_camera, embedded_scene, load_scene};
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use raykin::camera::CameraChoice;
@@ -8,48 +10,10 @@ use raykin::gpu::GpuContext;
 use raykin::headless::HeadlessApp;
 use raykin::record::CameraSpec;
 use raykin::render::{Environment, RenderSettings};
-use raykin::scene::{LoadOptions, SceneAsset};
+use raykin::scene::SceneAsset;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Instant;
-
-/// The scene shipped inside the binary (assets/default/).
-pub const DEFAULT_SCENE: &[u8] = include_bytes!("../../assets/default/CornellBox.glb");
-
-/// The embedded Cornell box, loaded.
-pub fn embedded_scene() -> Result<SceneAsset> {
-    let scene = raykin::scene::load_gltf_slice(
-        DEFAULT_SCENE,
-        Path::new("."),
-        Path::new("<embedded default scene>"),
-        &LoadOptions::default(),
-    )?;
-    report_warnings(&scene);
-    Ok(scene)
-}
-
-/// The classic Cornell box view of the embedded scene (the bench's `cornell` camera).
-pub fn embedded_camera() -> CameraChoice {
-    crate::bench::named_camera("cornell").expect("the bench names the Cornell box")
-}
-
-pub fn load_scene(path: &Path) -> Result<Arc<SceneAsset>> {
-    let scene = raykin::scene::load_gltf(path, &LoadOptions::default())?;
-    report_warnings(&scene);
-    Ok(Arc::new(scene))
-}
-
-fn report_warnings(scene: &SceneAsset) {
-    for w in &scene.warnings {
-        eprintln!("raykin: warning: {}: {w}", scene.source);
-    }
-}
-
-pub fn open_gpu() -> Result<GpuContext> {
-    let ctx = GpuContext::new_headless()?;
-    eprintln!("raykin: adapter: {}", ctx.describe());
-    Ok(ctx)
-}
 
 pub fn settings_from(args: &SceneArgs) -> RenderSettings {
     RenderSettings {

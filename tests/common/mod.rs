@@ -1,5 +1,8 @@
-//! Shared by the integration tests: one GPU context per test binary, asset paths, image statistics.
+//! Shared by both integration-test binaries (tests/engine/, tests/cli/): one GPU context per binary, asset
+//! paths, scratch folders, image statistics, and the Mitsuba reference set-up (`cornell`).
 #![allow(dead_code)]
+
+pub mod cornell;
 
 use raykin::camera::CameraChoice;
 use raykin::gpu::GpuContext;
@@ -9,7 +12,7 @@ use raykin::scene::SceneAsset;
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex, OnceLock};
 
-/// The repository root (tests run with the `game` crate as working directory).
+/// The repository root (each test binary runs in its package's folder, engine/ or game/).
 pub fn repo_root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..")
 }
@@ -17,6 +20,14 @@ pub fn repo_root() -> PathBuf {
 /// `../shared/assets`, beside the repository, as in CI.
 pub fn shared_assets() -> PathBuf {
     repo_root().join("../shared/assets")
+}
+
+/// A fresh, empty folder under the temporary directory, unique to this process.
+pub fn fresh_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("raykin-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    dir
 }
 
 /// One device per test binary; a lock serialises GPU tests (lavapipe has 2 cores to share).

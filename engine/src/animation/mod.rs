@@ -1,7 +1,10 @@
 //! Keyframe sampling of glTF animation channels (STEP, LINEAR with slerp, CUBICSPLINE), animation players,
 //! and CPU skinning and morphing ([`deform`]).
 
+mod crowd;
 mod deform;
+
+pub use crowd::{CrowdScene, crowd_scene};
 
 pub use deform::{
     DeformedElsewhere, DeformedMesh, DeformedMeshes, MeshPose, MeshPoses, deform_mesh,
@@ -23,52 +26,6 @@ pub enum Sampled {
     Rotation(Quat),
     Scale(Vec3),
     Weights(Vec<f32>),
-}
-
-/// Rejects channels that would sample to NaN or index out of range: empty or non-finite times,
-/// times not strictly increasing, value counts that do not match the keyframes, non-finite values.
-pub fn validate_channel(c: &AnimationChannel) -> Result<(), String> {
-    if c.times.is_empty() {
-        return Err("no keyframes".into());
-    }
-    if c.times.iter().any(|t| !t.is_finite()) {
-        return Err("non-finite keyframe time".into());
-    }
-    if c.times.windows(2).any(|w| w[1] <= w[0]) {
-        return Err("keyframe times are not strictly increasing".into());
-    }
-    let per_key = if c.interpolation == Interpolation::CubicSpline {
-        3
-    } else {
-        1
-    };
-    let keys = c.times.len() * per_key;
-    let (len, finite) = match &c.values {
-        ChannelValues::Translation(v) | ChannelValues::Scale(v) => {
-            (v.len(), v.iter().all(|x| x.is_finite()))
-        }
-        ChannelValues::Rotation(v) => (v.len(), v.iter().all(|x| x.is_finite())),
-        ChannelValues::Weights { values, count } => {
-            if *count == 0 || values.len() != keys * count {
-                return Err(format!(
-                    "{} weight values do not fill {} keyframes",
-                    values.len(),
-                    keys
-                ));
-            }
-            (keys, values.iter().all(|x| x.is_finite()))
-        }
-    };
-    if len != keys {
-        return Err(format!(
-            "{len} values for {} keyframes (sampler/accessor count mismatch)",
-            c.times.len()
-        ));
-    }
-    if !finite {
-        return Err("NaN or infinite keyframe value".into());
-    }
-    Ok(())
 }
 
 /// Where `t` falls: keyframe index `i` and the fraction towards `i + 1` (clamped to the first/last key).
@@ -390,7 +347,7 @@ pub fn hold_at(world: &mut World, clip: usize, seconds: f32) {
     }
 }
 
-/// Adds `(node, player)` pairs to a spawned scene copy whose root is `root` (see [`crate::scene::crowd_scene`]).
+/// Adds `(node, player)` pairs to a spawned scene copy whose root is `root` (see [`crowd_scene`]).
 pub fn attach_players(world: &mut World, root: Entity, players: &[(usize, AnimationPlayer)]) {
     let Some(nodes) = world.get::<SceneNodes>(root).map(|n| n.0.clone()) else {
         return;

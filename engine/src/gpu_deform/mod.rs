@@ -32,29 +32,7 @@ use levels::{LEVEL_SLOTS, LevelOrder};
 use readback::{JobState, RebuildJob, SahReadback, SahSample};
 use std::sync::Arc;
 
-/// Where deformable meshes are skinned, morphed and refit.
-#[derive(
-    Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize,
-)]
-pub enum DeformBackend {
-    /// GPU passes on real GPUs, the CPU on a CPU adapter (lavapipe), where it measured faster
-    /// (docs/ANIMATION.md).
-    #[default]
-    Auto,
-    Cpu,
-    Gpu,
-}
-
-impl DeformBackend {
-    /// `Auto` made concrete for this adapter.
-    pub fn resolve(self, device_type: wgpu::DeviceType) -> Self {
-        match self {
-            Self::Auto if device_type == wgpu::DeviceType::Cpu => Self::Cpu,
-            Self::Auto => Self::Gpu,
-            other => other,
-        }
-    }
-}
+pub use crate::render::settings::DeformBackend;
 
 /// `active` flags: deform (and refit) this frame, or refit only (a rebuilt tree that landed).
 const DEFORM: u32 = 1;

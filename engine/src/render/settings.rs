@@ -59,7 +59,7 @@ pub struct RenderSettings {
     /// BVH layout of static meshes (deformable meshes always refit a BVH2).
     pub static_bvh: crate::bvh::StaticLayout,
     /// Where deformable meshes are skinned, morphed and refit (`Auto`: GPU on real GPUs).
-    pub deform: crate::gpu_deform::DeformBackend,
+    pub deform: DeformBackend,
 }
 
 impl Default for RenderSettings {
@@ -82,7 +82,7 @@ impl Default for RenderSettings {
             denoise: false,
             denoise_params: Default::default(),
             static_bvh: crate::bvh::StaticLayout::Wide,
-            deform: crate::gpu_deform::DeformBackend::Auto,
+            deform: DeformBackend::Auto,
         }
     }
 }
@@ -101,5 +101,29 @@ impl RenderSettings {
             ..s.clone()
         };
         image_part(self) != image_part(other)
+    }
+}
+
+/// Where deformable meshes are skinned, morphed and refit.
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize,
+)]
+pub enum DeformBackend {
+    /// GPU passes on real GPUs, the CPU on a CPU adapter (lavapipe), where it measured faster
+    /// (docs/ANIMATION.md).
+    #[default]
+    Auto,
+    Cpu,
+    Gpu,
+}
+
+impl DeformBackend {
+    /// `Auto` made concrete for this adapter.
+    pub fn resolve(self, device_type: wgpu::DeviceType) -> Self {
+        match self {
+            Self::Auto if device_type == wgpu::DeviceType::Cpu => Self::Cpu,
+            Self::Auto => Self::Gpu,
+            other => other,
+        }
     }
 }

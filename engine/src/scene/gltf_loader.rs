@@ -748,7 +748,7 @@ impl<'a> Loader<'a> {
                     times,
                     values,
                 };
-                match crate::animation::validate_channel(&channel) {
+                match channel.validate() {
                     Ok(()) => channels.push(channel),
                     Err(reason) => warnings.push(format!("{label}: {reason}; channel skipped")),
                 }

@@ -9,7 +9,7 @@ pub mod procedural;
 mod spawn;
 mod tangents;
 
-pub use compose::{CrowdScene, compose, crowd_scene, unshare_deformable_meshes};
+pub use compose::{compose, unshare_deformable_meshes};
 pub(crate) use gltf_loader::percent_decode;
 pub use gltf_loader::{LoadOptions, load_gltf, load_gltf_slice};
 pub use gltf_writer::{SaveError, save_with_materials};
@@ -289,6 +289,54 @@ pub struct AnimationChannel {
     pub times: Vec<f32>,
     /// For CUBICSPLINE: in-tangent, value, out-tangent per keyframe.
     pub values: ChannelValues,
+}
+
+impl AnimationChannel {
+    /// Rejects channels that would sample to NaN or index out of range: empty or non-finite times,
+    /// times not strictly increasing, value counts that do not match the keyframes, non-finite values.
+    pub fn validate(&self) -> Result<(), String> {
+        if self.times.is_empty() {
+            return Err("no keyframes".into());
+        }
+        if self.times.iter().any(|t| !t.is_finite()) {
+            return Err("non-finite keyframe time".into());
+        }
+        if self.times.windows(2).any(|w| w[1] <= w[0]) {
+            return Err("keyframe times are not strictly increasing".into());
+        }
+        let per_key = if self.interpolation == Interpolation::CubicSpline {
+            3
+        } else {
+            1
+        };
+        let keys = self.times.len() * per_key;
+        let (len, finite) = match &self.values {
+            ChannelValues::Translation(v) | ChannelValues::Scale(v) => {
+                (v.len(), v.iter().all(|x| x.is_finite()))
+            }
+            ChannelValues::Rotation(v) => (v.len(), v.iter().all(|x| x.is_finite())),
+            ChannelValues::Weights { values, count } => {
+                if *count == 0 || values.len() != keys * count {
+                    return Err(format!(
+                        "{} weight values do not fill {} keyframes",
+                        values.len(),
+                        keys
+                    ));
+                }
+                (keys, values.iter().all(|x| x.is_finite()))
+            }
+        };
+        if len != keys {
+            return Err(format!(
+                "{len} values for {} keyframes (sampler/accessor count mismatch)",
+                self.times.len()
+            ));
+        }
+        if !finite {
+            return Err("NaN or infinite keyframe value".into());
+        }
+        Ok(())
+    }
 }
 
 #[derive(Clone, Debug)]

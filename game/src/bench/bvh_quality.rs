@@ -2,7 +2,7 @@
 //! full rebuild along an animation (SAH ratio, update ms, and the trace time of the same pose with each tree).
 
 use super::scenes::BenchScene;
-use super::stats::Spread;
+use crate::stats::Spread;
 use anyhow::Result;
 use raykin::bvh::{BvhQuality, MeshBvh};
 use raykin::camera::CameraChoice;
@@ -136,14 +136,7 @@ pub fn refit_vs_rebuild(
     seconds: f32,
     repeats: usize,
 ) -> Result<RefitResult> {
-    let scene = BenchScene {
-        name: "CesiumMan".into(),
-        scene: asset.clone(),
-        camera,
-        environment: base.environment,
-        players: Vec::new(),
-        source_files: Vec::new(),
-    };
+    let scene = BenchScene::still("CesiumMan".into(), asset.clone(), camera, base.environment);
     // CPU deformation: its refit and rebuild run synchronously in the frame they are asked for, so each pose
     // is traced with exactly the tree this comparison is about (the GPU backend rebuilds asynchronously).
     let base = &RenderSettings {

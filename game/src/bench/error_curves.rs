@@ -8,7 +8,7 @@
 
 use super::metrics::{flip_mean, rel_mse, srgb8, tonemap};
 use super::scenes::BenchScene;
-use super::stats::{log_log_fit, time_to_reach};
+use crate::stats::{log_log_fit, time_to_reach};
 use anyhow::{Context, Result};
 use raykin::gpu::GpuContext;
 use raykin::render::RenderSettings;
@@ -241,7 +241,7 @@ pub fn measure(
 }
 
 fn median(v: &[f64]) -> f64 {
-    super::stats::Spread::of(v).median
+    crate::stats::Spread::of(v).median
 }
 
 fn min_max(v: &[f64]) -> (f64, f64) {
@@ -274,7 +274,7 @@ fn reference_key(scene: &BenchScene, base: &RenderSettings, spp: u32) -> Result<
         raykin::render::shaders::compose(&raykin::render::passes::trace::KERNEL).as_bytes(),
     );
     let digest = hasher.finalize();
-    Ok(digest[..12].iter().map(|b| format!("{b:02x}")).collect())
+    Ok(raykin::record::output::hex(&digest[..12]))
 }
 
 /// A reference image (mean of two halves) and what is known about it.

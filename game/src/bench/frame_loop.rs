@@ -3,7 +3,7 @@
 //! of the frame-time breakdown.
 
 use super::scenes::BenchScene;
-use super::stats::Spread;
+use crate::stats::Spread;
 use anyhow::Result;
 use raykin::gpu::GpuContext;
 use raykin::headless::HeadlessApp;

@@ -5,7 +5,7 @@
 //! frames, so an estimator with infinite variance (the Cornell box's double-sided light, docs/ACCURACY.md)
 //! gives a curve that jumps up and down; the display transform bounds each pixel, which is what a viewer sees.
 
-/// Epsilon of the relMSE denominator (as in tests/cornell_reference.rs): keeps black pixels from dominating.
+/// Epsilon of the relMSE denominator (as in tests/common/cornell.rs): keeps black pixels from dominating.
 pub const REL_MSE_EPS: f64 = 1e-2;
 
 /// Relative MSE over pixels and channels: mean of (x - r)^2 / (r^2 + eps).

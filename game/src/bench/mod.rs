@@ -14,12 +14,11 @@ mod frame_loop;
 mod metrics;
 mod scaling;
 mod scenes;
-pub use scenes::named_camera;
-pub(crate) mod stats;
 mod suite;
 
+use crate::adapter::open_gpu;
 use crate::cli::BenchArgs;
-use crate::render_cmd::open_gpu;
+use crate::provenance;
 use anyhow::{Context, Result};
 use raykin::gpu::GpuContext;
 use raykin::headless::HeadlessApp;
@@ -115,7 +114,7 @@ fn wants(args: &BenchArgs, part: &str) -> bool {
 
 pub fn run(args: &BenchArgs) -> Result<()> {
     let started = std::time::Instant::now();
-    let load_average_start = load_average();
+    let load_average_start = provenance::load_average();
     for p in &args.parts {
         anyhow::ensure!(
             PARTS.contains(&p.as_str()),
@@ -148,14 +147,11 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         deform: args.deform.into(),
         ..Default::default()
     };
-    let commit = std::env::var("RAYKIN_COMMIT")
-        .ok()
-        .or_else(git_commit)
-        .unwrap_or_else(|| "unknown".into());
+    let commit = provenance::commit();
     let date_unix_s = std::time::SystemTime::now()
         .duration_since(std::time::UNIX_EPOCH)
         .map_or(0, |d| d.as_secs());
-    let date = stats::utc_date(date_unix_s);
+    let date = provenance::utc_date(date_unix_s);
     let note = if suite.scaling_note.is_empty() {
         String::new()
     } else {
@@ -254,13 +250,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         let (w, h) = suite.scaling_size;
         let settings = at_size(&base, (w, h));
         for name in &suite.bvh_scenes {
-            let scene = match loaded.iter().find(|s| &s.name == name) {
-                Some(s) => s,
-                None => {
-                    loaded.push(scenes::resolve(name, &args.assets)?);
-                    loaded.last().expect("just pushed")
-                }
-            };
+            let scene = scenes::find_or_load(&mut loaded, name, &args.assets)?;
             eprintln!("raykin bench: {}: BVH presets", scene.name);
             presets.extend(bvh_quality::presets(
                 &ctx,
@@ -324,13 +314,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             &settings,
             suite.scaling_frames,
         )?;
-        let cornell = match loaded.iter().find(|s| s.name == "cornell") {
-            Some(s) => s,
-            None => {
-                loaded.push(scenes::resolve("cornell", &args.assets)?);
-                loaded.last().expect("just pushed")
-            }
-        };
+        let cornell = scenes::find_or_load(&mut loaded, "cornell", &args.assets)?;
         res_scaling = scaling::resolution(
             &ctx,
             cornell,
@@ -365,7 +349,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         charts,
         wall_seconds: started.elapsed().as_secs_f64(),
         load_average_start,
-        load_average_end: load_average(),
+        load_average_end: provenance::load_average(),
     };
     write_outputs(&args.out, &results)?;
     eprintln!(
@@ -539,20 +523,4 @@ path-trace kernel; relMSE on tone-mapped images against the cached reference, it
 ray casting: the shading-free pass (camera rays through pixel centres, then one cosine-distributed bounce ray \
 per hit), per size.\n";
     s
-}
-
-fn load_average() -> Option<String> {
-    std::fs::read_to_string("/proc/loadavg")
-        .ok()
-        .map(|s| s.trim().to_string())
-}
-
-pub(crate) fn git_commit() -> Option<String> {
-    let out = std::process::Command::new("git")
-        .args(["rev-parse", "--short", "HEAD"])
-        .output()
-        .ok()?;
-    out.status
-        .success()
-        .then(|| String::from_utf8_lossy(&out.stdout).trim().to_string())
 }

@@ -2,7 +2,7 @@
 //! against resolution (one scene at several sizes).
 
 use super::scenes::{BenchScene, instanced_grid};
-use super::stats::Spread;
+use crate::stats::Spread;
 use anyhow::Result;
 use raykin::gpu::GpuContext;
 use raykin::render::RenderSettings;
@@ -40,14 +40,8 @@ pub fn triangles(
     let mut rows = Vec::new();
     for &n in copies {
         let (scene, camera) = instanced_grid(asset, n);
-        let bench = BenchScene {
-            name: format!("{n} x {}", asset.source),
-            scene: Arc::new(scene),
-            camera,
-            environment: base.environment,
-            players: Vec::new(),
-            source_files: Vec::new(),
-        };
+        let name = format!("{n} x {}", asset.source);
+        let bench = BenchScene::still(name, Arc::new(scene), camera, base.environment);
         let row = super::frame_loop::measure(ctx, &bench, base.clone(), 1, frames)?;
         rows.push(TriangleScalingRow {
             copies: n,
@@ -71,11 +65,7 @@ pub fn resolution(
 ) -> Result<Vec<ResolutionScalingRow>> {
     let mut rows = Vec::new();
     for &(width, height) in sizes {
-        let settings = RenderSettings {
-            width,
-            height,
-            ..base.clone()
-        };
+        let settings = super::at_size(base, (width, height));
         let row = super::frame_loop::measure(ctx, scene, settings, 1, frames)?;
         rows.push(ResolutionScalingRow {
             scene: scene.name.clone(),

@@ -1,6 +1,7 @@
-//! The named bench scenes, each with a FIXED camera and environment so that figures compare across commits
-//! (an automatic framing would move whenever framing code or an asset's bounds change).
+//! The scenes the bench measures: the named scenes of `crate::scenes` (fixed cameras, so figures compare
+//! across commits) or glTF files, and the synthetic ones of the scaling and refit parts.
 
+use crate::scenes::{gltf_files, load_scene};
 use anyhow::{Context, Result};
 use glam::Vec3;
 use raykin::animation::AnimationPlayer;
@@ -9,82 +10,6 @@ use raykin::render::Environment;
 use raykin::scene::{LoadOptions, NodeTransform, SceneAsset};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
-
-/// Where a named scene comes from, relative to the shared assets folder.
-enum Source {
-    File(&'static str),
-    /// `raykin::scene::crowd_scene`: 64 CesiumMan + 32 Fox, animated.
-    Crowd,
-}
-
-struct Named {
-    name: &'static str,
-    source: Source,
-    eye: [f32; 3],
-    target: [f32; 3],
-    yfov_deg: f32,
-    environment: Environment,
-}
-
-const SKY: Environment = Environment::Sky;
-
-/// Cameras: the Cornell box's is the classic one (and the Mitsuba reference test's); FlightHelmet's and the
-/// spheres' are the automatic framings of 2026-11-22 (commit b8db256) written down; the crowd's looks over the
-/// 96 figures from the front (the automatic framing fitted the whole 40 m ground and left them a few pixels).
-const NAMED: &[Named] = &[
-    Named {
-        name: "cornell",
-        source: Source::File("CornellBox/CornellBox.glb"),
-        eye: [-278.0, 273.0, 800.0],
-        target: [-278.0, 273.0, 0.0],
-        yfov_deg: 39.3077,
-        environment: Environment::Constant([0.0; 3]),
-    },
-    Named {
-        name: "flight-helmet",
-        source: Source::File("FlightHelmet/glTF/FlightHelmet.gltf"),
-        eye: [-0.0204, 0.4244, 1.1720],
-        target: [-0.0204, 0.3580, 0.0142],
-        yfov_deg: 45.0,
-        environment: SKY,
-    },
-    Named {
-        name: "spheres",
-        source: Source::File(
-            "MetalRoughSpheresNoTextures/glTF-Binary/MetalRoughSpheresNoTextures.glb",
-        ),
-        eye: [0.002776, 0.003580, 0.013095],
-        target: [0.002776, 0.002742, -0.0015],
-        yfov_deg: 45.0,
-        environment: SKY,
-    },
-    Named {
-        name: "crowd",
-        source: Source::Crowd,
-        eye: [0.0, 6.0, 18.0],
-        target: [0.0, 0.5, 0.0],
-        yfov_deg: 45.0,
-        environment: SKY,
-    },
-];
-
-/// The names `--scene` accepts besides file paths.
-pub fn named_scene_names() -> Vec<&'static str> {
-    NAMED.iter().map(|n| n.name).collect()
-}
-
-/// The fixed camera of a named bench scene (the viewer opens `crowd` with it, so its offscreen timings frame
-/// the same picture as the bench's).
-pub fn named_camera(name: &str) -> Option<CameraChoice> {
-    NAMED
-        .iter()
-        .find(|n| n.name == name)
-        .map(|n| CameraChoice::LookAt {
-            eye: Vec3::from(n.eye),
-            target: Vec3::from(n.target),
-            yfov: n.yfov_deg.to_radians(),
-        })
-}
 
 /// A scene ready to bench: the asset, its fixed view, and what produced it (for reference-cache keys).
 pub struct BenchScene {
@@ -99,6 +24,23 @@ pub struct BenchScene {
 }
 
 impl BenchScene {
+    /// A scene with no players and no source files (built in memory, never cached).
+    pub fn still(
+        name: String,
+        scene: Arc<SceneAsset>,
+        camera: CameraChoice,
+        environment: Environment,
+    ) -> Self {
+        Self {
+            name,
+            scene,
+            camera,
+            environment,
+            players: Vec::new(),
+            source_files: Vec::new(),
+        }
+    }
+
     pub fn animated(&self) -> bool {
         !self.players.is_empty()
     }
@@ -106,80 +48,52 @@ impl BenchScene {
 
 /// A named scene (from `assets`) or a glTF file (automatic camera, sky).
 pub fn resolve(spec: &str, assets: &Path) -> Result<BenchScene> {
-    let Some(named) = NAMED.iter().find(|n| n.name == spec) else {
-        let path = PathBuf::from(spec);
-        if !path.exists() {
-            anyhow::bail!(
-                "--scene {spec}: no such file, and not a named bench scene ({})",
-                named_scene_names().join(", ")
-            );
-        }
-        let scene = crate::render_cmd::load_scene(&path)?;
+    if let Some(named) = crate::scenes::named(spec) {
+        let loaded = named.load(assets)?;
         return Ok(BenchScene {
-            name: path
-                .file_stem()
-                .map_or_else(|| spec.to_string(), |s| s.to_string_lossy().into_owned()),
-            scene,
-            camera: CameraChoice::Auto,
-            environment: SKY,
-            players: Vec::new(),
-            source_files: gltf_files(&path),
+            name: named.name.to_string(),
+            scene: loaded.scene,
+            camera: named.camera(),
+            environment: named.environment,
+            players: loaded.players,
+            source_files: loaded.source_files,
         });
-    };
-    let camera = named_camera(named.name).unwrap_or_default();
-    let (scene, players, source_files) = match named.source {
-        Source::File(rel) => {
-            let path = assets.join(rel);
-            let scene = crate::render_cmd::load_scene(&path).with_context(|| {
-                format!(
-                    "bench scene `{}` (from --assets {})",
-                    named.name,
-                    assets.display()
-                )
-            })?;
-            (scene, Vec::new(), gltf_files(&path))
-        }
-        Source::Crowd => {
-            let crowd = raykin::scene::crowd_scene(assets).with_context(|| {
-                format!("bench scene `crowd` (from --assets {})", assets.display())
-            })?;
-            let files = [
-                "CesiumMan/glTF-Binary/CesiumMan.glb",
-                "Fox/glTF-Binary/Fox.glb",
-            ]
-            .iter()
-            .map(|f| assets.join(f))
-            .collect();
-            (Arc::new(crowd.scene), crowd.players, files)
-        }
-    };
+    }
+    let path = PathBuf::from(spec);
+    if !path.exists() {
+        anyhow::bail!(
+            "--scene {spec}: no such file, and not a named bench scene ({})",
+            crate::scenes::names().join(", ")
+        );
+    }
+    let name = path
+        .file_stem()
+        .map_or_else(|| spec.to_string(), |s| s.to_string_lossy().into_owned());
     Ok(BenchScene {
-        name: named.name.to_string(),
-        scene,
-        camera,
-        environment: named.environment,
-        players,
-        source_files,
+        source_files: gltf_files(&path),
+        ..BenchScene::still(
+            name,
+            load_scene(&path)?,
+            CameraChoice::Auto,
+            Environment::Sky,
+        )
     })
 }
 
-/// The glTF file and, for a .gltf, the files beside it (buffers, textures).
-fn gltf_files(path: &Path) -> Vec<PathBuf> {
-    let mut files = vec![path.to_path_buf()];
-    let is_gltf = path
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("gltf"));
-    if let (true, Some(dir)) = (is_gltf, path.parent())
-        && let Ok(entries) = std::fs::read_dir(dir)
-    {
-        let mut siblings: Vec<PathBuf> = entries
-            .filter_map(|e| e.ok().map(|e| e.path()))
-            .filter(|p| p.is_file() && p != path)
-            .collect();
-        siblings.sort();
-        files.extend(siblings);
-    }
-    files
+/// The scene called `name` among `loaded`, resolved and added to them when missing.
+pub fn find_or_load<'a>(
+    loaded: &'a mut Vec<BenchScene>,
+    name: &str,
+    assets: &Path,
+) -> Result<&'a BenchScene> {
+    let index = match loaded.iter().position(|s| s.name == name) {
+        Some(i) => i,
+        None => {
+            loaded.push(resolve(name, assets)?);
+            loaded.len() - 1
+        }
+    };
+    Ok(&loaded[index])
 }
 
 /// The asset the triangle-count scaling copies (one mesh, 15k triangles; textures are not needed to time
@@ -225,7 +139,7 @@ pub fn load_scaling_asset(assets: &Path) -> Result<Arc<SceneAsset>> {
 /// CesiumMan, alone, with a fixed camera: the refit-vs-rebuild measurement walks it through its clip.
 pub fn cesium_man(assets: &Path) -> Result<(Arc<SceneAsset>, CameraChoice)> {
     let path = assets.join("CesiumMan/glTF-Binary/CesiumMan.glb");
-    let scene = crate::render_cmd::load_scene(&path)
+    let scene = load_scene(&path)
         .with_context(|| format!("refit bench asset (from --assets {})", assets.display()))?;
     let camera = CameraChoice::LookAt {
         eye: Vec3::new(0.0, 0.8, 2.6),

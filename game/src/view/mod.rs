@@ -65,7 +65,7 @@ pub fn run(args: &ViewArgs) -> Result<()> {
         max_depth: args.max_depth,
     };
     if args.offscreen {
-        let ctx = crate::render_cmd::open_gpu()?;
+        let ctx = crate::adapter::open_gpu()?;
         return offscreen::run(
             ctx,
             offscreen::OffscreenSetup {

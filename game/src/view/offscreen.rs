@@ -6,8 +6,7 @@
 use super::script::{Flow, ScriptHost, ScriptRunner};
 use super::session::{SceneSource, Session, SessionOptions};
 use super::ui_render::UiRenderer;
-use crate::bench::git_commit;
-use crate::bench::stats::Spread;
+use crate::stats::Spread;
 use anyhow::{Context, Result};
 use raykin::frame_timing::FrameTimings;
 use raykin::gpu::GpuContext;
@@ -199,7 +198,7 @@ pub fn run(ctx: GpuContext, setup: OffscreenSetup) -> Result<()> {
         "backend": format!("{:?}", ctx.info.backend),
         "device_type": format!("{:?}", ctx.info.device_type),
         "driver": format!("{} {}", ctx.info.driver, ctx.info.driver_info),
-        "commit": std::env::var("RAYKIN_COMMIT").ok().or_else(git_commit).unwrap_or_else(|| "unknown".into()),
+        "commit": crate::provenance::commit(),
         "image": [iw, ih],
         "ui_target": size,
         "frames": session.frames,

@@ -29,7 +29,9 @@ impl SceneSource {
     pub fn from_arg(arg: Option<&Path>, assets: &Path) -> Self {
         match arg {
             None => Self::Embedded,
-            Some(p) if p == Path::new("crowd") && !p.exists() => Self::Crowd(assets.to_path_buf()),
+            Some(p) if p == Path::new(crate::scenes::CROWD.name) && !p.exists() => {
+                Self::Crowd(assets.to_path_buf())
+            }
             Some(p) => Self::File(p.to_path_buf()),
         }
     }
@@ -92,13 +94,13 @@ fn load(source: &SceneSource) -> Result<LoadedScene> {
             players: Vec::new(),
         },
         SceneSource::Embedded => LoadedScene {
-            scene: Arc::new(crate::render_cmd::embedded_scene()?),
+            scene: Arc::new(crate::scenes::embedded_scene()?),
             players: Vec::new(),
         },
         SceneSource::Crowd(assets) => {
-            let crowd = raykin::scene::crowd_scene(assets)?;
+            let crowd = crate::scenes::CROWD.load(assets)?;
             LoadedScene {
-                scene: Arc::new(crowd.scene),
+                scene: crowd.scene,
                 players: crowd.players,
             }
         }
@@ -320,7 +322,7 @@ impl Session {
                 p.display().to_string(),
             ),
             SceneSource::Embedded => (
-                crate::render_cmd::DEFAULT_SCENE.to_vec(),
+                crate::scenes::DEFAULT_SCENE.to_vec(),
                 PathBuf::from("."),
                 "<embedded default scene>".to_string(),
             ),
@@ -426,11 +428,9 @@ fn build_engine(
     };
     // The embedded Cornell box is lit by its ceiling light only and framed like `raykin` renders it.
     let camera = match (source, &options.camera) {
-        (SceneSource::Embedded, CameraChoice::Auto) => crate::render_cmd::embedded_camera(),
+        (SceneSource::Embedded, CameraChoice::Auto) => crate::scenes::embedded_camera(),
         // The crowd opens on the bench's fixed view (the automatic framing fits the whole ground).
-        (SceneSource::Crowd(_), CameraChoice::Auto) => {
-            crate::bench::named_camera("crowd").unwrap_or_default()
-        }
+        (SceneSource::Crowd(_), CameraChoice::Auto) => crate::scenes::CROWD.camera(),
         (_, c) => c.clone(),
     };
     let mut engine = HeadlessApp::new(ctx.clone(), scene.clone(), settings, &camera)?;

@@ -1,9 +1,8 @@
 //! Bad input: each case gets a clear error naming the file and the problem, or a warning and a skipped piece
 //! while the rest renders; never a panic, a hang, or a non-finite/black image.
 
-mod common;
+use crate::common::*;
 use base64::Engine as _;
-use common::*;
 use raykin::camera::CameraChoice;
 use raykin::render::{Environment, RenderSettings};
 use raykin::scene::{LoadOptions, SceneError, load_gltf};
@@ -296,34 +295,5 @@ fn scene_over_gpu_limits_is_a_clear_error() {
             && msg.contains("over this GPU's limits")
             && msg.contains("MiB"),
         "{msg}"
-    );
-}
-
-#[test]
-fn no_gpu_adapter_says_how_to_install_one() {
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_raykin"))
-        .args([
-            "render",
-            "../shared/assets/CornellBox/CornellBox.glb",
-            "--spp",
-            "1",
-            "--width",
-            "8",
-            "--height",
-            "8",
-            "--out",
-        ])
-        .arg(scratch("never.png"))
-        .current_dir(repo_root())
-        .env("WGPU_BACKEND", "vulkan")
-        .env("VK_DRIVER_FILES", "/nonexistent/icd.json")
-        .env("VK_ICD_FILENAMES", "/nonexistent/icd.json")
-        .output()
-        .unwrap();
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(!out.status.success());
-    assert!(
-        stderr.contains("no GPU adapter") && stderr.contains("mesa-vulkan-drivers"),
-        "{stderr}"
     );
 }

@@ -4,8 +4,7 @@
 //! rate, a reference less noisy than the curves it judges, rebuilds that cost more than refits, and charts
 //! that decode with visible content.
 
-mod common;
-use common::*;
+use crate::common::*;
 use serde_json::Value;
 use std::path::Path;
 

@@ -6,8 +6,6 @@
 //! Needs `xvfb-run` and ImageMagick's `import` (scripts/setup.sh installs them): without them the window test
 //! fails, naming what is missing.
 
-mod common;
-
 use image::RgbaImage;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
@@ -17,14 +15,11 @@ use std::time::{Duration, Instant};
 const IMAGE: (u32, u32) = (256, 160);
 
 fn fixture() -> PathBuf {
-    common::repo_root().join("tests/fixtures/viewer/viewer_scene.gltf")
+    crate::common::repo_root().join("tests/fixtures/viewer/viewer_scene.gltf")
 }
 
 fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("raykin-viewer-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    dir
+    crate::common::fresh_dir(&format!("viewer-{name}"))
 }
 
 fn on_path(program: &str) -> bool {
@@ -449,7 +444,7 @@ fn a_bad_file_reports_an_error_and_keeps_the_scene() {
 
 /// A long offscreen run (animation playing: instances, TLAS and accumulation change every frame) must not grow
 /// its resident memory in the second half. Slow on lavapipe (minutes), so opt-in:
-/// `cargo test --workspace --test viewer -- --ignored memory`.
+/// `cargo test --workspace --test cli -- --ignored viewer::offscreen_memory`.
 #[test]
 #[ignore = "soak test, minutes on lavapipe: run with --ignored"]
 fn offscreen_memory_stays_flat() {

@@ -1,8 +1,7 @@
 //! Every asset under ../shared/assets loads without error (all variants: .gltf with external or embedded
 //! buffers, .glb), and every static one renders a finite, non-black image.
 
-mod common;
-use common::*;
+use crate::common::*;
 use raykin::camera::CameraChoice;
 use raykin::render::{Environment, RenderSettings};
 use std::path::PathBuf;

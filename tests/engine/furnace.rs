@@ -3,8 +3,7 @@
 //! quadrature of the specification's formulas (not by the renderer's code). The glTF BRDF does not conserve
 //! energy, so the expected values are not 1.
 
-mod common;
-use common::*;
+use crate::common::*;
 use raykin::camera::CameraChoice;
 use raykin::render::{Environment, RenderSettings};
 use raykin::scene::{Material, NodeTransform, procedural};

@@ -1,9 +1,8 @@
 //! GPU (tiny images): a skinned CesiumMan posed at T renders like a static mesh built from the reference's
 //! skinned positions, `--time` is deterministic, and accumulation does not ghost after a pose change.
 
-mod common;
-use common::gpu_context as gpu;
-use common::repo_root;
+use crate::common::gpu_context as gpu;
+use crate::common::repo_root;
 
 use glam::Vec3;
 use raykin::camera::CameraChoice;

@@ -2,9 +2,7 @@
 //! included), picking agrees with a brute-force ray cast, and File > Save as writes the edits into a glTF that
 //! loads back with everything else unchanged.
 
-mod common;
-
-use common::{gpu, repo_root, shared_assets};
+use crate::common::{gpu, repo_root, shared_assets};
 use glam::{Vec3, Vec4};
 use raykin::camera::CameraChoice;
 use raykin::headless::HeadlessApp;
@@ -284,10 +282,7 @@ fn picking_matches_a_brute_force_ray_cast() {
 }
 
 fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("raykin-editor-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    dir
+    crate::common::fresh_dir(&format!("editor-{name}"))
 }
 
 /// Saves `source` with one material edited, to .gltf and .glb in a different folder, and reloads both.

@@ -3,9 +3,7 @@
 //! the old WGSL stack of 32 entries the deepest pairs of instances vanished without a word; every one of the 80
 //! emissive quads must show.
 
-mod common;
-
-use common::gpu;
+use crate::common::gpu;
 use glam::{Mat4, Vec3};
 use raykin::bvh::{FlatBvh, GpuBvhChild, GpuBvhNode};
 use raykin::camera::CameraChoice;

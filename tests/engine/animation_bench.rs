@@ -1,10 +1,11 @@
 //! Measurements behind docs/ANIMATION.md (ignored by default; they print tables):
-//!   cargo test --release --workspace --test animation_bench -- --ignored --nocapture
+//!   cargo test --release --workspace --test engine -- --ignored --nocapture animation_bench::
 
+use crate::common::shared_assets;
 use raykin::animation::{AnimationPlayer, DeformedMeshes, cpu_app};
 use raykin::bvh::{BvhQuality, MeshBvh};
 use raykin::scene::{LoadOptions, SceneAsset, SceneRoot, load_gltf};
-use std::path::{Path, PathBuf};
+
 use std::sync::Arc;
 
 /// CPU seconds of this process (all threads) or of the calling thread: unlike wall time, not inflated when
@@ -25,10 +26,6 @@ fn process_cpu() -> f64 {
 
 fn thread_cpu() -> f64 {
     cpu_seconds(libc::CLOCK_THREAD_CPUTIME_ID)
-}
-
-fn assets() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/assets")
 }
 
 fn root(app: &mut bevy_app::App) -> bevy_ecs::entity::Entity {
@@ -55,8 +52,13 @@ fn sah_ratio_curves() {
             0,
         ),
     ] {
-        let scene =
-            Arc::new(load_gltf(assets().join(path), &LoadOptions { skip_images: true }).unwrap());
+        let scene = Arc::new(
+            load_gltf(
+                shared_assets().join(path),
+                &LoadOptions { skip_images: true },
+            )
+            .unwrap(),
+        );
         let mut app = cpu_app(scene.clone());
         let r = root(&mut app);
         let duration = scene.animations[clip].duration;
@@ -115,7 +117,7 @@ fn sah_ratio_curves() {
 #[test]
 #[ignore]
 fn cpu_skinning_time() {
-    let crowd = raykin::scene::crowd_scene(assets()).unwrap();
+    let crowd = raykin::animation::crowd_scene(shared_assets()).unwrap();
     let scene: Arc<SceneAsset> = Arc::new(crowd.scene);
     let mut app = cpu_app(scene.clone());
     let r = root(&mut app);

@@ -1,55 +1,12 @@
 //! Accuracy against an independent renderer: the Cornell box vs Mitsuba 3 with the exact glTF BRDF
 //! (tests/reference/cornell/, made by make_reference.py), and the Monte Carlo convergence rate.
 
-mod common;
-use common::*;
-use raykin::camera::CameraChoice;
-use raykin::render::{Environment, RenderSettings};
-use std::sync::Arc;
-
-const SIZE: u32 = 64;
-/// raykin depth = Mitsuba max_depth - 1 (reference.json records 9).
-const DEPTH: u32 = 8;
-/// The relMSE denominator's epsilon, as in reference.json (keeps dark pixels from dominating).
-const EPS: f64 = 1e-2;
-
-fn camera() -> CameraChoice {
-    CameraChoice::LookAt {
-        eye: glam::Vec3::new(-278.0, 273.0, 800.0),
-        target: glam::Vec3::new(-278.0, 273.0, 0.0),
-        yfov: 39.3077f32.to_radians(),
-    }
-}
+use crate::common::cornell::{self, EPS, SIZE, camera, mean_of};
+use crate::common::*;
+use raykin::render::RenderSettings;
 
 fn settings(seed: u32) -> RenderSettings {
-    RenderSettings {
-        width: SIZE,
-        height: SIZE,
-        max_depth: DEPTH,
-        environment: Environment::Constant([0.0; 3]),
-        seed,
-        ..Default::default()
-    }
-}
-
-fn load_reference() -> (Vec<[f32; 3]>, Vec<[f32; 3]>) {
-    let dir = repo_root().join("tests/reference/cornell");
-    let (w, h, a) =
-        raykin::image_io::read_exr(&dir.join("cornell_64_a.exr")).expect("reference half a");
-    let (_, _, b) =
-        raykin::image_io::read_exr(&dir.join("cornell_64_b.exr")).expect("reference half b");
-    assert_eq!((w, h), (SIZE, SIZE));
-    (a, b)
-}
-
-fn cornell() -> Arc<raykin::scene::SceneAsset> {
-    Arc::new(
-        raykin::scene::load_gltf(
-            shared_assets().join("CornellBox/CornellBox.glb"),
-            &Default::default(),
-        )
-        .expect("CornellBox loads"),
-    )
+    cornell::settings(SIZE, seed)
 }
 
 /// Our image and Mitsuba's agree within the noise of both: the expected relMSE of two unbiased estimates is the
@@ -59,22 +16,14 @@ fn cornell() -> Arc<raykin::scene::SceneAsset> {
 #[test]
 fn cornell_box_matches_mitsuba_within_noise() {
     let (ctx, _gpu) = gpu();
-    let scene = cornell();
+    let scene = cornell::scene();
     let spp = 128;
     let a = render(&ctx, &scene, settings(1), &camera(), spp);
     let b = render(&ctx, &scene, settings(2), &camera(), spp);
     assert_all_finite(&a, "raykin half a");
-    let ours: Vec<[f32; 3]> = a
-        .iter()
-        .zip(&b)
-        .map(|(x, y)| [0, 1, 2].map(|c| 0.5 * (x[c] + y[c])))
-        .collect();
-    let (ra, rb) = load_reference();
-    let reference: Vec<[f32; 3]> = ra
-        .iter()
-        .zip(&rb)
-        .map(|(x, y)| [0, 1, 2].map(|c| 0.5 * (x[c] + y[c])))
-        .collect();
+    let ours = mean_of(&a, &b);
+    let (ra, rb) = cornell::reference_halves();
+    let reference = mean_of(&ra, &rb);
     // Var of a mean of two halves = E[(a-b)^2] / 4, in relMSE units.
     let ours_noise = rel_mse(&a, &b, EPS) / 4.0;
     let ref_noise = rel_mse(&ra, &rb, EPS) / 4.0;
@@ -108,9 +57,7 @@ fn cornell_box_matches_mitsuba_within_noise() {
 #[test]
 fn error_converges_at_monte_carlo_rate() {
     let (ctx, _gpu) = gpu();
-    let mut scene = (*cornell()).clone();
-    scene.materials[0].double_sided = false;
-    let scene = Arc::new(scene);
+    let scene = cornell::scene_with_light(false);
     let small = |seed| RenderSettings {
         width: 32,
         height: 32,
@@ -118,11 +65,7 @@ fn error_converges_at_monte_carlo_rate() {
     };
     let half_a = render(&ctx, &scene, small(100), &camera(), 512);
     let half_b = render(&ctx, &scene, small(200), &camera(), 512);
-    let reference: Vec<[f32; 3]> = half_a
-        .iter()
-        .zip(&half_b)
-        .map(|(x, y)| [0, 1, 2].map(|c| 0.5 * (x[c] + y[c])))
-        .collect();
+    let reference = mean_of(&half_a, &half_b);
     let reference_noise = rel_mse(&half_a, &half_b, EPS) / 4.0;
     let mut app =
         raykin::headless::HeadlessApp::new(ctx.clone(), scene, small(7), &camera()).unwrap();

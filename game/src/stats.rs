@@ -1,4 +1,5 @@
-//! Summary statistics of repeated measurements, and the fits the error curves need.
+//! Summary statistics of repeated measurements (the bench's and the viewer's offscreen report), and the fits
+//! the bench's error curves need.
 
 /// Median and spread (minimum, 10th / 90th / 99th percentile) of a set of measurements. The minimum is the
 /// robust figure on a shared CPU, where other processes only ever add time.
@@ -79,20 +80,6 @@ pub fn time_to_reach(curve: &[(f64, f64)], target: f64) -> Option<f64> {
     })
 }
 
-/// Calendar date (UTC) of a Unix time, as YYYY-MM-DD (days-from-civil inverse, proleptic Gregorian).
-pub fn utc_date(unix_seconds: u64) -> String {
-    let days = (unix_seconds / 86_400) as i64 + 719_468;
-    let era = days.div_euclid(146_097);
-    let doe = days.rem_euclid(146_097);
-    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
-    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
-    let mp = (5 * doy + 2) / 153;
-    let day = doy - (153 * mp + 2) / 5 + 1;
-    let month = if mp < 10 { mp + 3 } else { mp - 9 };
-    let year = yoe + era * 400 + i64::from(month <= 2);
-    format!("{year:04}-{month:02}-{day:02}")
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -126,12 +113,5 @@ mod tests {
         assert!((time_to_reach(&curve, 0.1).unwrap() - 10.0).abs() < 1e-9);
         assert_eq!(time_to_reach(&curve, 0.01), None);
         assert_eq!(time_to_reach(&curve, 2.0), Some(1.0));
-    }
-
-    #[test]
-    fn utc_dates() {
-        assert_eq!(utc_date(0), "1970-01-01");
-        assert_eq!(utc_date(951_782_400), "2000-02-29");
-        assert_eq!(utc_date(1_798_761_600), "2027-01-01");
     }
 }

@@ -3,8 +3,7 @@
 //! scenes with deep trees, several meshes, textures and alpha-masked materials), and the shading-free
 //! ray-casting pass casts exactly the rays it reports.
 
-mod common;
-use common::*;
+use crate::common::*;
 use raykin::bvh::StaticLayout;
 use raykin::camera::CameraChoice;
 use raykin::render::RenderSettings;

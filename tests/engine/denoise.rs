@@ -2,74 +2,13 @@
 //! kept on flat and textured surfaces, texture and geometric edges kept, converged input passed through,
 //! extreme inputs kept finite, and a display-side switch that never touches accumulation.
 
-mod common;
-use common::*;
+use crate::common::cornell::{self, EPS};
+use crate::common::*;
 use raykin::camera::CameraChoice;
 use raykin::headless::HeadlessApp;
 use raykin::render::{Denoiser, Environment, RenderSettings};
 use raykin::scene::{Image, Material, NodeTransform, SceneAsset, Texture, TextureRef, procedural};
 use std::sync::Arc;
-
-/// The relMSE denominator's epsilon, as in the Mitsuba comparison.
-const EPS: f64 = 1e-2;
-const CORNELL_SIZE: u32 = 64;
-
-fn cornell_camera() -> CameraChoice {
-    CameraChoice::LookAt {
-        eye: glam::Vec3::new(-278.0, 273.0, 800.0),
-        target: glam::Vec3::new(-278.0, 273.0, 0.0),
-        yfov: 39.3077f32.to_radians(),
-    }
-}
-
-/// The Mitsuba reference's settings (raykin depth 8 = Mitsuba max_depth 9, black environment).
-fn cornell_settings(size: u32, seed: u32) -> RenderSettings {
-    RenderSettings {
-        width: size,
-        height: size,
-        max_depth: 8,
-        environment: Environment::Constant([0.0; 3]),
-        seed,
-        ..Default::default()
-    }
-}
-
-fn cornell(double_sided_light: bool) -> Arc<SceneAsset> {
-    let mut scene = raykin::scene::load_gltf(
-        shared_assets().join("CornellBox/CornellBox.glb"),
-        &Default::default(),
-    )
-    .expect("CornellBox loads");
-    scene.materials[0].double_sided = double_sided_light;
-    Arc::new(scene)
-}
-
-/// The box seen from the reference's camera, `size` pixels square.
-fn cornell_app(
-    ctx: raykin::gpu::GpuContext,
-    double_sided_light: bool,
-    size: u32,
-    seed: u32,
-) -> HeadlessApp {
-    HeadlessApp::new(
-        ctx,
-        cornell(double_sided_light),
-        cornell_settings(size, seed),
-        &cornell_camera(),
-    )
-    .expect("the Cornell box uploads")
-}
-
-/// Mitsuba 3 with the exact glTF BRDF, 131072 spp (tests/reference/cornell/).
-fn mitsuba_reference() -> Vec<[f32; 3]> {
-    let dir = repo_root().join("tests/reference/cornell");
-    let read = |name: &str| raykin::image_io::read_exr(&dir.join(name)).expect(name).2;
-    let (a, b) = (read("cornell_64_a.exr"), read("cornell_64_b.exr"));
-    a.iter()
-        .zip(&b)
-        .map(|(x, y)| [0, 1, 2].map(|c| 0.5 * (x[c] + y[c])))
-        .collect()
-}
 
 fn luminance(c: [f32; 3]) -> f64 {
     0.2126 * c[0] as f64 + 0.7152 * c[1] as f64 + 0.0722 * c[2] as f64
@@ -160,8 +99,8 @@ fn adjacent_pairs(size: u32, mut is_edge: impl FnMut(usize, usize) -> bool) -> V
 #[test]
 fn denoising_cuts_the_error_against_mitsuba_at_low_spp() {
     let (ctx, _gpu) = gpu();
-    let reference = mitsuba_reference();
-    let mut app = cornell_app(ctx, true, CORNELL_SIZE, 11);
+    let reference = cornell::reference();
+    let mut app = cornell::app(ctx, true, cornell::SIZE, 11);
     let mut done = 0;
     for (spp, min_factor) in [(1, 3.0), (4, 2.0)] {
         app.accumulate(spp - done, 64, |_| {});
@@ -264,7 +203,7 @@ fn flat_region_keeps_its_mean() {
 fn scene_energy_is_kept() {
     let (ctx, _gpu) = gpu();
     for (double_sided, bound) in [(false, 0.01), (true, 0.03)] {
-        let mut app = cornell_app(ctx.clone(), double_sided, CORNELL_SIZE, 5);
+        let mut app = cornell::app(ctx.clone(), double_sided, cornell::SIZE, 5);
         app.accumulate(16, 64, |_| {});
         let (noisy, denoised) = (app.radiance(), app.denoised_radiance());
         let total = |img: &[[f32; 3]]| img.iter().map(|p| luminance(*p)).sum::<f64>();
@@ -404,13 +343,13 @@ fn texture_edges_stay_sharp() {
 #[test]
 fn geometric_edges_stay_sharp() {
     let (ctx, _gpu) = gpu();
-    let reference = mitsuba_reference();
-    let mut app = cornell_app(ctx, true, CORNELL_SIZE, 21);
+    let reference = cornell::reference();
+    let mut app = cornell::app(ctx, true, cornell::SIZE, 21);
     app.accumulate(4, 64, |_| {});
     let (noisy, denoised, aovs) = (app.radiance(), app.denoised_radiance(), app.aovs());
     // The light's own outline is no geometric edge of the filter's (its emission is added back unfiltered),
     // and a blind blur would smear its radiance of 100 over every pair near it.
-    let s = CORNELL_SIZE as i32;
+    let s = cornell::SIZE as i32;
     let near_light = |i: usize| {
         let (x, y) = ((i as i32) % s, (i as i32) / s);
         (-3..=3).any(|dy| {
@@ -424,7 +363,7 @@ fn geometric_edges_stay_sharp() {
             })
         })
     };
-    let pairs = adjacent_pairs(CORNELL_SIZE, |a, b| {
+    let pairs = adjacent_pairs(cornell::SIZE, |a, b| {
         let (na, nb) = (
             glam::Vec3::from(aovs.normal[a]),
             glam::Vec3::from(aovs.normal[b]),
@@ -445,7 +384,7 @@ fn geometric_edges_stay_sharp() {
         reference: &reference,
         noisy: &noisy,
         denoised: &denoised,
-        size: CORNELL_SIZE,
+        size: cornell::SIZE,
     };
     assert_edges_kept("geometric-edge", &pairs, &images, 0.25);
 }
@@ -506,8 +445,8 @@ fn write_synthetic_accumulation(
 #[test]
 fn converged_input_passes_through() {
     let (ctx, _gpu) = gpu();
-    let reference = mitsuba_reference();
-    let mut app = cornell_app(ctx, true, CORNELL_SIZE, 31);
+    let reference = cornell::reference();
+    let mut app = cornell::app(ctx, true, cornell::SIZE, 31);
     app.accumulate(4, 64, |_| {});
     // Capped at 1: emitters are exact in a real render (their emission bypasses the filter).
     let variance: Vec<f64> = reference
@@ -545,7 +484,7 @@ fn converged_input_passes_through() {
 fn extreme_inputs_stay_finite() {
     let (ctx, _gpu) = gpu();
     let size = 16;
-    let mut app = cornell_app(ctx, true, size, 41);
+    let mut app = cornell::app(ctx, true, size, 41);
     app.accumulate(1, 1, |_| {});
     let real = app.denoised_radiance();
     assert_all_finite(&real, "denoised 1-spp render");
@@ -578,7 +517,7 @@ fn denoise_switch_never_touches_accumulation() {
     let (ctx, _gpu) = gpu();
     let size = 16;
     let new_app = || {
-        let mut app = cornell_app(ctx.clone(), true, size, 51);
+        let mut app = cornell::app(ctx.clone(), true, size, 51);
         app.settings_mut().spp_per_frame = 2;
         // The viewer's path: denoise + tone map every frame, GPU timestamps read back.
         app.accumulation_mut().display_each_frame = true;
@@ -641,61 +580,4 @@ fn denoise_switch_never_touches_accumulation() {
         total > 10 && agree * 10 >= total * 9,
         "display follows the denoised image in {agree}/{total} pixels"
     );
-}
-
-/// `raykin render --denoise` writes the denoised image: the EXR equals `HeadlessApp::denoised_radiance` for the
-/// same settings, and differs from the render without `--denoise`.
-#[test]
-fn render_command_writes_the_denoised_image() {
-    let dir = std::env::temp_dir().join(format!("raykin-denoise-cli-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let run = |out: &std::path::Path, denoise: bool| {
-        let mut cmd = std::process::Command::new(env!("CARGO_BIN_EXE_raykin"));
-        cmd.arg("render")
-            .arg(shared_assets().join("CornellBox/CornellBox.glb"))
-            .args([
-                "--width", "16", "--height", "16", "--spp", "4", "--seed", "61",
-            ])
-            .args(["--env", "0,0,0", "--max-depth", "8", "--fov", "39.3077"])
-            .args(["--look-from=-278,273,800", "--look-at=-278,273,0"])
-            .arg("--out")
-            .arg(out);
-        if denoise {
-            cmd.arg("--denoise");
-        }
-        let status = cmd.status().expect("raykin runs");
-        assert!(
-            status.success(),
-            "raykin render failed for {}",
-            out.display()
-        );
-        out.to_path_buf()
-    };
-    let denoised_exr = run(&dir.join("denoised.exr"), true);
-    let plain_exr = run(&dir.join("plain.exr"), false);
-    let read = |p: &std::path::Path| raykin::image_io::read_exr(p).expect("EXR").2;
-    let (from_cli, plain) = (read(&denoised_exr), read(&plain_exr));
-
-    let (ctx, _gpu) = gpu();
-    let mut app = cornell_app(ctx, true, 16, 61);
-    app.accumulate(4, 16, |_| {});
-    let expected = app.denoised_radiance();
-    assert!(
-        rel_mse(&from_cli, &expected, EPS) < 1e-10,
-        "`--denoise` EXR differs from HeadlessApp::denoised_radiance"
-    );
-    assert!(rel_mse(&plain, &app.radiance(), EPS) < 1e-10);
-    assert!(
-        rel_mse(&from_cli, &plain, EPS) > 1e-4,
-        "--denoise changed nothing"
-    );
-
-    let denoised_png = run(&dir.join("denoised.png"), true);
-    let plain_png = run(&dir.join("plain.png"), false);
-    assert_ne!(
-        std::fs::read(denoised_png).unwrap(),
-        std::fs::read(plain_png).unwrap(),
-        "the tone-mapped PNG ignores --denoise"
-    );
-    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -2,22 +2,17 @@
 //! through the real ECS systems (animate -> propagate_transforms -> deform_meshes) on a GPU-less world,
 //! plus the keyframe sampler cases and bad-input handling.
 
+use crate::common::{repo_root, shared_assets};
 use base64::Engine as _;
 use glam::{Mat4, Quat, Vec3};
-use raykin::animation::{
-    AnimationPlayer, DeformedMeshes, Sampled, cpu_app, sample_channel, validate_channel,
-};
+use raykin::animation::{AnimationPlayer, DeformedMeshes, Sampled, cpu_app, sample_channel};
 use raykin::scene::{
     AnimationChannel, ChannelValues, GlobalTransform, Interpolation, LoadOptions, SceneAsset,
     SceneNodes, SceneRoot, SkinnedMesh, load_gltf, load_gltf_slice,
 };
 use serde_json::Value;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::sync::Arc;
-
-fn repo_root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
-}
 
 fn read_json(rel: &str) -> Value {
     let path = repo_root().join(rel);
@@ -243,7 +238,7 @@ fn interpolation_cases() {
             times,
             values,
         };
-        validate_channel(&channel).unwrap();
+        channel.validate().unwrap();
         let name = case["name"].as_str().unwrap().to_string();
         for q in case["queries"].as_array().unwrap() {
             let t = q["t"].as_f64().unwrap() as f32;
@@ -302,7 +297,7 @@ fn several_players_at_once_with_explicit_clock() {
     // Two copies of RiggedSimple, one held at its first key, one playing from 0 for 30 frames of 1/60 s.
     let scene = Arc::new(
         load_gltf(
-            repo_root().join("../shared/assets/RiggedSimple/glTF-Binary/RiggedSimple.glb"),
+            shared_assets().join("RiggedSimple/glTF-Binary/RiggedSimple.glb"),
             &LoadOptions::default(),
         )
         .unwrap(),
@@ -614,7 +609,7 @@ fn posing_a_scene_without_clip_is_harmless() {
 
 #[test]
 fn crowd_scene_skins_every_instance() {
-    let crowd = raykin::scene::crowd_scene(repo_root().join("../shared/assets")).unwrap();
+    let crowd = raykin::animation::crowd_scene(shared_assets()).unwrap();
     assert_eq!(crowd.players.len(), 96);
     let skinned: Vec<usize> = (0..crowd.scene.meshes.len())
         .filter(|&m| crowd.scene.meshes[m].skin_weights.is_some())

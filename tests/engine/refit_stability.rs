@@ -2,8 +2,7 @@
 //! its refit BVH past the threshold, the rebuild fires, and the traced image equals a render of the same
 //! geometry with a freshly built BVH (for both the refit-only and the rebuilt tree).
 
-mod common;
-use common::gpu_context as gpu;
+use crate::common::gpu_context as gpu;
 
 use glam::{Quat, Vec2, Vec3};
 use raykin::bvh::refit::DEFAULT_REBUILD_THRESHOLD;

@@ -4,8 +4,7 @@
 //! every deformed vertex. Assets: CesiumMan (also with tangents added), Fox, RobotExpressive,
 //! AnimatedMorphCube and the synthetic two-influence-set skin + morph file of the fixture tests.
 
-mod common;
-use common::{gpu_context as gpu, repo_root, shared_assets};
+use crate::common::{gpu_context as gpu, repo_root, shared_assets};
 
 use glam::{Vec3, Vec4};
 use raykin::bvh::GpuBvhNode;

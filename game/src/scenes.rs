@@ -1,0 +1,201 @@
+//! The scenes the commands know by name, in one place for `render`, `view` and `bench`: the Cornell box built
+//! into the binary, and the named scenes of the shared assets folder, each with a FIXED camera and environment
+//! (bench figures compare across commits, and an automatic framing would move whenever framing code or an
+//! asset's bounds change). Also loading a scene file with its warnings printed.
+
+use anyhow::{Context, Result};
+use glam::Vec3;
+use raykin::animation::AnimationPlayer;
+use raykin::camera::CameraChoice;
+use raykin::render::Environment;
+use raykin::scene::{LoadOptions, SceneAsset};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+/// The scene shipped inside the binary (assets/default/): the Cornell box.
+pub const DEFAULT_SCENE: &[u8] = include_bytes!("../../assets/default/CornellBox.glb");
+
+/// A camera written down: where it stands, what it looks at, its vertical field of view.
+pub struct FixedView {
+    eye: [f32; 3],
+    target: [f32; 3],
+    yfov_deg: f32,
+}
+
+impl FixedView {
+    pub fn camera(&self) -> CameraChoice {
+        CameraChoice::LookAt {
+            eye: Vec3::from(self.eye),
+            target: Vec3::from(self.target),
+            yfov: self.yfov_deg.to_radians(),
+        }
+    }
+}
+
+/// Where a named scene comes from.
+pub enum Source {
+    /// A file, relative to the shared assets folder.
+    File(&'static str),
+    /// `raykin::animation::crowd_scene`: 64 CesiumMan + 32 Fox, animated.
+    Crowd,
+}
+
+pub struct NamedScene {
+    pub name: &'static str,
+    pub source: Source,
+    pub view: FixedView,
+    pub environment: Environment,
+}
+
+/// A named scene loaded: the asset, the animation players to attach (the crowd's), and the files whose bytes
+/// define it (the bench's reference cache hashes them).
+pub struct LoadedNamedScene {
+    pub scene: Arc<SceneAsset>,
+    pub players: Vec<(usize, AnimationPlayer)>,
+    pub source_files: Vec<PathBuf>,
+}
+
+// Cameras: the Cornell box's is the classic one (and the Mitsuba reference test's); FlightHelmet's and the
+// spheres' are the automatic framings of 2026-11-22 (commit b8db256) written down; the crowd's looks over the
+// 96 figures from the front (the automatic framing fitted the whole 40 m ground and left them a few pixels).
+
+pub const CORNELL: NamedScene = NamedScene {
+    name: "cornell",
+    source: Source::File("CornellBox/CornellBox.glb"),
+    view: FixedView {
+        eye: [-278.0, 273.0, 800.0],
+        target: [-278.0, 273.0, 0.0],
+        yfov_deg: 39.3077,
+    },
+    environment: Environment::Constant([0.0; 3]),
+};
+
+pub const FLIGHT_HELMET: NamedScene = NamedScene {
+    name: "flight-helmet",
+    source: Source::File("FlightHelmet/glTF/FlightHelmet.gltf"),
+    view: FixedView {
+        eye: [-0.0204, 0.4244, 1.1720],
+        target: [-0.0204, 0.3580, 0.0142],
+        yfov_deg: 45.0,
+    },
+    environment: Environment::Sky,
+};
+
+pub const SPHERES: NamedScene = NamedScene {
+    name: "spheres",
+    source: Source::File("MetalRoughSpheresNoTextures/glTF-Binary/MetalRoughSpheresNoTextures.glb"),
+    view: FixedView {
+        eye: [0.002776, 0.003580, 0.013095],
+        target: [0.002776, 0.002742, -0.0015],
+        yfov_deg: 45.0,
+    },
+    environment: Environment::Sky,
+};
+
+pub const CROWD: NamedScene = NamedScene {
+    name: "crowd",
+    source: Source::Crowd,
+    view: FixedView {
+        eye: [0.0, 6.0, 18.0],
+        target: [0.0, 0.5, 0.0],
+        yfov_deg: 45.0,
+    },
+    environment: Environment::Sky,
+};
+
+const NAMED: &[&NamedScene] = &[&CORNELL, &FLIGHT_HELMET, &SPHERES, &CROWD];
+
+/// The named scene called `name`, if any.
+pub fn named(name: &str) -> Option<&'static NamedScene> {
+    NAMED.iter().copied().find(|n| n.name == name)
+}
+
+/// The names, for messages.
+pub fn names() -> Vec<&'static str> {
+    NAMED.iter().map(|n| n.name).collect()
+}
+
+impl NamedScene {
+    pub fn camera(&self) -> CameraChoice {
+        self.view.camera()
+    }
+
+    /// Loads the scene from the shared assets folder `assets`.
+    pub fn load(&self, assets: &Path) -> Result<LoadedNamedScene> {
+        let context = || format!("scene `{}` (from --assets {})", self.name, assets.display());
+        Ok(match self.source {
+            Source::File(relative) => {
+                let path = assets.join(relative);
+                LoadedNamedScene {
+                    scene: load_scene(&path).with_context(context)?,
+                    players: Vec::new(),
+                    source_files: gltf_files(&path),
+                }
+            }
+            Source::Crowd => {
+                let crowd = raykin::animation::crowd_scene(assets).with_context(context)?;
+                LoadedNamedScene {
+                    scene: Arc::new(crowd.scene),
+                    players: crowd.players,
+                    // The two files `crowd_scene` composes.
+                    source_files: [
+                        "CesiumMan/glTF-Binary/CesiumMan.glb",
+                        "Fox/glTF-Binary/Fox.glb",
+                    ]
+                    .iter()
+                    .map(|f| assets.join(f))
+                    .collect(),
+                }
+            }
+        })
+    }
+}
+
+/// The embedded Cornell box, loaded.
+pub fn embedded_scene() -> Result<SceneAsset> {
+    let scene = raykin::scene::load_gltf_slice(
+        DEFAULT_SCENE,
+        Path::new("."),
+        Path::new("<embedded default scene>"),
+        &LoadOptions::default(),
+    )?;
+    report_warnings(&scene);
+    Ok(scene)
+}
+
+/// The embedded box is the `cornell` scene's model: the same classic view.
+pub fn embedded_camera() -> CameraChoice {
+    CORNELL.camera()
+}
+
+/// A glTF file, its warnings printed to stderr.
+pub fn load_scene(path: &Path) -> Result<Arc<SceneAsset>> {
+    let scene = raykin::scene::load_gltf(path, &LoadOptions::default())?;
+    report_warnings(&scene);
+    Ok(Arc::new(scene))
+}
+
+fn report_warnings(scene: &SceneAsset) {
+    for w in &scene.warnings {
+        eprintln!("raykin: warning: {}: {w}", scene.source);
+    }
+}
+
+/// The glTF file and, for a .gltf, the files beside it (buffers, textures).
+pub fn gltf_files(path: &Path) -> Vec<PathBuf> {
+    let mut files = vec![path.to_path_buf()];
+    let is_gltf = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("gltf"));
+    if let (true, Some(dir)) = (is_gltf, path.parent())
+        && let Ok(entries) = std::fs::read_dir(dir)
+    {
+        let mut siblings: Vec<PathBuf> = entries
+            .filter_map(|e| e.ok().map(|e| e.path()))
+            .filter(|p| p.is_file() && p != path)
+            .collect();
+        siblings.sort();
+        files.extend(siblings);
+    }
+    files
+}

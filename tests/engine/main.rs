@@ -1,0 +1,23 @@
+//! Tests of the engine library (`raykin`): one integration-test binary, one module per subject. The GPU
+//! tests share one device and serialise through `common::gpu()`.
+//!   cargo test --workspace --test engine -- furnace::      (one module)
+
+#[path = "../common/mod.rs"]
+mod common;
+
+mod animation_bench;
+mod animation_fixtures;
+mod architecture;
+mod assets;
+mod bad_input;
+mod cornell_reference;
+mod deep_tlas;
+mod denoise;
+mod editor;
+mod furnace;
+mod gpu_deform;
+mod record;
+mod refit_stability;
+mod shaders;
+mod skinned_image;
+mod traversal;
