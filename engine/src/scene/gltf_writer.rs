@@ -4,7 +4,7 @@
 //! own folder (and a GLB's binary chunk becomes `NAME.bin` beside it); a `.glb` output packs every buffer and
 //! external image into its one binary chunk.
 
-use super::gltf_loader::percent_decode;
+use super::inputs::percent_decode;
 use super::{AlphaMode, Material};
 use gltf::json;
 use std::path::{Component, Path, PathBuf};
@@ -155,7 +155,12 @@ struct Sources<'a> {
 
 impl Sources<'_> {
     fn read_uri(&self, uri: &str) -> Result<Vec<u8>, String> {
-        super::gltf_loader::read_uri(self.dir, uri)
+        // The scene loaded already, under the access the user chose: read back what it names.
+        let trusted = super::inputs::Access {
+            external_files: true,
+        };
+        let whole = super::inputs::ReadLimit::AtMost(u64::MAX);
+        super::inputs::read_uri(self.dir, uri, trusted, whole, &mut |_| {})
     }
 
     fn buffer(&self, buffer: &json::Buffer) -> Result<Vec<u8>, String> {
