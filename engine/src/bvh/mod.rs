@@ -8,7 +8,7 @@
 pub mod refit;
 pub mod wide;
 
-pub use wide::WideBvh;
+pub use wide::{WideBvh, WideBvhError};
 
 use bytemuck::{Pod, Zeroable};
 use glam::{Vec3, Vec3A};
@@ -342,12 +342,15 @@ impl Blas {
         layout: StaticLayout,
         deformable: bool,
     ) -> Result<Self, BvhTooDeep> {
-        Ok(match (deformable, layout) {
-            (false, StaticLayout::Wide) => {
-                Self::Wide(WideBvh::build(positions, triangles, quality)?)
+        if !deformable && layout == StaticLayout::Wide {
+            match WideBvh::build(positions, triangles, quality) {
+                Ok(wide) => return Ok(Self::Wide(wide)),
+                Err(wide::WideBvhError::TooDeep(e)) => return Err(e),
+                // Traversal gives the same image through the BVH2.
+                Err(wide::WideBvhError::TooLarge) => {}
             }
-            _ => Self::Binary(MeshBvh::build(positions, triangles, quality)?),
-        })
+        }
+        Ok(Self::Binary(MeshBvh::build(positions, triangles, quality)?))
     }
 
     /// Slot `i` of the mesh's GPU triangle range holds original triangle `order()[i]`.
@@ -396,7 +399,7 @@ pub fn build_tlas(boxes: &[(Vec3, Vec3)]) -> Result<FlatBvh, BvhTooDeep> {
     }
     let prims: Vec<InstanceBox> = boxes
         .iter()
-        .map(|(lo, hi)| InstanceBox(Aabb::new(Vec3A::from(*lo), Vec3A::from(*hi))))
+        .map(|(lo, hi)| InstanceBox(Aabb::new(finite(*lo), finite(*hi))))
         .collect();
     let mut params = BvhBuildParams::fast_build();
     params.max_prims_per_leaf = 1;
@@ -415,9 +418,52 @@ pub(crate) fn obvhs_triangles(positions: &[Vec3], triangles: &[[u32; 3]]) -> Vec
     triangles
         .iter()
         .map(|t| Triangle {
-            v0: Vec3A::from(positions[t[0] as usize]),
-            v1: Vec3A::from(positions[t[1] as usize]),
-            v2: Vec3A::from(positions[t[2] as usize]),
+            v0: finite(positions[t[0] as usize]),
+            v1: finite(positions[t[1] as usize]),
+            v2: finite(positions[t[2] as usize]),
         })
         .collect()
+}
+
+/// A point obvhs can build over. Its PLOC builder asserts (debug) or merges a node with itself (release)
+/// on infinite or NaN boxes, which an overflowing transform or deformation can produce; such a triangle or
+/// instance cannot be hit anyway (traversal tests its real coordinates), so it only needs a finite place
+/// in the tree.
+fn finite(p: Vec3) -> Vec3A {
+    let clamp = |v: f32| {
+        if v.is_nan() {
+            0.0
+        } else {
+            v.clamp(-f32::MAX, f32::MAX)
+        }
+    };
+    Vec3A::new(clamp(p.x), clamp(p.y), clamp(p.z))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// obvhs's PLOC builder panics on infinite boxes (e.g. an instance placed at 2^129 by an overflowing
+    /// transform); the builds clamp them instead.
+    #[test]
+    fn non_finite_boxes_and_vertices_build() {
+        let boxes: Vec<(Vec3, Vec3)> = (0..50)
+            .map(|k| {
+                let x = if k % 7 == 0 { f32::INFINITY } else { k as f32 };
+                (
+                    Vec3::new(x - 1.0, f32::NAN, 0.0),
+                    Vec3::new(x + 1.0, 1.0, 0.0),
+                )
+            })
+            .collect();
+        assert!(build_tlas(&boxes).is_ok());
+        let positions = [
+            Vec3::ZERO,
+            Vec3::X,
+            Vec3::new(f32::INFINITY, 0.0, 0.0),
+            Vec3::new(0.0, f32::NAN, 1.0),
+        ];
+        assert!(MeshBvh::build(&positions, &[[0, 1, 2], [0, 1, 3]], BvhQuality::Fast).is_ok());
+    }
 }

@@ -1,5 +1,6 @@
 //! The wgpu device: one adapter picked at start-up, shared by every plugin as a resource.
 
+pub mod limits;
 pub mod readback;
 mod timestamps;
 
