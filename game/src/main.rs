@@ -3,6 +3,8 @@
 
 mod bench;
 mod cli;
+mod messages;
+mod outputs;
 mod record_cmd;
 mod render_cmd;
 mod view;
@@ -10,12 +12,8 @@ mod view;
 use clap::Parser;
 
 fn main() -> std::process::ExitCode {
-    tracing_subscriber::fmt()
-        .with_env_filter(
-            tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| "warn".into()),
-        )
-        .with_writer(std::io::stderr)
-        .init();
+    messages::ensure_runtime_dir();
+    messages::init();
     let cli = cli::Cli::parse();
     let result = match cli.command {
         Some(cli::Command::Render(args)) => render_cmd::run(&args),

@@ -2,7 +2,10 @@
 //! a summary, `--merge` and the optional ffmpeg encode.
 
 use crate::cli::RecordArgs;
-use crate::render_cmd::{camera_spec, load_scene, open_gpu, settings_from};
+use crate::outputs::Output;
+use crate::render_cmd::{
+    camera_spec, check_scene, check_size, load_scene, open_gpu, settings_from,
+};
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressStyle};
 use raykin::record::{
@@ -43,7 +46,16 @@ fn run(args: &RecordArgs) -> Result<ExitCode> {
     if let Some(video) = &args.video {
         check_video(video, args.format)?;
     }
-    let scene = load_scene(&scene_args.scene)?;
+    let scene = load_scene(&scene_args.scene, &args.load.options())?;
+    crate::outputs::refuse_recording_over_inputs(out, &scene.files)?;
+    if let Some(video) = &args.video {
+        let video = Output {
+            what: "--video",
+            path: video.clone(),
+        };
+        crate::outputs::refuse_overwrites(&[video], &scene.files)?;
+    }
+    check_scene(&scene, &camera_spec(scene_args).choice())?;
     let request = RecordRequest {
         animation: scene_args.animation.clone(),
         fps: args.fps,
@@ -61,6 +73,7 @@ fn run(args: &RecordArgs) -> Result<ExitCode> {
             aovs: args.aovs.clone(),
             render: settings_from(scene_args),
         },
+        scene: args.load.scene_index,
     };
     let settings = raykin::record::plan(&scene, &request)?;
     if settings.clip.is_none() {
@@ -94,6 +107,11 @@ fn run(args: &RecordArgs) -> Result<ExitCode> {
         None
     } else {
         let ctx = open_gpu()?;
+        check_size(
+            &ctx,
+            settings.frame.render.width,
+            settings.frame.render.height,
+        )?;
         let cancel = Arc::new(AtomicBool::new(false));
         install_interrupt_handler(cancel.clone());
         let bar = progress_bar(range.len() as u64);

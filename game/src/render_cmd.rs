@@ -1,6 +1,7 @@
 //! `raykin render` and the no-argument default job.
 
 use crate::cli::{RenderArgs, SceneArgs};
+use crate::outputs::Output;
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use raykin::camera::CameraChoice;
@@ -33,16 +34,35 @@ pub fn embedded_camera() -> CameraChoice {
     crate::bench::named_camera("cornell").expect("the bench names the Cornell box")
 }
 
-pub fn load_scene(path: &Path) -> Result<Arc<SceneAsset>> {
-    let scene = raykin::scene::load_gltf(path, &LoadOptions::default())?;
+pub fn load_scene(path: &Path, options: &LoadOptions) -> Result<Arc<SceneAsset>> {
+    let scene = raykin::scene::load_gltf(path, options)?;
     report_warnings(&scene);
     Ok(Arc::new(scene))
 }
 
-fn report_warnings(scene: &SceneAsset) {
+/// Each of the scene's warnings, once, as one line (the loader only collects them).
+pub fn report_warnings(scene: &SceneAsset) {
     for w in &scene.warnings {
         eprintln!("raykin: warning: {}: {w}", scene.source);
     }
+}
+
+/// What can be checked before the GPU opens: the camera choice and the top-level BVH of the rest pose.
+pub fn check_scene(scene: &SceneAsset, camera: &CameraChoice) -> Result<()> {
+    raykin::camera::check_camera_choice(scene, camera)?;
+    raykin::bvh::build_tlas(&scene.rest_instance_boxes()).map_err(|e| {
+        anyhow::anyhow!(
+            "{}: the top-level BVH over its instances: {e} (instances placed along a geometric series?)",
+            scene.source
+        )
+    })?;
+    Ok(())
+}
+
+/// The image size against the adapter's limits, before the renderer creates any buffer.
+pub fn check_size(ctx: &GpuContext, width: u32, height: u32) -> Result<()> {
+    raykin::gpu::limits::check_image_size(&ctx.limits, width, height)
+        .with_context(|| format!("on {}", ctx.info.name))
 }
 
 pub fn open_gpu() -> Result<GpuContext> {
@@ -53,9 +73,9 @@ pub fn open_gpu() -> Result<GpuContext> {
 
 pub fn settings_from(args: &SceneArgs) -> RenderSettings {
     RenderSettings {
-        width: args.width.max(1),
-        height: args.height.max(1),
-        spp_per_frame: args.spp_per_dispatch.max(1),
+        width: args.width,
+        height: args.height,
+        spp_per_frame: args.spp_per_dispatch,
         max_depth: args.max_depth,
         environment: match args.env {
             Some(c) => Environment::Constant(c.to_array()),
@@ -88,11 +108,7 @@ pub fn pose_from(scene: &SceneAsset, args: &SceneArgs) -> Result<Option<(usize, 
         Some(a) => raykin::animation::find_clip(scene, a).map_err(anyhow::Error::msg)?,
         None => 0,
     };
-    let time = args.time.unwrap_or(0.0);
-    if !time.is_finite() {
-        anyhow::bail!("--time {time}: not a finite number of seconds");
-    }
-    Ok(Some((clip, time)))
+    Ok(Some((clip, args.time.unwrap_or(0.0))))
 }
 
 pub fn camera_from(args: &SceneArgs) -> CameraChoice {
@@ -144,16 +160,19 @@ struct RenderReport {
 }
 
 pub fn run(args: &RenderArgs) -> Result<()> {
-    let scene = load_scene(&args.scene.scene)?;
-    check_output(&args.out)?;
-    // Pose arguments are checked before the GPU opens: a typo fails at once.
+    let scene = load_scene(&args.scene.scene, &args.load.options())?;
+    check_outputs(&scene, &args.out, args.aovs, args.report.as_deref())?;
+    // Pose and camera arguments are checked before the GPU opens: a typo fails at once.
     let pose = pose_from(&scene, &args.scene)?;
+    let camera = camera_from(&args.scene);
+    check_scene(&scene, &camera)?;
     let ctx = open_gpu()?;
+    check_size(&ctx, args.scene.width, args.scene.height)?;
     render_to_file(
         ctx,
         scene,
         &args.scene,
-        camera_from(&args.scene),
+        camera,
         pose,
         &args.out,
         args.aovs,
@@ -161,7 +180,20 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     )
 }
 
-fn check_output(out: &Path) -> Result<()> {
+/// `NAME.albedo.exr`, `NAME.normal.exr`, `NAME.depth.exr` beside the image.
+fn aov_paths(out: &Path) -> [(&'static str, PathBuf); 3] {
+    let stem = out.with_extension("");
+    ["albedo", "normal", "depth"].map(|name| {
+        (
+            name,
+            PathBuf::from(format!("{}.{name}.exr", stem.display())),
+        )
+    })
+}
+
+/// Every file the render writes: a known format, never one of the scene's files or another output, in
+/// writable folders; all before any rendering.
+fn check_outputs(scene: &SceneAsset, out: &Path, aovs: bool, report: Option<&Path>) -> Result<()> {
     let ext = out
         .extension()
         .and_then(|e| e.to_str())
@@ -172,9 +204,25 @@ fn check_output(out: &Path) -> Result<()> {
             out.display()
         );
     }
-    if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir)
-            .with_context(|| format!("{}: cannot create the output folder", dir.display()))?;
+    let mut outputs = vec![Output {
+        what: "--out",
+        path: out.to_path_buf(),
+    }];
+    if aovs {
+        outputs.extend(aov_paths(out).map(|(_, path)| Output {
+            what: "--aovs output",
+            path,
+        }));
+    }
+    if let Some(report) = report {
+        outputs.push(Output {
+            what: "--report",
+            path: report.to_path_buf(),
+        });
+    }
+    crate::outputs::refuse_overwrites(&outputs, &scene.files)?;
+    for o in &outputs {
+        crate::outputs::check_writable(o.what, &o.path)?;
     }
     Ok(())
 }
@@ -226,14 +274,11 @@ fn render_to_file(
     }
     if aovs {
         let a = app.aovs();
-        let stem = out.with_extension("");
         let depth: Vec<[f32; 3]> = a.depth.iter().map(|d| [*d; 3]).collect();
-        for (name, data) in [
-            ("albedo", &a.albedo),
-            ("normal", &a.normal),
-            ("depth", &depth),
-        ] {
-            let path = PathBuf::from(format!("{}.{name}.exr", stem.display()));
+        for ((_, path), data) in aov_paths(out)
+            .into_iter()
+            .zip([&a.albedo, &a.normal, &depth])
+        {
             raykin::image_io::write_atomically(&path, |p| {
                 raykin::image_io::write_exr(p, w, h, data)
             })?;
@@ -265,8 +310,11 @@ fn render_to_file(
             render_wall_s: wall,
             samples_per_second: (w as f64 * h as f64 * args.spp as f64) / wall,
         };
-        std::fs::write(path, serde_json::to_string_pretty(&r)?)
-            .with_context(|| format!("{}: cannot write the report", path.display()))?;
+        raykin::image_io::write_bytes_atomically(
+            path,
+            serde_json::to_string_pretty(&r)?.as_bytes(),
+        )
+        .with_context(|| format!("--report {}: cannot write the report", path.display()))?;
     }
     Ok(())
 }
@@ -306,6 +354,6 @@ pub fn run_default() -> Result<()> {
     };
     let camera = embedded_camera();
     let out = Path::new("out/default.png");
-    check_output(out)?;
+    check_outputs(&scene, out, false, None)?;
     render_to_file(ctx, Arc::new(scene), &args, camera, None, out, false, None)
 }

@@ -114,7 +114,7 @@ pub fn resolve(spec: &str, assets: &Path) -> Result<BenchScene> {
                 named_scene_names().join(", ")
             );
         }
-        let scene = crate::render_cmd::load_scene(&path)?;
+        let scene = crate::render_cmd::load_scene(&path, &Default::default())?;
         return Ok(BenchScene {
             name: path
                 .file_stem()
@@ -130,13 +130,14 @@ pub fn resolve(spec: &str, assets: &Path) -> Result<BenchScene> {
     let (scene, players, source_files) = match named.source {
         Source::File(rel) => {
             let path = assets.join(rel);
-            let scene = crate::render_cmd::load_scene(&path).with_context(|| {
-                format!(
-                    "bench scene `{}` (from --assets {})",
-                    named.name,
-                    assets.display()
-                )
-            })?;
+            let scene =
+                crate::render_cmd::load_scene(&path, &Default::default()).with_context(|| {
+                    format!(
+                        "bench scene `{}` (from --assets {})",
+                        named.name,
+                        assets.display()
+                    )
+                })?;
             (scene, Vec::new(), gltf_files(&path))
         }
         Source::Crowd => {
@@ -217,15 +218,21 @@ pub fn instanced_grid(asset: &Arc<SceneAsset>, copies: usize) -> (SceneAsset, Ca
 /// Loads the scaling asset without images (traversal time does not depend on texels).
 pub fn load_scaling_asset(assets: &Path) -> Result<Arc<SceneAsset>> {
     let path = assets.join(SCALING_ASSET);
-    let scene = raykin::scene::load_gltf(&path, &LoadOptions { skip_images: true })
-        .with_context(|| format!("scaling asset (from --assets {})", assets.display()))?;
+    let scene = raykin::scene::load_gltf(
+        &path,
+        &LoadOptions {
+            skip_images: true,
+            ..Default::default()
+        },
+    )
+    .with_context(|| format!("scaling asset (from --assets {})", assets.display()))?;
     Ok(Arc::new(scene))
 }
 
 /// CesiumMan, alone, with a fixed camera: the refit-vs-rebuild measurement walks it through its clip.
 pub fn cesium_man(assets: &Path) -> Result<(Arc<SceneAsset>, CameraChoice)> {
     let path = assets.join("CesiumMan/glTF-Binary/CesiumMan.glb");
-    let scene = crate::render_cmd::load_scene(&path)
+    let scene = crate::render_cmd::load_scene(&path, &Default::default())
         .with_context(|| format!("refit bench asset (from --assets {})", assets.display()))?;
     let camera = CameraChoice::LookAt {
         eye: Vec3::new(0.0, 0.8, 2.6),
