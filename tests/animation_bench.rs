@@ -55,8 +55,16 @@ fn sah_ratio_curves() {
             0,
         ),
     ] {
-        let scene =
-            Arc::new(load_gltf(assets().join(path), &LoadOptions { skip_images: true }).unwrap());
+        let scene = Arc::new(
+            load_gltf(
+                assets().join(path),
+                &LoadOptions {
+                    skip_images: true,
+                    ..Default::default()
+                },
+            )
+            .unwrap(),
+        );
         let mut app = cpu_app(scene.clone());
         let r = root(&mut app);
         let duration = scene.animations[clip].duration;

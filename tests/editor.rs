@@ -276,7 +276,10 @@ fn picking_matches_a_brute_force_ray_cast() {
     let man = Arc::new(
         load_gltf(
             shared_assets().join("CesiumMan/glTF/CesiumMan.gltf"),
-            &LoadOptions { skip_images: true },
+            &LoadOptions {
+                skip_images: true,
+                ..Default::default()
+            },
         )
         .expect("CesiumMan loads"),
     );
