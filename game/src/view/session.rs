@@ -138,6 +138,9 @@ impl Session {
         if !from_file && ctx.info.device_type == wgpu::DeviceType::Cpu {
             prefs.render_scale = 0.25;
         }
+        if let Some((w, h)) = options.fixed_render_size {
+            crate::render_cmd::check_size(&ctx, w, h)?;
+        }
         let loaded = load(&source, &options.load)?;
         let engine = build_engine(&ctx, &loaded, &source, &prefs, &options)?;
         let egui = egui::Context::default();
