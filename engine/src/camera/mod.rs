@@ -150,7 +150,9 @@ fn pick_camera(
     view_from_node(world, yfov).map(Some).ok_or_else(|| {
         let position = cameras.iter().position(|c| c.0 == node).unwrap_or(0);
         fail(format!(
-            "camera {position} (node {node} `{}`) cannot be used: its world transform is singular (a scale              of 0, or a matrix without an orientation); fix the file, or choose another view with --camera              I or --look-from/--look-at",
+            "camera {position} (node {node} `{}`) cannot be used: its world transform is singular (a scale \
+             of 0, or a matrix without an orientation); fix the file, or choose another view with --camera \
+             I or --look-from/--look-at",
             scene.nodes.get(node).map_or("", |n| n.name.as_str())
         ))
     })

@@ -253,11 +253,16 @@ impl<'a> Loader<'a> {
             .filter_map(|n| scene.nodes[n].mesh)
             .any(|m| !scene.meshes[m].triangles.is_empty());
         if !drawn {
+            let scenes = self.document.scenes().len();
             return Err(SceneError::Scene {
                 path: self.path,
                 reason: format!(
-                    "the displayed scene draws no triangles (its nodes have no meshes); the file has {}                      scene(s): pick another with --scene N",
-                    self.document.scenes().len()
+                    "the displayed scene draws no triangles (its nodes have no meshes){}",
+                    if scenes > 1 {
+                        format!("; the file has {scenes} scenes: pick another with --scene N")
+                    } else {
+                        String::new()
+                    }
                 ),
             });
         }
