@@ -312,6 +312,7 @@ fn check_save(source: PathBuf) {
             &bytes,
             source.parent().unwrap(),
             &source.display().to_string(),
+            Default::default(),
             &materials,
             &out,
         )
@@ -364,6 +365,7 @@ fn saving_refuses_bad_requests_clearly() {
         &bytes,
         source.parent().unwrap(),
         "CornellBox.glb",
+        Default::default(),
         &original.materials,
         &dir.join("out.obj"),
     )
@@ -376,6 +378,7 @@ fn saving_refuses_bad_requests_clearly() {
         &bytes,
         source.parent().unwrap(),
         "CornellBox.glb",
+        Default::default(),
         &original.materials[..1],
         &dir.join("out.glb"),
     )

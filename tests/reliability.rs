@@ -449,3 +449,58 @@ fn a_top_level_bvh_deeper_than_the_stack_is_refused() {
     let err = raykin::bvh::build_tlas(&scene.rest_instance_boxes()).unwrap_err();
     assert!(err.depth > raykin::bvh::MAX_TRAVERSAL_DEPTH, "{err}");
 }
+
+/// File > Save as embeds the scene's buffers and images in a GLB: it reads only what the load was allowed
+/// to read, so a texture URI naming a file outside the scene's folder never ends up inside the saved file.
+#[test]
+fn save_as_embeds_no_file_the_load_could_not_read() {
+    let file = corpus().join("image_absolute_path.gltf");
+    let (scene, _) = warnings_of("image_absolute_path.gltf", &["absolute path"]);
+    let out = std::env::temp_dir().join(format!("raykin-save-{}.glb", std::process::id()));
+    let err = raykin::scene::save_with_materials(
+        &std::fs::read(&file).unwrap(),
+        file.parent().unwrap(),
+        "image_absolute_path.gltf",
+        LoadOptions::default().access(),
+        &scene.materials,
+        &out,
+    )
+    .unwrap_err();
+    assert!(err.to_string().contains("absolute path"), "{err}");
+    assert!(!out.exists());
+}
+
+/// Save as .gltf into another folder copies the buffer beside the output (so the saved scene loads under the
+/// confined reads) and never replaces a file already there.
+#[test]
+fn save_as_gltf_copies_outside_files_without_replacing_any() {
+    let source = shared_assets().join("Box/glTF/Box.gltf");
+    let scene = load_gltf(&source, &LoadOptions::default()).unwrap();
+    let dir = std::env::temp_dir().join(format!("raykin-save-copy-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let unrelated = b"someone else's Box0.bin".to_vec();
+    std::fs::write(dir.join("Box0.bin"), &unrelated).unwrap();
+    let out = dir.join("edited.gltf");
+    raykin::scene::save_with_materials(
+        &std::fs::read(&source).unwrap(),
+        source.parent().unwrap(),
+        "Box.gltf",
+        LoadOptions::default().access(),
+        &scene.materials,
+        &out,
+    )
+    .unwrap();
+    assert_eq!(std::fs::read(dir.join("Box0.bin")).unwrap(), unrelated);
+    let saved = load_gltf(&out, &LoadOptions::default()).expect("the saved scene loads confined");
+    assert_eq!(saved.triangle_count(), scene.triangle_count());
+    let names: Vec<String> = saved
+        .files
+        .iter()
+        .map(|f| f.file_name().unwrap().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(
+        names,
+        ["edited.gltf", "Box0-1.bin"],
+        "the scene file, then what it read"
+    );
+}

@@ -178,7 +178,8 @@ fn run_campaign(options: &Options, seeds: &[Seed]) {
         started_case.store(start.elapsed().as_secs(), Ordering::SeqCst);
         let bytes = mutate(seed, n_rng(options.seed, n));
         let decode_images = n % 16 == 0;
-        let verdict = check_case(&bytes, &seed.base_dir, &seed.path, decode_images);
+        let save = (n % 8 == 3).then_some(options.out.as_path());
+        let verdict = check_case_saving(&bytes, &seed.base_dir, &seed.path, decode_images, save);
         started_case.store(u64::MAX, Ordering::SeqCst);
         cases += 1;
         loaded += u64::from(matches!(verdict, Verdict::Loaded));
@@ -360,6 +361,18 @@ fn take_panics() -> Vec<String> {
 }
 
 fn check_case(bytes: &[u8], base_dir: &Path, name: &Path, decode_images: bool) -> Verdict {
+    check_case_saving(bytes, base_dir, name, decode_images, None)
+}
+
+/// Like [`check_case`]; with `save_dir`, a loaded case is also saved through File > Save as (GLB, the
+/// edited-materials writer) and the result reloaded.
+fn check_case_saving(
+    bytes: &[u8],
+    base_dir: &Path,
+    name: &Path,
+    decode_images: bool,
+    save_dir: Option<&Path>,
+) -> Verdict {
     take_panics();
     IN_CASE.set(true);
     let options = LoadOptions {
@@ -369,7 +382,10 @@ fn check_case(bytes: &[u8], base_dir: &Path, name: &Path, decode_images: bool) -
     let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
         let loaded = raykin::scene::load_gltf_slice(bytes, base_dir, name, &options);
         match loaded {
-            Ok(scene) => match invariants(&scene).and_then(|()| exercise_cpu(scene)) {
+            Ok(scene) => match invariants(&scene)
+                .and_then(|()| save_and_reload(bytes, base_dir, name, &scene, save_dir))
+                .and_then(|()| exercise_cpu(scene))
+            {
                 Ok(()) => Verdict::Loaded,
                 Err(e) => Verdict::Broken(e),
             },
@@ -399,6 +415,45 @@ fn refusal(e: &SceneError, name: &Path) -> Verdict {
     } else {
         Verdict::Unnamed(message)
     }
+}
+
+/// Saves `scene`'s source with its materials as a GLB in `dir` and reloads it: the writer must not panic,
+/// and what it writes must load with the same triangles.
+fn save_and_reload(
+    bytes: &[u8],
+    base_dir: &Path,
+    name: &Path,
+    scene: &SceneAsset,
+    dir: Option<&Path>,
+) -> Result<(), String> {
+    let Some(dir) = dir else {
+        return Ok(());
+    };
+    let out = dir.join("saved.glb");
+    let label = name.display().to_string();
+    let access = LoadOptions::default().access();
+    if raykin::scene::save_with_materials(bytes, base_dir, &label, access, &scene.materials, &out)
+        .is_err()
+    {
+        // A texture the load skipped cannot be embedded: a clear refusal is fine.
+        return Ok(());
+    }
+    let again = raykin::scene::load_gltf(
+        &out,
+        &LoadOptions {
+            skip_images: true,
+            ..Default::default()
+        },
+    )
+    .map_err(|e| format!("Save as wrote a file that does not load: {e}"))?;
+    if again.triangle_count() != scene.triangle_count() {
+        return Err(format!(
+            "Save as changed the triangle count: {} -> {}",
+            scene.triangle_count(),
+            again.triangle_count()
+        ));
+    }
+    Ok(())
 }
 
 /// What every loaded scene must satisfy for the renderer and the animation code to use it blindly.

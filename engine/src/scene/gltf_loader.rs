@@ -23,7 +23,8 @@ pub struct LoadOptions {
 }
 
 impl LoadOptions {
-    fn access(&self) -> inputs::Access {
+    /// The files these options let a scene read.
+    pub fn access(&self) -> inputs::Access {
         inputs::Access {
             external_files: self.allow_external_files,
         }

@@ -340,7 +340,8 @@ impl Session {
             }
         };
         let materials = self.world().resource::<Materials>().0.clone();
-        raykin::scene::save_with_materials(&bytes, &dir, &name, &materials, out)?;
+        let access = self.options.load.access();
+        raykin::scene::save_with_materials(&bytes, &dir, &name, access, &materials, out)?;
         Ok(())
     }
 
