@@ -47,15 +47,9 @@ pub fn report_warnings(scene: &SceneAsset) {
     }
 }
 
-/// What can be checked before the GPU opens: the camera choice and the top-level BVH of the rest pose.
+/// What can be checked before the GPU opens: the camera choice.
 pub fn check_scene(scene: &SceneAsset, camera: &CameraChoice) -> Result<()> {
     raykin::camera::check_camera_choice(scene, camera)?;
-    raykin::bvh::build_tlas(&scene.rest_instance_boxes()).map_err(|e| {
-        anyhow::anyhow!(
-            "{}: the top-level BVH over its instances: {e} (instances placed along a geometric series?)",
-            scene.source
-        )
-    })?;
     Ok(())
 }
 

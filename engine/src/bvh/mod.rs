@@ -5,6 +5,7 @@
 //! reverse sweep over the array (children always sit after their parent). Deformed meshes are refit in place;
 //! [`MeshBvh::sah_cost`] against the cost at build time tells when a refit has degraded and a rebuild is due.
 
+mod balanced;
 pub mod refit;
 pub mod wide;
 
@@ -16,6 +17,9 @@ use obvhs::{BvhBuildParams, aabb::Aabb, bvh2::Bvh2, triangle::Triangle};
 
 /// Deepest BVH the GPU traversal stack holds (see `shaders/bvh.wgsl`).
 pub const MAX_TRAVERSAL_DEPTH: u32 = 64;
+/// Deepest top-level BVH [`build_tlas`] returns: the top-level stack in `shaders/bvh.wgsl` `trace` holds 32
+/// entries (deeper trees lost whole subtrees of instances without a word).
+pub const MAX_TLAS_DEPTH: u32 = 64;
 
 /// One child of a GPU node: its box, and either an inner node index (`count == 0`) or a leaf's first
 /// primitive and primitive count.
@@ -288,7 +292,10 @@ impl MeshBvh {
         let tris = obvhs_triangles(positions, triangles);
         let mut core = std::time::Duration::ZERO;
         let bvh = obvhs::bvh2::builder::build_bvh2_from_tris(&tris, quality.params(), &mut core);
-        let flat = FlatBvh::from_obvhs(&bvh)?;
+        let flat = FlatBvh::from_obvhs(&bvh).or_else(|_| {
+            let boxes: Vec<Aabb> = tris.iter().map(obvhs::Boundable::aabb).collect();
+            FlatBvh::from_obvhs(&balanced::median_split(&boxes))
+        })?;
         let build_sah = flat.sah_cost();
         Ok(Self { flat, build_sah })
     }
@@ -345,9 +352,8 @@ impl Blas {
         if !deformable && layout == StaticLayout::Wide {
             match WideBvh::build(positions, triangles, quality) {
                 Ok(wide) => return Ok(Self::Wide(wide)),
-                Err(wide::WideBvhError::TooDeep(e)) => return Err(e),
-                // Traversal gives the same image through the BVH2.
-                Err(wide::WideBvhError::TooLarge) => {}
+                // Traversal gives the same image through the BVH2, which is never too deep.
+                Err(_) => {}
             }
         }
         Ok(Self::Binary(MeshBvh::build(positions, triangles, quality)?))
@@ -392,7 +398,9 @@ impl obvhs::Boundable for InstanceBox {
     }
 }
 
-/// Builds the top-level BVH over instance world-space boxes; leaves hold one instance each.
+/// Builds the top-level BVH over instance world-space boxes; leaves hold one instance each. At most
+/// [`MAX_TLAS_DEPTH`] levels for up to 2^31 instances: where obvhs's tree is deeper (degenerate placements),
+/// a balanced one replaces it.
 pub fn build_tlas(boxes: &[(Vec3, Vec3)]) -> Result<FlatBvh, BvhTooDeep> {
     if boxes.is_empty() {
         return FlatBvh::from_obvhs(&Bvh2::default());
@@ -405,7 +413,13 @@ pub fn build_tlas(boxes: &[(Vec3, Vec3)]) -> Result<FlatBvh, BvhTooDeep> {
     params.max_prims_per_leaf = 1;
     let mut core = std::time::Duration::ZERO;
     let bvh = obvhs::bvh2::builder::build_bvh2(&prims, params, &mut core);
-    FlatBvh::from_obvhs(&bvh)
+    match FlatBvh::from_obvhs(&bvh) {
+        Ok(flat) if flat.depth <= MAX_TLAS_DEPTH => Ok(flat),
+        _ => {
+            let boxes: Vec<Aabb> = prims.iter().map(|p| p.0).collect();
+            FlatBvh::from_obvhs(&balanced::median_split(&boxes))
+        }
+    }
 }
 
 /// `triangles` (a mesh's, in file order) rearranged into a BVH's leaf `order` (BVH2 or wide).
@@ -443,6 +457,33 @@ fn finite(p: Vec3) -> Vec3A {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// obvhs's PLOC chains identical boxes (100 of them gave 99 levels): the top level falls back to a
+    /// balanced tree and keeps every instance.
+    #[test]
+    fn coincident_instances_keep_a_shallow_top_level() {
+        let boxes = vec![(Vec3::ZERO, Vec3::ONE); 500];
+        let tlas = build_tlas(&boxes).unwrap();
+        assert!(tlas.depth <= 10, "{}", tlas.depth);
+        // Nested boxes (one level per box from PLOC) and a geometric series stay within the WGSL stack.
+        for grow in [1.3f32, 1.5] {
+            let nested: Vec<(Vec3, Vec3)> = (0..120)
+                .map(|k| (Vec3::splat(-grow.powi(k)), Vec3::splat(grow.powi(k))))
+                .collect();
+            assert!(build_tlas(&nested).unwrap().depth <= MAX_TLAS_DEPTH);
+            let series: Vec<(Vec3, Vec3)> = (0..120)
+                .map(|k| (Vec3::X * grow.powi(k), Vec3::X * grow.powi(k) + Vec3::ONE))
+                .collect();
+            assert!(build_tlas(&series).unwrap().depth <= MAX_TLAS_DEPTH);
+        }
+        let mut order = tlas.order.clone();
+        order.sort();
+        assert_eq!(order, (0..500).collect::<Vec<u32>>());
+        let positions: Vec<Vec3> = (0..300).flat_map(|_| [Vec3::ZERO, Vec3::X, Vec3::Y]).collect();
+        let triangles: Vec<[u32; 3]> = (0..300).map(|t| [3 * t, 3 * t + 1, 3 * t + 2]).collect();
+        let bvh = MeshBvh::build(&positions, &triangles, BvhQuality::Fast).unwrap();
+        assert!(bvh.flat.depth <= MAX_TRAVERSAL_DEPTH);
+    }
 
     /// obvhs's PLOC builder panics on infinite boxes (e.g. an instance placed at 2^129 by an overflowing
     /// transform); the builds clamp them instead.

@@ -96,6 +96,9 @@ impl<'a> Loader<'a> {
             path: path.clone(),
             reason,
         };
+        if let Some(problem) = validate::glb_header_problem(bytes) {
+            return Err(invalid(problem));
+        }
         let gltf = gltf::Gltf::from_slice_without_validation(bytes).map_err(|e| {
             // A glTF 1.0 file is not even shaped like a 2.0 one: name its version, not the parse error.
             invalid(validate::version_problem(bytes).unwrap_or_else(|| describe_gltf_error(&e)))

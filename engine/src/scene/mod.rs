@@ -383,35 +383,6 @@ impl SceneAsset {
         any.then_some((lo, hi))
     }
 
-    /// World-space boxes of the displayed mesh instances in the rest pose: what the top-level BVH is built
-    /// over (skinned meshes as their bind pose under their node).
-    pub fn rest_instance_boxes(&self) -> Vec<(Vec3, Vec3)> {
-        let world = self.rest_world_matrices();
-        let shown = self.displayed_nodes();
-        (0..self.nodes.len())
-            .filter(|&n| shown[n])
-            .filter_map(|n| {
-                let mesh = self.meshes.get(self.nodes[n].mesh?)?;
-                if mesh.positions.is_empty() {
-                    return None;
-                }
-                let (lo, hi) = mesh.bounds();
-                let corners = (0..8).map(|c| {
-                    let pick = |bit: u32, a: f32, b: f32| if c & bit == 0 { a } else { b };
-                    world[n].transform_point3(Vec3::new(
-                        pick(1, lo.x, hi.x),
-                        pick(2, lo.y, hi.y),
-                        pick(4, lo.z, hi.z),
-                    ))
-                });
-                Some(corners.fold(
-                    (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
-                    |(a, b), p| (a.min(p), b.max(p)),
-                ))
-            })
-            .collect()
-    }
-
     pub fn triangle_count(&self) -> usize {
         self.meshes.iter().map(|m| m.triangles.len()).sum()
     }

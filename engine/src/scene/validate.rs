@@ -53,6 +53,29 @@ pub(super) fn check(root: &mut json::Root) -> Result<Findings, String> {
     Ok(findings)
 }
 
+/// A GLB header the crate would mis-read: it computes `length - 12` unchecked (a length under 12 underflows).
+pub(super) fn glb_header_problem(bytes: &[u8]) -> Option<String> {
+    let word = |at: usize| -> Option<u32> {
+        Some(u32::from_le_bytes(bytes.get(at..at + 4)?.try_into().ok()?))
+    };
+    if !bytes.starts_with(b"glTF") {
+        return None;
+    }
+    let (Some(version), Some(length)) = (word(4), word(8)) else {
+        return Some(format!(
+            "a GLB of {} bytes has no complete 12-byte header",
+            bytes.len()
+        ));
+    };
+    if version != 2 {
+        return Some(format!(
+            "GLB version {version}: raykin reads GLB version 2 (glTF 2.0)"
+        ));
+    }
+    (length < 12)
+        .then(|| format!("the GLB header's length {length} is shorter than the header itself"))
+}
+
 /// The version a file states, from its raw JSON: for a message when the crate cannot parse the file at all
 /// (a glTF 1.0 file is not even shaped like a 2.0 one).
 pub(super) fn version_problem(json: &[u8]) -> Option<String> {
