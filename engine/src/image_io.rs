@@ -61,7 +61,8 @@ pub const PARTIAL_SUFFIX: &str = ".partial";
 
 /// Writes `path` atomically: `write` fills a temporary file in the same folder (named per process, so
 /// concurrent writers never share one), then a rename replaces `path`. On failure the temporary file is
-/// removed and `path` is untouched: no reader ever sees a truncated file.
+/// removed and `path` is untouched: no reader ever sees a truncated file. Errors name `path`, never the
+/// temporary file the user did not ask for.
 pub fn write_atomically(
     path: &Path,
     write: impl FnOnce(&Path) -> Result<(), ImageError>,
@@ -78,7 +79,10 @@ pub fn write_atomically(
     if result.is_err() {
         let _ = std::fs::remove_file(&tmp);
     }
-    result
+    result.map_err(|e| ImageError {
+        path: path.display().to_string(),
+        reason: e.reason,
+    })
 }
 
 /// Writes `bytes` to `path` atomically and durably (flushed to the device before the rename).

@@ -31,6 +31,8 @@ pub struct ViewArgs {
     /// A .gltf or .glb file, or `crowd` (the animated bench crowd from --assets); default: the embedded
     /// Cornell box.
     pub scene: Option<PathBuf>,
+    #[command(flatten)]
+    pub load: LoadArgs,
     /// Run scripted steps (see docs/VIEWER.md): wait, edit materials, scrub, switch camera, screenshot, quit.
     #[arg(long)]
     pub script: Option<PathBuf>,
@@ -57,10 +59,10 @@ pub struct ViewArgs {
     #[arg(long)]
     pub no_vsync: bool,
     /// Animation time step in seconds per frame (default: wall-clock time; 1/60 with --script or --offscreen).
-    #[arg(long)]
+    #[arg(long, value_parser = parse_non_negative, allow_hyphen_values = true)]
     pub fixed_dt: Option<f32>,
     /// Samples per pixel per frame.
-    #[arg(long)]
+    #[arg(long, value_parser = at_least_one(), allow_negative_numbers = true)]
     pub spp_per_frame: Option<u32>,
     /// Surface interactions after the camera ray.
     #[arg(long)]
@@ -77,6 +79,79 @@ pub struct ViewArgs {
     /// Neither read nor write the settings file.
     #[arg(long)]
     pub no_settings: bool,
+}
+
+/// How a scene file is read: which of its glTF scenes, and whether it may read files outside its folder.
+#[derive(Args, Debug, Clone, Default)]
+pub struct LoadArgs {
+    /// Show the file's glTF scene N (default: its default scene, else its first).
+    #[arg(long = "scene", value_name = "N")]
+    pub scene_index: Option<usize>,
+    /// Let the scene's URIs name files outside its folder (absolute paths, `..`, symlinks out of it): only
+    /// for trusted files.
+    #[arg(long)]
+    pub allow_external_files: bool,
+}
+
+impl LoadArgs {
+    pub fn options(&self) -> raykin::scene::LoadOptions {
+        raykin::scene::LoadOptions {
+            scene: self.scene_index,
+            allow_external_files: self.allow_external_files,
+            ..Default::default()
+        }
+    }
+}
+
+/// A u32 of at least 1 (sample counts, sizes).
+pub fn at_least_one() -> clap::builder::RangedI64ValueParser<u32> {
+    clap::value_parser!(u32).range(1..)
+}
+
+fn parse_number(s: &str) -> Result<f32, String> {
+    s.trim()
+        .parse::<f32>()
+        .map_err(|_| format!("`{s}` is not a number"))
+}
+
+/// A finite number (negative allowed).
+pub fn parse_finite(s: &str) -> Result<f32, String> {
+    let v = parse_number(s)?;
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        Err(format!("`{s}` is not a finite number"))
+    }
+}
+
+pub fn parse_non_negative(s: &str) -> Result<f32, String> {
+    let v = parse_finite(s)?;
+    if v >= 0.0 {
+        Ok(v)
+    } else {
+        Err(format!("`{s}` is negative"))
+    }
+}
+
+pub fn parse_positive(s: &str) -> Result<f32, String> {
+    let v = parse_finite(s)?;
+    if v > 0.0 {
+        Ok(v)
+    } else {
+        Err(format!("`{s}` is not greater than 0"))
+    }
+}
+
+/// A vertical field of view in degrees: a pinhole camera sees less than a half space.
+pub fn parse_fov(s: &str) -> Result<f32, String> {
+    let v = parse_finite(s)?;
+    if v > 0.0 && v < 180.0 {
+        Ok(v)
+    } else {
+        Err(format!(
+            "`{s}`: a field of view is an angle in degrees between 0 and 180, both excluded"
+        ))
+    }
 }
 
 pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
@@ -127,9 +202,9 @@ pub struct BenchArgs {
     #[arg(long, value_enum, default_value_t = StaticBvh::Wide)]
     pub static_bvh: StaticBvh,
     /// Override the suite's frame-loop sizes with one size.
-    #[arg(long)]
+    #[arg(long, value_parser = at_least_one(), allow_negative_numbers = true)]
     pub width: Option<u32>,
-    #[arg(long)]
+    #[arg(long, value_parser = at_least_one(), allow_negative_numbers = true)]
     pub height: Option<u32>,
     /// Where skinning, morphing and BVH refit run (see `render --help`).
     #[arg(long, value_enum, default_value_t = DeformArg::Auto)]
@@ -161,29 +236,29 @@ pub struct SceneArgs {
     /// A .gltf or .glb file.
     pub scene: PathBuf,
     /// Samples per pixel.
-    #[arg(long, default_value_t = 64)]
+    #[arg(long, default_value_t = 64, value_parser = at_least_one(), allow_negative_numbers = true)]
     pub spp: u32,
     /// Surface interactions after the camera ray.
     #[arg(long, default_value_t = 6)]
     pub max_depth: u32,
-    #[arg(long, default_value_t = 640)]
+    #[arg(long, default_value_t = 640, value_parser = at_least_one(), allow_negative_numbers = true)]
     pub width: u32,
-    #[arg(long, default_value_t = 360)]
+    #[arg(long, default_value_t = 360, value_parser = at_least_one(), allow_negative_numbers = true)]
     pub height: u32,
     /// Index of the scene's camera to use (default: the first, else a framing of the scene).
     #[arg(long, conflicts_with = "look_from")]
     pub camera: Option<usize>,
     /// Camera position X,Y,Z (with --look-at; overrides the scene's cameras).
-    #[arg(long, value_parser = parse_vec3, requires = "look_at")]
+    #[arg(long, value_parser = parse_vec3, requires = "look_at", allow_hyphen_values = true)]
     pub look_from: Option<glam::Vec3>,
     /// Point the camera looks at, X,Y,Z.
-    #[arg(long, value_parser = parse_vec3, requires = "look_from")]
+    #[arg(long, value_parser = parse_vec3, requires = "look_from", allow_hyphen_values = true)]
     pub look_at: Option<glam::Vec3>,
-    /// Vertical field of view in degrees, with --look-from.
-    #[arg(long, default_value_t = 45.0)]
+    /// Vertical field of view in degrees (0 < FOV < 180), with --look-from.
+    #[arg(long, default_value_t = 45.0, value_parser = parse_fov, allow_hyphen_values = true)]
     pub fov: f32,
-    /// Constant environment radiance R,G,B.
-    #[arg(long, value_parser = parse_vec3, conflicts_with = "sky")]
+    /// Constant environment radiance R,G,B (non-negative).
+    #[arg(long, value_parser = parse_radiance, conflicts_with = "sky", allow_hyphen_values = true)]
     pub env: Option<glam::Vec3>,
     /// Sky-gradient environment (the default when --env is not given).
     #[arg(long)]
@@ -191,7 +266,7 @@ pub struct SceneArgs {
     #[arg(long, default_value_t = 0)]
     pub seed: u32,
     /// Exposure in stops for PNG output (EXR is never exposed or tone-mapped).
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = 0.0, value_parser = parse_finite, allow_hyphen_values = true)]
     pub exposure: f32,
     /// Disable next-event estimation (BRDF sampling only).
     #[arg(long)]
@@ -200,13 +275,13 @@ pub struct SceneArgs {
     #[arg(long)]
     pub no_rr: bool,
     /// Pose time in seconds (clip 0 unless --animation); the same time always gives the same image.
-    #[arg(long)]
+    #[arg(long, value_parser = parse_finite, allow_hyphen_values = true)]
     pub time: Option<f32>,
     /// Animation clip by name or index.
     #[arg(long)]
     pub animation: Option<String>,
     /// Samples per pixel per GPU submission.
-    #[arg(long, default_value_t = 16)]
+    #[arg(long, default_value_t = 16, value_parser = at_least_one(), allow_negative_numbers = true)]
     pub spp_per_dispatch: u32,
     /// Denoise the image (edge-avoiding a-trous filter guided by normal, depth and albedo).
     #[arg(long)]
@@ -240,6 +315,10 @@ impl From<StaticBvh> for raykin::bvh::StaticLayout {
 pub struct RenderArgs {
     #[command(flatten)]
     pub scene: SceneArgs,
+    // Beside, not inside, SceneArgs: clap never fills an optional flattened struct (record's) that
+    // flattens another.
+    #[command(flatten)]
+    pub load: LoadArgs,
     /// Output image: .exr (linear radiance) or .png (tone-mapped sRGB).
     #[arg(long)]
     pub out: PathBuf,
@@ -260,26 +339,28 @@ same command resumes. docs/RECORDING.md: files, manifest, motion vectors, Slurm 
 pub struct RecordArgs {
     #[command(flatten)]
     pub scene: Option<SceneArgs>,
+    #[command(flatten)]
+    pub load: LoadArgs,
     /// Output folder: frame_00000.png|exr, AOVs (frame_00000.NAME.exr), manifest.json.
     #[arg(long, required_unless_present = "merge")]
     pub out: Option<PathBuf>,
     /// Frames per second of the recording (frame k is the pose at START + k/FPS).
-    #[arg(long, default_value_t = 30.0)]
+    #[arg(long, default_value_t = 30.0, value_parser = parse_positive, allow_hyphen_values = true)]
     pub fps: f32,
     /// T0: seconds into the clip of frame 0.
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = 0.0, value_parser = parse_finite, allow_hyphen_values = true)]
     pub start: f32,
     /// T1: the frames cover [START, END) (default: the clip's end).
-    #[arg(long, conflicts_with = "frames")]
+    #[arg(long, conflicts_with = "frames", value_parser = parse_finite, allow_hyphen_values = true)]
     pub end: Option<f32>,
     /// Number of frames instead of --end (required for a scene without animations).
-    #[arg(long)]
+    #[arg(long, value_parser = at_least_one(), allow_negative_numbers = true)]
     pub frames: Option<u32>,
     /// Render only frames A..B (A to B-1; also A..=B, A.., ..B), e.g. one task of a Slurm array.
     #[arg(long, value_parser = raykin::record::parse_range)]
     pub range: Option<(Option<u32>, Option<u32>)>,
     /// Sample each frame for this long instead of a fixed --spp (frames are then not bit-reproducible).
-    #[arg(long, conflicts_with = "spp")]
+    #[arg(long, conflicts_with = "spp", value_parser = parse_positive_ms, allow_hyphen_values = true)]
     pub time_budget_ms: Option<f64>,
     /// png (tone-mapped sRGB) or exr (linear radiance).
     #[arg(long, default_value = "png")]
@@ -297,6 +378,19 @@ pub struct RecordArgs {
     /// Fold the part manifests of --range runs in this folder into manifest.json and report missing frames.
     #[arg(long, conflicts_with_all = ["out", "range", "force"])]
     pub merge: Option<PathBuf>,
+}
+
+/// A constant environment radiance: three finite, non-negative numbers.
+pub fn parse_radiance(s: &str) -> Result<glam::Vec3, String> {
+    let v = parse_vec3(s)?;
+    if v.min_element() < 0.0 {
+        return Err(format!("`{s}`: radiance cannot be negative"));
+    }
+    Ok(v)
+}
+
+fn parse_positive_ms(s: &str) -> Result<f64, String> {
+    parse_positive(s).map(f64::from)
 }
 
 pub fn parse_vec3(s: &str) -> Result<glam::Vec3, String> {

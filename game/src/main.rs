@@ -4,6 +4,8 @@
 mod adapter;
 mod bench;
 mod cli;
+mod messages;
+mod outputs;
 mod provenance;
 mod record_cmd;
 mod render_cmd;
@@ -14,12 +16,8 @@ mod view;
 use clap::Parser;
 
 fn main() -> std::process::ExitCode {
-    tracing_subscriber::fmt()
-        .with_env_filter(
-            tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| "warn".into()),
-        )
-        .with_writer(std::io::stderr)
-        .init();
+    messages::ensure_runtime_dir();
+    messages::init();
     let cli = cli::Cli::parse();
     let result = match cli.command {
         Some(cli::Command::Render(args)) => render_cmd::run(&args),

@@ -3,7 +3,8 @@
 
 use crate::adapter::open_gpu;
 use crate::cli::RecordArgs;
-use crate::render_cmd::{camera_spec, settings_from};
+use crate::outputs::Output;
+use crate::render_cmd::{camera_spec, check_scene, check_size, settings_from};
 use crate::scenes::load_scene;
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -45,7 +46,16 @@ fn run(args: &RecordArgs) -> Result<ExitCode> {
     if let Some(video) = &args.video {
         check_video(video, args.format)?;
     }
-    let scene = load_scene(&scene_args.scene)?;
+    let scene = load_scene(&scene_args.scene, &args.load.options())?;
+    crate::outputs::refuse_recording_over_inputs(out, &scene.files)?;
+    if let Some(video) = &args.video {
+        let video = Output {
+            what: "--video",
+            path: video.clone(),
+        };
+        crate::outputs::refuse_overwrites(&[video], &scene.files)?;
+    }
+    check_scene(&scene, &camera_spec(scene_args).choice())?;
     let request = RecordRequest {
         animation: scene_args.animation.clone(),
         fps: args.fps,
@@ -63,6 +73,7 @@ fn run(args: &RecordArgs) -> Result<ExitCode> {
             aovs: args.aovs.clone(),
             render: settings_from(scene_args),
         },
+        scene: args.load.scene_index,
     };
     let settings = raykin::record::plan(&scene, &request)?;
     if settings.clip.is_none() {
@@ -96,6 +107,11 @@ fn run(args: &RecordArgs) -> Result<ExitCode> {
         None
     } else {
         let ctx = open_gpu()?;
+        check_size(
+            &ctx,
+            settings.frame.render.width,
+            settings.frame.render.height,
+        )?;
         let cancel = Arc::new(AtomicBool::new(false));
         install_interrupt_handler(cancel.clone());
         let bar = progress_bar(range.len() as u64);

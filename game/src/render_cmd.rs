@@ -2,6 +2,7 @@
 
 use crate::adapter::open_gpu;
 use crate::cli::{RenderArgs, SceneArgs};
+use crate::outputs::Output;
 use crate::scenes::{embedded_camera, embedded_scene, load_scene};
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -15,11 +16,23 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Instant;
 
+/// What can be checked before the GPU opens: the camera choice.
+pub fn check_scene(scene: &SceneAsset, camera: &CameraChoice) -> Result<()> {
+    raykin::camera::check_camera_choice(scene, camera)?;
+    Ok(())
+}
+
+/// The image size against the adapter's limits, before the renderer creates any buffer.
+pub fn check_size(ctx: &GpuContext, width: u32, height: u32) -> Result<()> {
+    raykin::gpu::limits::check_image_size(&ctx.limits, width, height)
+        .with_context(|| format!("on {}", ctx.info.name))
+}
+
 pub fn settings_from(args: &SceneArgs) -> RenderSettings {
     RenderSettings {
-        width: args.width.max(1),
-        height: args.height.max(1),
-        spp_per_frame: args.spp_per_dispatch.max(1),
+        width: args.width,
+        height: args.height,
+        spp_per_frame: args.spp_per_dispatch,
         max_depth: args.max_depth,
         environment: match args.env {
             Some(c) => Environment::Constant(c.to_array()),
@@ -52,11 +65,7 @@ pub fn pose_from(scene: &SceneAsset, args: &SceneArgs) -> Result<Option<(usize, 
         Some(a) => raykin::animation::find_clip(scene, a).map_err(anyhow::Error::msg)?,
         None => 0,
     };
-    let time = args.time.unwrap_or(0.0);
-    if !time.is_finite() {
-        anyhow::bail!("--time {time}: not a finite number of seconds");
-    }
-    Ok(Some((clip, time)))
+    Ok(Some((clip, args.time.unwrap_or(0.0))))
 }
 
 pub fn camera_from(args: &SceneArgs) -> CameraChoice {
@@ -108,16 +117,19 @@ struct RenderReport {
 }
 
 pub fn run(args: &RenderArgs) -> Result<()> {
-    let scene = load_scene(&args.scene.scene)?;
-    check_output(&args.out)?;
-    // Pose arguments are checked before the GPU opens: a typo fails at once.
+    let scene = load_scene(&args.scene.scene, &args.load.options())?;
+    check_outputs(&scene, &args.out, args.aovs, args.report.as_deref())?;
+    // Pose and camera arguments are checked before the GPU opens: a typo fails at once.
     let pose = pose_from(&scene, &args.scene)?;
+    let camera = camera_from(&args.scene);
+    check_scene(&scene, &camera)?;
     let ctx = open_gpu()?;
+    check_size(&ctx, args.scene.width, args.scene.height)?;
     render_to_file(
         ctx,
         scene,
         &args.scene,
-        camera_from(&args.scene),
+        camera,
         pose,
         &args.out,
         args.aovs,
@@ -125,7 +137,20 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     )
 }
 
-fn check_output(out: &Path) -> Result<()> {
+/// `NAME.albedo.exr`, `NAME.normal.exr`, `NAME.depth.exr` beside the image.
+fn aov_paths(out: &Path) -> [(&'static str, PathBuf); 3] {
+    let stem = out.with_extension("");
+    ["albedo", "normal", "depth"].map(|name| {
+        (
+            name,
+            PathBuf::from(format!("{}.{name}.exr", stem.display())),
+        )
+    })
+}
+
+/// Every file the render writes: a known format, never one of the scene's files or another output, in
+/// writable folders; all before any rendering.
+fn check_outputs(scene: &SceneAsset, out: &Path, aovs: bool, report: Option<&Path>) -> Result<()> {
     let ext = out
         .extension()
         .and_then(|e| e.to_str())
@@ -136,9 +161,25 @@ fn check_output(out: &Path) -> Result<()> {
             out.display()
         );
     }
-    if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir)
-            .with_context(|| format!("{}: cannot create the output folder", dir.display()))?;
+    let mut outputs = vec![Output {
+        what: "--out",
+        path: out.to_path_buf(),
+    }];
+    if aovs {
+        outputs.extend(aov_paths(out).map(|(_, path)| Output {
+            what: "--aovs output",
+            path,
+        }));
+    }
+    if let Some(report) = report {
+        outputs.push(Output {
+            what: "--report",
+            path: report.to_path_buf(),
+        });
+    }
+    crate::outputs::refuse_overwrites(&outputs, &scene.files)?;
+    for o in &outputs {
+        crate::outputs::check_writable(o.what, &o.path)?;
     }
     Ok(())
 }
@@ -190,14 +231,11 @@ fn render_to_file(
     }
     if aovs {
         let a = app.aovs();
-        let stem = out.with_extension("");
         let depth: Vec<[f32; 3]> = a.depth.iter().map(|d| [*d; 3]).collect();
-        for (name, data) in [
-            ("albedo", &a.albedo),
-            ("normal", &a.normal),
-            ("depth", &depth),
-        ] {
-            let path = PathBuf::from(format!("{}.{name}.exr", stem.display()));
+        for ((_, path), data) in aov_paths(out)
+            .into_iter()
+            .zip([&a.albedo, &a.normal, &depth])
+        {
             raykin::image_io::write_atomically(&path, |p| {
                 raykin::image_io::write_exr(p, w, h, data)
             })?;
@@ -229,8 +267,11 @@ fn render_to_file(
             render_wall_s: wall,
             samples_per_second: (w as f64 * h as f64 * args.spp as f64) / wall,
         };
-        std::fs::write(path, serde_json::to_string_pretty(&r)?)
-            .with_context(|| format!("{}: cannot write the report", path.display()))?;
+        raykin::image_io::write_bytes_atomically(
+            path,
+            serde_json::to_string_pretty(&r)?.as_bytes(),
+        )
+        .with_context(|| format!("--report {}: cannot write the report", path.display()))?;
     }
     Ok(())
 }
@@ -270,6 +311,6 @@ pub fn run_default() -> Result<()> {
     };
     let camera = embedded_camera();
     let out = Path::new("out/default.png");
-    check_output(out)?;
+    check_outputs(&scene, out, false, None)?;
     render_to_file(ctx, Arc::new(scene), &args, camera, None, out, false, None)
 }

@@ -127,7 +127,7 @@ impl NamedScene {
             Source::File(relative) => {
                 let path = assets.join(relative);
                 LoadedNamedScene {
-                    scene: load_scene(&path).with_context(context)?,
+                    scene: load_scene(&path, &LoadOptions::default()).with_context(context)?,
                     players: Vec::new(),
                     source_files: gltf_files(&path),
                 }
@@ -169,13 +169,14 @@ pub fn embedded_camera() -> CameraChoice {
 }
 
 /// A glTF file, its warnings printed to stderr.
-pub fn load_scene(path: &Path) -> Result<Arc<SceneAsset>> {
-    let scene = raykin::scene::load_gltf(path, &LoadOptions::default())?;
+pub fn load_scene(path: &Path, options: &LoadOptions) -> Result<Arc<SceneAsset>> {
+    let scene = raykin::scene::load_gltf(path, options)?;
     report_warnings(&scene);
     Ok(Arc::new(scene))
 }
 
-fn report_warnings(scene: &SceneAsset) {
+/// Each of the scene's warnings, once, as one line (the loader only collects them).
+pub fn report_warnings(scene: &SceneAsset) {
     for w in &scene.warnings {
         eprintln!("raykin: warning: {}: {w}", scene.source);
     }

@@ -7,6 +7,7 @@ mod common;
 
 mod bad_input;
 mod bench;
+mod cli_args;
 mod denoise;
 mod record;
 mod viewer;

@@ -55,7 +55,10 @@ fn sah_ratio_curves() {
         let scene = Arc::new(
             load_gltf(
                 shared_assets().join(path),
-                &LoadOptions { skip_images: true },
+                &LoadOptions {
+                    skip_images: true,
+                    ..Default::default()
+                },
             )
             .unwrap(),
         );

@@ -88,7 +88,14 @@ fn check_fixture_file(rel: &str, filter: impl Fn(&str) -> bool) -> usize {
             Some((_, s)) => s.clone(),
             None => {
                 let s = Arc::new(
-                    load_gltf(repo_root().join(asset), &LoadOptions { skip_images: true }).unwrap(),
+                    load_gltf(
+                        repo_root().join(asset),
+                        &LoadOptions {
+                            skip_images: true,
+                            ..Default::default()
+                        },
+                    )
+                    .unwrap(),
                 );
                 cache.push((asset.to_string(), s.clone()));
                 s

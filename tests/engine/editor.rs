@@ -274,7 +274,10 @@ fn picking_matches_a_brute_force_ray_cast() {
     let man = Arc::new(
         load_gltf(
             shared_assets().join("CesiumMan/glTF/CesiumMan.gltf"),
-            &LoadOptions { skip_images: true },
+            &LoadOptions {
+                skip_images: true,
+                ..Default::default()
+            },
         )
         .expect("CesiumMan loads"),
     );
@@ -304,6 +307,7 @@ fn check_save(source: PathBuf) {
             &bytes,
             source.parent().unwrap(),
             &source.display().to_string(),
+            Default::default(),
             &materials,
             &out,
         )
@@ -356,6 +360,7 @@ fn saving_refuses_bad_requests_clearly() {
         &bytes,
         source.parent().unwrap(),
         "CornellBox.glb",
+        Default::default(),
         &original.materials,
         &dir.join("out.obj"),
     )
@@ -368,6 +373,7 @@ fn saving_refuses_bad_requests_clearly() {
         &bytes,
         source.parent().unwrap(),
         "CornellBox.glb",
+        Default::default(),
         &original.materials[..1],
         &dir.join("out.glb"),
     )

@@ -28,7 +28,16 @@ fn settings(deform: DeformBackend) -> RenderSettings {
 }
 
 fn load(path: std::path::PathBuf) -> Arc<SceneAsset> {
-    Arc::new(load_gltf(&path, &LoadOptions { skip_images: true }).unwrap())
+    Arc::new(
+        load_gltf(
+            &path,
+            &LoadOptions {
+                skip_images: true,
+                ..Default::default()
+            },
+        )
+        .unwrap(),
+    )
 }
 
 /// CesiumMan with a tangent per vertex (pseudo-random unit vectors, both handednesses), so that skinned

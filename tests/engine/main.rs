@@ -18,6 +18,7 @@ mod furnace;
 mod gpu_deform;
 mod record;
 mod refit_stability;
+mod reliability;
 mod shaders;
 mod skinned_image;
 mod traversal;

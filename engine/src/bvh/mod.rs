@@ -5,10 +5,11 @@
 //! reverse sweep over the array (children always sit after their parent). Deformed meshes are refit in place;
 //! [`MeshBvh::sah_cost`] against the cost at build time tells when a refit has degraded and a rebuild is due.
 
+mod balanced;
 pub mod refit;
 pub mod wide;
 
-pub use wide::WideBvh;
+pub use wide::{WideBvh, WideBvhError};
 
 use bytemuck::{Pod, Zeroable};
 use glam::{Vec3, Vec3A};
@@ -16,6 +17,9 @@ use obvhs::{BvhBuildParams, aabb::Aabb, bvh2::Bvh2, triangle::Triangle};
 
 /// Deepest BVH the GPU traversal stack holds (`TLAS_STACK_SIZE`, `BLAS_STACK_SIZE` in the WGSL constants).
 pub const MAX_TRAVERSAL_DEPTH: u32 = 64;
+/// Deepest top-level BVH [`build_tlas`] returns: the top-level stack in `shaders/bvh.wgsl` `trace` holds 32
+/// entries (deeper trees lost whole subtrees of instances without a word).
+pub const MAX_TLAS_DEPTH: u32 = 64;
 
 /// One child of a GPU node: its box, and either an inner node index (`count == 0`) or a leaf's first
 /// primitive and primitive count.
@@ -288,7 +292,10 @@ impl MeshBvh {
         let tris = obvhs_triangles(positions, triangles);
         let mut core = std::time::Duration::ZERO;
         let bvh = obvhs::bvh2::builder::build_bvh2_from_tris(&tris, quality.params(), &mut core);
-        let flat = FlatBvh::from_obvhs(&bvh)?;
+        let flat = FlatBvh::from_obvhs(&bvh).or_else(|_| {
+            let boxes: Vec<Aabb> = tris.iter().map(obvhs::Boundable::aabb).collect();
+            FlatBvh::from_obvhs(&balanced::median_split(&boxes))
+        })?;
         let build_sah = flat.sah_cost();
         Ok(Self { flat, build_sah })
     }
@@ -342,12 +349,14 @@ impl Blas {
         layout: StaticLayout,
         deformable: bool,
     ) -> Result<Self, BvhTooDeep> {
-        Ok(match (deformable, layout) {
-            (false, StaticLayout::Wide) => {
-                Self::Wide(WideBvh::build(positions, triangles, quality)?)
+        if !deformable && layout == StaticLayout::Wide {
+            match WideBvh::build(positions, triangles, quality) {
+                Ok(wide) => return Ok(Self::Wide(wide)),
+                // Traversal gives the same image through the BVH2, which is never too deep.
+                Err(_) => {}
             }
-            _ => Self::Binary(MeshBvh::build(positions, triangles, quality)?),
-        })
+        }
+        Ok(Self::Binary(MeshBvh::build(positions, triangles, quality)?))
     }
 
     /// Slot `i` of the mesh's GPU triangle range holds original triangle `order()[i]`.
@@ -389,20 +398,28 @@ impl obvhs::Boundable for InstanceBox {
     }
 }
 
-/// Builds the top-level BVH over instance world-space boxes; leaves hold one instance each.
+/// Builds the top-level BVH over instance world-space boxes; leaves hold one instance each. At most
+/// [`MAX_TLAS_DEPTH`] levels for up to 2^31 instances: where obvhs's tree is deeper (degenerate placements),
+/// a balanced one replaces it.
 pub fn build_tlas(boxes: &[(Vec3, Vec3)]) -> Result<FlatBvh, BvhTooDeep> {
     if boxes.is_empty() {
         return FlatBvh::from_obvhs(&Bvh2::default());
     }
     let prims: Vec<InstanceBox> = boxes
         .iter()
-        .map(|(lo, hi)| InstanceBox(Aabb::new(Vec3A::from(*lo), Vec3A::from(*hi))))
+        .map(|(lo, hi)| InstanceBox(Aabb::new(finite(*lo), finite(*hi))))
         .collect();
     let mut params = BvhBuildParams::fast_build();
     params.max_prims_per_leaf = 1;
     let mut core = std::time::Duration::ZERO;
     let bvh = obvhs::bvh2::builder::build_bvh2(&prims, params, &mut core);
-    FlatBvh::from_obvhs(&bvh)
+    match FlatBvh::from_obvhs(&bvh) {
+        Ok(flat) if flat.depth <= MAX_TLAS_DEPTH => Ok(flat),
+        _ => {
+            let boxes: Vec<Aabb> = prims.iter().map(|p| p.0).collect();
+            FlatBvh::from_obvhs(&balanced::median_split(&boxes))
+        }
+    }
 }
 
 /// `triangles` (a mesh's, in file order) rearranged into a BVH's leaf `order` (BVH2 or wide).
@@ -415,9 +432,81 @@ pub(crate) fn obvhs_triangles(positions: &[Vec3], triangles: &[[u32; 3]]) -> Vec
     triangles
         .iter()
         .map(|t| Triangle {
-            v0: Vec3A::from(positions[t[0] as usize]),
-            v1: Vec3A::from(positions[t[1] as usize]),
-            v2: Vec3A::from(positions[t[2] as usize]),
+            v0: finite(positions[t[0] as usize]),
+            v1: finite(positions[t[1] as usize]),
+            v2: finite(positions[t[2] as usize]),
         })
         .collect()
+}
+
+/// A point obvhs can build over. Its PLOC builder asserts (debug) or merges a node with itself (release)
+/// on infinite or NaN boxes, which an overflowing transform or deformation can produce; such a triangle or
+/// instance cannot be hit anyway (traversal tests its real coordinates), so it only needs a finite place
+/// in the tree.
+fn finite(p: Vec3) -> Vec3A {
+    let clamp = |v: f32| {
+        if v.is_nan() {
+            0.0
+        } else {
+            v.clamp(-f32::MAX, f32::MAX)
+        }
+    };
+    Vec3A::new(clamp(p.x), clamp(p.y), clamp(p.z))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// obvhs's PLOC chains identical boxes (100 of them gave 99 levels): the top level falls back to a
+    /// balanced tree and keeps every instance.
+    #[test]
+    fn coincident_instances_keep_a_shallow_top_level() {
+        let boxes = vec![(Vec3::ZERO, Vec3::ONE); 500];
+        let tlas = build_tlas(&boxes).unwrap();
+        assert!(tlas.depth <= 10, "{}", tlas.depth);
+        // Nested boxes (one level per box from PLOC) and a geometric series stay within the WGSL stack.
+        for grow in [1.3f32, 1.5] {
+            let nested: Vec<(Vec3, Vec3)> = (0..120)
+                .map(|k| (Vec3::splat(-grow.powi(k)), Vec3::splat(grow.powi(k))))
+                .collect();
+            assert!(build_tlas(&nested).unwrap().depth <= MAX_TLAS_DEPTH);
+            let series: Vec<(Vec3, Vec3)> = (0..120)
+                .map(|k| (Vec3::X * grow.powi(k), Vec3::X * grow.powi(k) + Vec3::ONE))
+                .collect();
+            assert!(build_tlas(&series).unwrap().depth <= MAX_TLAS_DEPTH);
+        }
+        let mut order = tlas.order.clone();
+        order.sort();
+        assert_eq!(order, (0..500).collect::<Vec<u32>>());
+        let positions: Vec<Vec3> = (0..300)
+            .flat_map(|_| [Vec3::ZERO, Vec3::X, Vec3::Y])
+            .collect();
+        let triangles: Vec<[u32; 3]> = (0..300).map(|t| [3 * t, 3 * t + 1, 3 * t + 2]).collect();
+        let bvh = MeshBvh::build(&positions, &triangles, BvhQuality::Fast).unwrap();
+        assert!(bvh.flat.depth <= MAX_TRAVERSAL_DEPTH);
+    }
+
+    /// obvhs's PLOC builder panics on infinite boxes (e.g. an instance placed at 2^129 by an overflowing
+    /// transform); the builds clamp them instead.
+    #[test]
+    fn non_finite_boxes_and_vertices_build() {
+        let boxes: Vec<(Vec3, Vec3)> = (0..50)
+            .map(|k| {
+                let x = if k % 7 == 0 { f32::INFINITY } else { k as f32 };
+                (
+                    Vec3::new(x - 1.0, f32::NAN, 0.0),
+                    Vec3::new(x + 1.0, 1.0, 0.0),
+                )
+            })
+            .collect();
+        assert!(build_tlas(&boxes).is_ok());
+        let positions = [
+            Vec3::ZERO,
+            Vec3::X,
+            Vec3::new(f32::INFINITY, 0.0, 0.0),
+            Vec3::new(0.0, f32::NAN, 1.0),
+        ];
+        assert!(MeshBvh::build(&positions, &[[0, 1, 2], [0, 1, 3]], BvhQuality::Fast).is_ok());
+    }
 }

@@ -30,7 +30,7 @@ impl WideBvh {
         positions: &[Vec3],
         triangles: &[[u32; 3]],
         quality: BvhQuality,
-    ) -> Result<Self, BvhTooDeep> {
+    ) -> Result<Self, WideBvhError> {
         if triangles.is_empty() {
             // A node without children: every ray misses it.
             return Ok(Self {
@@ -41,6 +41,9 @@ impl WideBvh {
             });
         }
         let tris = super::obvhs_triangles(positions, triangles);
+        if !sah_costs_stay_finite(&tris) {
+            return Err(WideBvhError::TooLarge);
+        }
         let mut params = quality.params();
         // A wide leaf holds at most 3 triangles (the unary count in a child's meta byte).
         params.max_prims_per_leaf = 3;
@@ -48,7 +51,7 @@ impl WideBvh {
         let cw: CwBvh = obvhs::cwbvh::builder::build_cwbvh_from_tris(&tris, params, &mut core);
         let depth = tree_depth(&cw.nodes);
         if depth > MAX_WIDE_DEPTH {
-            return Err(BvhTooDeep { depth });
+            return Err(WideBvhError::TooDeep(BvhTooDeep { depth }));
         }
         let bounds = (Vec3::from(cw.total_aabb.min), Vec3::from(cw.total_aabb.max));
         Ok(Self {
@@ -58,6 +61,36 @@ impl WideBvh {
             depth,
         })
     }
+}
+
+/// Why a mesh has no wide BVH; [`super::Blas::build`] then gives it the BVH2 (the same image).
+#[derive(Debug, thiserror::Error)]
+pub enum WideBvhError {
+    #[error(transparent)]
+    TooDeep(#[from] BvhTooDeep),
+    /// The mesh is so large (about 1e18 units and more) that the conversion's SAH costs would overflow f32.
+    #[error("the mesh is too large for the wide BVH's cost arithmetic")]
+    TooLarge,
+}
+
+/// Whether obvhs's BVH2-to-CWBVH conversion can compare its SAH costs. They are sums of node half-areas
+/// (at most one per node, each at most the root's, 2n - 1 nodes for n triangles) in f32; once they overflow
+/// to infinity every candidate costs the same, no split is chosen, and obvhs 0.4 indexes its decision table
+/// with an unset (255) child slot: an out-of-bounds panic in `get_children` (or a wrong tree where the index
+/// happens to fit). Computed in f64 with a factor 2 margin for f32 rounding.
+fn sah_costs_stay_finite(tris: &[obvhs::triangle::Triangle]) -> bool {
+    let (mut lo, mut hi) = (glam::DVec3::splat(f64::MAX), glam::DVec3::splat(f64::MIN));
+    for t in tris {
+        for v in [t.v0, t.v1, t.v2] {
+            let v = glam::DVec3::new(v.x as f64, v.y as f64, v.z as f64);
+            lo = lo.min(v);
+            hi = hi.max(v);
+        }
+    }
+    let d = (hi - lo).max(glam::DVec3::ZERO);
+    let half_area = d.x * d.y + d.y * d.z + d.z * d.x;
+    let nodes = 2.0 * tris.len() as f64;
+    (half_area * nodes * 2.0).is_finite() && half_area * nodes * 2.0 < f32::MAX as f64
 }
 
 /// Levels of inner nodes on the longest root-to-leaf path.
@@ -126,6 +159,35 @@ mod tests {
         }
         assert!(seen.iter().all(|&n| n == 1), "each triangle in one leaf");
         assert!(bvh.depth >= 2 && bvh.depth <= MAX_WIDE_DEPTH);
+    }
+
+    /// obvhs 0.4 panics converting a BVH over geometry about 1e19 units wide (its f32 SAH costs overflow):
+    /// such a mesh gets no wide tree, and `Blas::build` falls back to the BVH2, which handles it.
+    #[test]
+    fn enormous_meshes_are_refused_not_a_panic() {
+        let positions = [
+            Vec3::new(-1e19, -1e19, 0.0),
+            Vec3::new(1e19, -1e19, 0.0),
+            Vec3::new(1e19, 1e19, 0.0),
+            Vec3::new(-1e19, 1e19, 0.0),
+        ];
+        let triangles = [[0, 1, 2], [0, 2, 3]];
+        assert!(matches!(
+            WideBvh::build(&positions, &triangles, BvhQuality::Medium),
+            Err(WideBvhError::TooLarge)
+        ));
+        let blas = super::super::Blas::build(
+            &positions,
+            &triangles,
+            BvhQuality::Medium,
+            super::super::StaticLayout::Wide,
+            false,
+        )
+        .unwrap();
+        assert!(blas.binary().is_some());
+        // Large but representable scenes keep the wide tree.
+        let small: Vec<Vec3> = positions.iter().map(|p| *p * 1e-5).collect();
+        assert!(WideBvh::build(&small, &triangles, BvhQuality::Medium).is_ok());
     }
 
     #[test]

@@ -95,11 +95,101 @@ pub enum CameraChoice {
     },
 }
 
+/// The chosen camera cannot be used: it does not exist, or its node's world transform is singular (a scale of
+/// 0 has no orientation to look along). The message names the scene and the cameras it has.
 #[derive(Debug, thiserror::Error)]
-#[error("camera {requested} does not exist: the scene has {available} camera(s)")]
+#[error("{scene}: {problem}")]
 pub struct NoSuchCamera {
-    pub requested: usize,
-    pub available: usize,
+    pub scene: String,
+    pub problem: String,
+}
+
+/// "the scene has 2 camera(s): 0 (node 3 `Camera`), ..." for messages; `cameras` as (node, world, yfov).
+fn camera_listing(scene: &SceneAsset, cameras: &[(usize, Mat4, f32)]) -> String {
+    if cameras.is_empty() {
+        return "the scene has no cameras (use --look-from/--look-at, or leave --camera out to frame it)".into();
+    }
+    let list: Vec<String> = cameras
+        .iter()
+        .enumerate()
+        .map(|(i, (node, _, _))| {
+            let name = scene.nodes.get(*node).map_or("", |n| n.name.as_str());
+            format!("{i} (node {node} `{name}`)")
+        })
+        .collect();
+    format!(
+        "the scene has {} camera(s): {}",
+        cameras.len(),
+        list.join(", ")
+    )
+}
+
+/// Picks camera `index` (`None`: the first) among `cameras` and checks its transform can orient a view.
+fn pick_camera(
+    scene: &SceneAsset,
+    mut cameras: Vec<(usize, Mat4, f32)>,
+    index: Option<usize>,
+) -> Result<Option<CameraView>, NoSuchCamera> {
+    cameras.sort_by_key(|c| c.0);
+    let fail = |problem: String| NoSuchCamera {
+        scene: scene.source.clone(),
+        problem,
+    };
+    let chosen = match index {
+        Some(i) => Some(cameras.get(i).ok_or_else(|| {
+            fail(format!(
+                "camera {i} does not exist: {}",
+                camera_listing(scene, &cameras)
+            ))
+        })?),
+        None => cameras.first(),
+    };
+    let Some(&(node, world, yfov)) = chosen else {
+        return Ok(None);
+    };
+    view_from_node(world, yfov).map(Some).ok_or_else(|| {
+        let position = cameras.iter().position(|c| c.0 == node).unwrap_or(0);
+        fail(format!(
+            "camera {position} (node {node} `{}`) cannot be used: its world transform is singular (a scale \
+             of 0, or a matrix without an orientation); fix the file, or choose another view with --camera \
+             I or --look-from/--look-at",
+            scene.nodes.get(node).map_or("", |n| n.name.as_str())
+        ))
+    })
+}
+
+/// A camera node's view: rotation and translation of its world matrix (camera nodes may carry scale);
+/// `None` when the matrix is singular or not finite.
+fn view_from_node(world: Mat4, yfov: f32) -> Option<CameraView> {
+    let det = world.determinant();
+    if !(det.is_finite() && det != 0.0) {
+        return None;
+    }
+    let (_, r, t) = world.to_scale_rotation_translation();
+    (r.is_finite() && t.is_finite()).then(|| CameraView {
+        world_from_camera: Mat4::from_rotation_translation(r.normalize(), t),
+        yfov,
+    })
+}
+
+/// Checks `choice` against the scene's cameras in the rest pose, before any GPU work: `--camera 99` or a
+/// camera node of scale 0 fail at once, naming the file and its cameras.
+pub fn check_camera_choice(scene: &SceneAsset, choice: &CameraChoice) -> Result<(), NoSuchCamera> {
+    let index = match choice {
+        CameraChoice::LookAt { .. } => return Ok(()),
+        CameraChoice::Index(i) => Some(*i),
+        CameraChoice::Auto => None,
+    };
+    let world = scene.rest_world_matrices();
+    let shown = scene.displayed_nodes();
+    let cameras = (0..scene.nodes.len())
+        .filter(|&n| shown[n])
+        .filter_map(|n| {
+            let camera = scene.cameras.get(scene.nodes[n].camera?)?;
+            Some((n, world[n], camera.yfov))
+        })
+        .collect();
+    pick_camera(scene, cameras, index).map(|_| ())
 }
 
 /// The scene's glTF camera views in node order, from (node, world matrix, yfov) of each camera node.
@@ -109,12 +199,15 @@ pub fn scene_camera_views(cameras: impl Iterator<Item = (usize, Mat4, f32)>) -> 
     cameras
         .into_iter()
         .map(|(_, m, yfov)| {
-            // Camera nodes may carry scale: keep only rotation and translation.
-            let (_, r, t) = m.to_scale_rotation_translation();
-            CameraView {
-                world_from_camera: Mat4::from_rotation_translation(r, t),
+            // A singular node (the loader warns of it) looks down -Z from where it is, rather than a NaN view.
+            view_from_node(m, yfov).unwrap_or(CameraView {
+                world_from_camera: Mat4::from_translation(
+                    Some(m.w_axis.truncate())
+                        .filter(|t| t.is_finite())
+                        .unwrap_or(Vec3::ZERO),
+                ),
                 yfov,
-            }
+            })
         })
         .collect()
 }
@@ -126,28 +219,25 @@ pub fn resolve_camera(
     choice: &CameraChoice,
     aspect: f32,
 ) -> Result<CameraView, NoSuchCamera> {
-    let cameras = scene_camera_views(
-        world
-            .query::<(&crate::scene::SceneNode, &CameraComponent, &GlobalTransform)>()
-            .iter(world)
-            .map(|(n, c, g)| (n.node, g.0, c.yfov)),
-    );
-    Ok(match choice {
-        CameraChoice::LookAt { eye, target, yfov } => {
-            CameraView::look_at(*eye, *target, Vec3::Y, *yfov)
+    if let CameraChoice::LookAt { eye, target, yfov } = choice {
+        return Ok(CameraView::look_at(*eye, *target, Vec3::Y, *yfov));
+    }
+    let cameras = world
+        .query::<(&crate::scene::SceneNode, &CameraComponent, &GlobalTransform)>()
+        .iter(world)
+        .map(|(n, c, g)| (n.node, g.0, c.yfov))
+        .collect();
+    let index = match choice {
+        CameraChoice::Index(i) => Some(*i),
+        _ => None,
+    };
+    Ok(match pick_camera(scene, cameras, index)? {
+        Some(view) => view,
+        None => {
+            let bounds = scene
+                .rest_bounds()
+                .unwrap_or((Vec3::splat(-1.0), Vec3::ONE));
+            CameraView::framing(bounds, 45f32.to_radians(), aspect)
         }
-        CameraChoice::Index(i) => *cameras.get(*i).ok_or(NoSuchCamera {
-            requested: *i,
-            available: cameras.len(),
-        })?,
-        CameraChoice::Auto => match cameras.first() {
-            Some(view) => *view,
-            None => {
-                let bounds = scene
-                    .rest_bounds()
-                    .unwrap_or((Vec3::splat(-1.0), Vec3::ONE));
-                CameraView::framing(bounds, 45f32.to_radians(), aspect)
-            }
-        },
     })
 }

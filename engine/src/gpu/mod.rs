@@ -1,6 +1,7 @@
 //! The wgpu device: one adapter picked at start-up, shared by every plugin as a resource.
 
 pub mod bind;
+pub mod limits;
 pub mod readback;
 mod timestamps;
 

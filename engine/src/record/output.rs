@@ -55,9 +55,10 @@ pub fn prepare_dir(dir: &Path) -> Result<(), RecordError> {
     };
     std::fs::create_dir_all(dir).map_err(|e| fail(format!("cannot create it: {e}")))?;
     let probe = dir.join(format!(".raykin-probe.{}", std::process::id()));
-    std::fs::write(&probe, b"probe").map_err(|e| fail(format!("it is not writable: {e}")))?;
+    let written = std::fs::write(&probe, b"probe");
+    // Removed whatever happened: a full disk can create the file and then fail the write.
     let _ = std::fs::remove_file(&probe);
-    Ok(())
+    written.map_err(|e| fail(format!("it is not writable: {e}")))
 }
 
 /// Temporary files of interrupted writes (`.NAME.PID.partial`) in `dir`.

@@ -149,6 +149,10 @@ pub struct RecordSettings {
     pub frames: u32,
     #[serde(flatten)]
     pub frame: FrameOptions,
+    /// The glTF scene chosen with `--scene` (absent: the file's default; recordings made before the
+    /// option read as absent).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub scene: Option<usize>,
 }
 
 impl RecordSettings {
@@ -216,6 +220,8 @@ pub struct RecordRequest {
     /// Frame count instead of T1.
     pub frames: Option<u32>,
     pub frame: FrameOptions,
+    /// The glTF scene chosen with `--scene` (`None`: the file's default).
+    pub scene: Option<usize>,
 }
 
 /// Resolves a request against the scene: the clip, T0..T1 inside it, and the frame count.
@@ -294,14 +300,9 @@ pub fn plan(scene: &SceneAsset, req: &RecordRequest) -> Result<RecordSettings, R
             ));
         }
     };
-    if let CameraSpec::Index(i) = req.frame.camera {
-        let cameras = scene.nodes.iter().filter(|n| n.camera.is_some()).count();
-        if i >= cameras {
-            return fail(format!(
-                "{}: --camera {i}: the scene has {cameras} camera(s)",
-                scene.source
-            ));
-        }
+    if let CameraSpec::Index(_) = req.frame.camera {
+        crate::camera::check_camera_choice(scene, &req.frame.camera.choice())
+            .map_err(|e| RecordError::Plan(format!("--camera: {e}")))?;
     }
     let mut frame = req.frame.clone();
     frame.aovs.sort();
@@ -315,6 +316,7 @@ pub fn plan(scene: &SceneAsset, req: &RecordRequest) -> Result<RecordSettings, R
         start: req.start,
         frames,
         frame,
+        scene: req.scene,
     };
     if let (Some(c), Some(d)) = (clip, duration) {
         let last = settings.time(frames - 1);

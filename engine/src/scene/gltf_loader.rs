@@ -4,7 +4,7 @@
 //! skipped; problems that make the file unusable are a [`SceneError`] naming the file.
 
 use super::*;
-use base64::Engine as _;
+use super::{inputs, validate};
 use gltf::mesh::Mode;
 use std::collections::HashSet;
 use std::path::Path;
@@ -16,17 +16,42 @@ const SUPPORTED_REQUIRED_EXTENSIONS: &[&str] = &["KHR_materials_emissive_strengt
 pub struct LoadOptions {
     /// Skip decoding images (BVH or geometry-only tools).
     pub skip_images: bool,
+    /// The glTF scene to display (`--scene N`); `None`: the file's default scene, else its first.
+    pub scene: Option<usize>,
+    /// Let URIs name files outside the scene's folder (`--allow-external-files`, for trusted files).
+    pub allow_external_files: bool,
+}
+
+impl LoadOptions {
+    /// The files these options let a scene read.
+    pub fn access(&self) -> inputs::Access {
+        inputs::Access {
+            external_files: self.allow_external_files,
+        }
+    }
 }
 
 /// Loads a .gltf or .glb file.
 pub fn load_gltf(path: impl AsRef<Path>, options: &LoadOptions) -> Result<SceneAsset, SceneError> {
     let path = path.as_ref();
-    let bytes = std::fs::read(path).map_err(|source| SceneError::Io {
+    let io = |source| SceneError::Io {
         path: path.to_path_buf(),
         source,
-    })?;
+    };
+    // Only a regular file: a FIFO or a device would be read without end.
+    if !std::fs::metadata(path).map_err(io)?.is_file() {
+        return Err(io(std::io::Error::new(
+            std::io::ErrorKind::InvalidInput,
+            "not a regular file",
+        )));
+    }
+    let bytes = std::fs::read(path).map_err(io)?;
     let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
-    load_gltf_slice(&bytes, &base, path, options)
+    let mut scene = load_gltf_slice(&bytes, &base, path, options)?;
+    if let Ok(file) = path.canonicalize() {
+        scene.files.insert(0, file);
+    }
+    Ok(scene)
 }
 
 /// Loads glTF bytes; external URIs resolve against `base_dir`, `name` names the source in messages.
@@ -37,20 +62,13 @@ pub fn load_gltf_slice(
     options: &LoadOptions,
 ) -> Result<SceneAsset, SceneError> {
     // The gltf crate and image decoders are not ours: a panic inside them must still become an error.
-    let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        Loader::new(bytes, base_dir, name, options).and_then(Loader::load)
-    }));
-    result.unwrap_or_else(|panic| {
-        let reason = panic
-            .downcast_ref::<String>()
-            .cloned()
-            .or_else(|| panic.downcast_ref::<&str>().map(|s| s.to_string()))
-            .unwrap_or_else(|| "the decoder panicked".into());
-        Err(SceneError::Invalid {
-            path: name.to_path_buf(),
-            reason,
+    crate::panic_guard::catch(|| Loader::new(bytes, base_dir, name, options).and_then(Loader::load))
+        .unwrap_or_else(|message| {
+            Err(SceneError::Internal {
+                path: name.to_path_buf(),
+                message,
+            })
         })
-    })
 }
 
 struct Loader<'a> {
@@ -60,6 +78,10 @@ struct Loader<'a> {
     document: gltf::Document,
     buffers: Vec<Vec<u8>>,
     warnings: std::cell::RefCell<Vec<String>>,
+    /// Canonical paths of the files URIs named, as read.
+    files: std::cell::RefCell<Vec<PathBuf>>,
+    /// Primitives, images and channels [`validate::check`] found unreadable.
+    skip: validate::Findings,
 }
 
 impl<'a> Loader<'a> {
@@ -70,40 +92,46 @@ impl<'a> Loader<'a> {
         options: &'a LoadOptions,
     ) -> Result<Self, SceneError> {
         let path = name.to_path_buf();
-        let gltf = gltf::Gltf::from_slice(bytes).map_err(|e| {
-            // The crate's validation rejects unknown required extensions; name the extension plainly.
-            if let Ok(unvalidated) = gltf::Gltf::from_slice_without_validation(bytes)
-                && let Some(ext) = unvalidated
-                    .document
-                    .extensions_required()
-                    .find(|ext| !SUPPORTED_REQUIRED_EXTENSIONS.contains(ext))
-            {
-                return SceneError::UnsupportedExtension {
-                    path: path.clone(),
-                    extension: ext.to_string(),
-                };
-            }
-            SceneError::Invalid {
-                path: path.clone(),
-                reason: describe_gltf_error(&e),
-            }
-        })?;
-        for ext in gltf.document.extensions_required() {
-            if !SUPPORTED_REQUIRED_EXTENSIONS.contains(&ext) {
-                return Err(SceneError::UnsupportedExtension {
-                    path,
-                    extension: ext.to_string(),
-                });
-            }
+        let invalid = |reason: String| SceneError::Invalid {
+            path: path.clone(),
+            reason,
+        };
+        if let Some(problem) = validate::glb_header_problem(bytes) {
+            return Err(invalid(problem));
         }
+        let gltf = gltf::Gltf::from_slice_without_validation(bytes).map_err(|e| {
+            // A glTF 1.0 file is not even shaped like a 2.0 one: name its version, not the parse error.
+            invalid(validate::version_problem(bytes).unwrap_or_else(|| describe_gltf_error(&e)))
+        })?;
+        let mut root = gltf.document.into_json();
+        if let Some(ext) = root
+            .extensions_required
+            .iter()
+            .find(|ext| !SUPPORTED_REQUIRED_EXTENSIONS.contains(&ext.as_str()))
+        {
+            return Err(SceneError::UnsupportedExtension {
+                path,
+                extension: ext.clone(),
+            });
+        }
+        // Our checks first: the crate's validation and readers panic on some of what they catch.
+        let mut findings = validate::check(&mut root).map_err(invalid)?;
+        let document =
+            gltf::Document::from_json(root).map_err(|e| invalid(describe_gltf_error(&e)))?;
         let mut loader = Self {
             path,
             base_dir,
             options,
-            document: gltf.document,
+            document,
             buffers: Vec::new(),
             warnings: Default::default(),
+            files: Default::default(),
+            skip: Default::default(),
         };
+        for w in std::mem::take(&mut findings.warnings) {
+            loader.warn(w);
+        }
+        loader.skip = findings;
         loader.buffers = loader.load_buffers(gltf.blob)?;
         Ok(loader)
     }
@@ -115,8 +143,8 @@ impl<'a> Loader<'a> {
         }
     }
 
+    /// Collects a warning for [`SceneAsset::warnings`]; the caller shows them (the CLI prints each once).
     fn warn(&self, message: String) {
-        tracing::warn!("{}: {message}", self.path.display());
         self.warnings.borrow_mut().push(message);
     }
 
@@ -127,14 +155,21 @@ impl<'a> Loader<'a> {
             let fail = |uri: &str, reason: String| SceneError::Buffer {
                 path: self.path.clone(),
                 index,
-                uri: uri.to_string(),
+                // A data URI can be megabytes of base64: name its kind, not its content.
+                uri: if uri.starts_with("data:") {
+                    "data URI".to_string()
+                } else {
+                    uri.to_string()
+                },
                 reason,
             };
             let data = match buffer.source() {
                 gltf::buffer::Source::Bin => blob
                     .take()
                     .ok_or_else(|| fail("GLB BIN chunk", "the .glb has no binary chunk".into()))?,
-                gltf::buffer::Source::Uri(uri) => self.read_uri(uri).map_err(|r| fail(uri, r))?,
+                gltf::buffer::Source::Uri(uri) => self
+                    .read_uri(uri, inputs::ReadLimit::Exactly(buffer.length() as u64))
+                    .map_err(|r| fail(uri, r))?,
             };
             if data.len() < buffer.length() {
                 return Err(fail(
@@ -154,8 +189,15 @@ impl<'a> Loader<'a> {
         Ok(buffers)
     }
 
-    fn read_uri(&self, uri: &str) -> Result<Vec<u8>, String> {
-        read_uri(self.base_dir, uri)
+    /// Reads what `uri` names within the options' access and `limit`, recording the file it opened.
+    fn read_uri(&self, uri: &str, limit: inputs::ReadLimit) -> Result<Vec<u8>, String> {
+        inputs::read_uri(
+            self.base_dir,
+            uri,
+            self.options.access(),
+            limit,
+            &mut |file| self.files.borrow_mut().push(file),
+        )
     }
 
     fn load(self) -> Result<SceneAsset, SceneError> {
@@ -182,7 +224,11 @@ impl<'a> Loader<'a> {
             nodes,
             roots,
             warnings: self.warnings.take(),
+            files: self.files.take(),
         };
+        scene.files.sort();
+        scene.files.dedup();
+        detach_empty_skins(&mut scene);
         super::compose::unshare_deformable_meshes(&mut scene);
         if scene.triangle_count() == 0 {
             return Err(SceneError::Empty {
@@ -192,6 +238,36 @@ impl<'a> Loader<'a> {
                 } else {
                     scene.warnings.join("; ")
                 },
+            });
+        }
+        let shown = scene.displayed_nodes();
+        let world = scene.rest_world_matrices();
+        for (n, node) in scene.nodes.iter().enumerate() {
+            let det = world[n].determinant();
+            if shown[n] && node.camera.is_some() && !(det.is_finite() && det != 0.0) {
+                scene.warnings.push(format!(
+                    "node {n} `{}`: its camera's world transform is singular (a scale of 0); it cannot be \
+                     used as a view",
+                    node.name
+                ));
+            }
+        }
+        let drawn = (0..scene.nodes.len())
+            .filter(|&n| shown[n])
+            .filter_map(|n| scene.nodes[n].mesh)
+            .any(|m| !scene.meshes[m].triangles.is_empty());
+        if !drawn {
+            let scenes = self.document.scenes().len();
+            return Err(SceneError::Scene {
+                path: self.path,
+                reason: format!(
+                    "the displayed scene draws no triangles (its nodes have no meshes){}",
+                    if scenes > 1 {
+                        format!("; the file has {scenes} scenes: pick another with --scene N")
+                    } else {
+                        String::new()
+                    }
+                ),
             });
         }
         Ok(scene)
@@ -206,21 +282,11 @@ impl<'a> Loader<'a> {
                 continue;
             }
             let name = image.name().unwrap_or("").to_string();
-            let bytes = match image.source() {
-                gltf::image::Source::View { view, .. } => {
-                    let buffer = &self.buffers[view.buffer().index()];
-                    buffer
-                        .get(view.offset()..view.offset() + view.length())
-                        .map(<[u8]>::to_vec)
-                        .ok_or_else(|| "its bufferView lies outside the buffer".to_string())
-                }
-                gltf::image::Source::Uri { uri, .. } => self.read_uri(uri),
+            let bytes = match self.skip.images.get(&image.index()) {
+                Some(reason) => Err(reason.clone()),
+                None => self.image_bytes(&image),
             };
-            let decoded = bytes.and_then(|b| {
-                image::load_from_memory(&b)
-                    .map(|img| img.to_rgba8())
-                    .map_err(|e| format!("cannot decode: {e}"))
-            });
+            let decoded = bytes.and_then(|b| inputs::decode_image(&b));
             match decoded {
                 Ok(rgba) => out.push(Some(Image {
                     name,
@@ -238,6 +304,22 @@ impl<'a> Loader<'a> {
             }
         }
         out
+    }
+
+    /// The encoded bytes of an image: its bufferView's range, or the file its URI names.
+    fn image_bytes(&self, image: &gltf::Image) -> Result<Vec<u8>, String> {
+        match image.source() {
+            gltf::image::Source::View { view, .. } => {
+                let buffer = &self.buffers[view.buffer().index()];
+                buffer
+                    .get(view.offset()..view.offset() + view.length())
+                    .map(<[u8]>::to_vec)
+                    .ok_or_else(|| "its bufferView lies outside the buffer".to_string())
+            }
+            gltf::image::Source::Uri { uri, .. } => {
+                self.read_uri(uri, inputs::ReadLimit::AtMost(inputs::MAX_IMAGE_FILE_BYTES))
+            }
+        }
     }
 
     /// Textures whose image failed to load are `None`; materials then drop that texture.
@@ -318,18 +400,18 @@ impl<'a> Loader<'a> {
             for w in warnings {
                 self.warn(w);
             }
-            let strength = m.emissive_strength().unwrap_or(1.0);
-            let material = Material {
+            let mut material = Material {
                 name,
-                base_color: finite_or(Vec4::from(pbr.base_color_factor()), Vec4::ONE),
+                // Range and finiteness are checked below, with a warning for each change.
+                base_color: Vec4::from(pbr.base_color_factor()),
                 base_color_texture,
-                metallic: finite_or(pbr.metallic_factor(), 1.0).clamp(0.0, 1.0),
-                roughness: finite_or(pbr.roughness_factor(), 1.0).clamp(0.0, 1.0),
+                metallic: pbr.metallic_factor(),
+                roughness: pbr.roughness_factor(),
                 metallic_roughness_texture,
                 normal_texture,
                 normal_scale: normal.as_ref().map_or(1.0, |n| finite_or(n.scale(), 1.0)),
-                emissive: finite_or(Vec3::from(m.emissive_factor()), Vec3::ZERO).max(Vec3::ZERO),
-                emissive_strength: finite_or(strength, 1.0).max(0.0),
+                emissive: Vec3::from(m.emissive_factor()),
+                emissive_strength: m.emissive_strength().unwrap_or(1.0),
                 emissive_texture,
                 alpha_mode: match m.alpha_mode() {
                     gltf::material::AlphaMode::Opaque => AlphaMode::Opaque,
@@ -340,6 +422,13 @@ impl<'a> Loader<'a> {
                 },
                 double_sided: m.double_sided(),
             };
+            for note in super::plausible::clamp_factors(&mut material) {
+                self.warn(format!(
+                    "material {} `{}`: {note}",
+                    out.len(),
+                    material.name
+                ));
+            }
             out.push(material);
         }
         out
@@ -364,6 +453,10 @@ impl<'a> Loader<'a> {
                     data.name,
                     primitive.index()
                 );
+                if let Some(reason) = self.skip.primitives.get(&(mesh.index(), primitive.index())) {
+                    self.warn(format!("{label} skipped: {reason}"));
+                    continue;
+                }
                 match self.read_primitive(&primitive) {
                     Ok((part, note)) => {
                         if let Some(note) = note {
@@ -555,7 +648,17 @@ impl<'a> Loader<'a> {
         for c in cameras {
             match c.projection() {
                 gltf::camera::Projection::Perspective(p) => out.push(PerspectiveCamera {
-                    yfov: finite_or(p.yfov(), 0.8).clamp(1e-3, 3.1),
+                    yfov: {
+                        let yfov = p.yfov();
+                        let valid = finite_or(yfov, 0.8).clamp(1e-3, 3.1);
+                        if valid != yfov {
+                            self.warn(format!(
+                                "camera {}: yfov {yfov} is not an angle in (0, pi) radians; {valid} used",
+                                c.index()
+                            ));
+                        }
+                        valid
+                    },
                     aspect_ratio: p.aspect_ratio().filter(|a| a.is_finite() && *a > 0.0),
                     znear: p.znear(),
                 }),
@@ -610,16 +713,7 @@ impl<'a> Loader<'a> {
                 nodes[c].parent = Some(i);
             }
         }
-        let roots: Vec<usize> = match self
-            .document
-            .default_scene()
-            .or_else(|| self.document.scenes().next())
-        {
-            Some(scene) => scene.nodes().map(|n| n.index()).collect(),
-            None => (0..nodes.len())
-                .filter(|&i| nodes[i].parent.is_none())
-                .collect(),
-        };
+        let roots = self.scene_roots(&nodes)?;
         // Walk from the roots: a cycle would revisit a node.
         let mut seen = HashSet::new();
         let mut stack = roots.clone();
@@ -651,6 +745,72 @@ impl<'a> Loader<'a> {
             return Err(self.invalid(format!("the node hierarchy has a cycle through node {n}")));
         }
         Ok((nodes, roots))
+    }
+
+    /// Root nodes of the displayed scene: `--scene N`, else the default scene, else the first; a file
+    /// without scenes shows every parentless node. Choosing an empty scene is an error that lists the others.
+    fn scene_roots(&self, nodes: &[NodeData]) -> Result<Vec<usize>, SceneError> {
+        let scenes: Vec<gltf::Scene> = self.document.scenes().collect();
+        let listing = || {
+            let names: Vec<String> = scenes
+                .iter()
+                .map(|s| {
+                    format!(
+                        "{} `{}` ({} root nodes)",
+                        s.index(),
+                        s.name().unwrap_or(""),
+                        s.nodes().len()
+                    )
+                })
+                .collect();
+            format!(
+                "the file has {} scene(s): {}",
+                scenes.len(),
+                names.join(", ")
+            )
+        };
+        let fail = |reason: String| SceneError::Scene {
+            path: self.path.clone(),
+            reason,
+        };
+        let chosen = match self.options.scene {
+            Some(n) => Some(
+                scenes
+                    .get(n)
+                    .ok_or_else(|| fail(format!("there is no scene {n}: {}", listing())))?,
+            ),
+            None => self
+                .document
+                .default_scene()
+                .map(|s| s.index())
+                .or((!scenes.is_empty()).then_some(0))
+                .map(|i| &scenes[i]),
+        };
+        let Some(scene) = chosen else {
+            return Ok((0..nodes.len())
+                .filter(|&i| nodes[i].parent.is_none())
+                .collect());
+        };
+        let roots: Vec<usize> = scene.nodes().map(|n| n.index()).collect();
+        if roots.is_empty() {
+            return Err(fail(format!(
+                "scene {} `{}`{} lists no nodes, so there is nothing to render; {}{}",
+                scene.index(),
+                scene.name().unwrap_or(""),
+                if self.options.scene.is_none() {
+                    " (the default scene)"
+                } else {
+                    ""
+                },
+                listing(),
+                if scenes.len() > 1 {
+                    "; pick another with --scene N"
+                } else {
+                    ""
+                }
+            )));
+        }
+        Ok(roots)
     }
 
     fn load_skins(&self) -> Vec<SkinData> {
@@ -699,6 +859,13 @@ impl<'a> Loader<'a> {
                 .unwrap_or_else(|| format!("animation {}", anim.index()));
             let mut channels = Vec::new();
             for channel in anim.channels() {
+                if let Some(reason) = self.skip.channels.get(&(anim.index(), channel.index())) {
+                    warnings.push(format!(
+                        "{name} channel {}: {reason}; channel skipped",
+                        channel.index()
+                    ));
+                    continue;
+                }
                 let reader = channel.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
                 let label = format!("{name} channel {}", channel.index());
                 let interpolation = match channel.sampler().interpolation() {
@@ -767,6 +934,33 @@ impl<'a> Loader<'a> {
             self.warn(w);
         }
         clips
+    }
+}
+
+/// A skin without joints places no vertex: its nodes draw their mesh rigidly, with the node's transform. The
+/// skin is detached here, and a mesh no skinned node uses loses its JOINTS/WEIGHTS, so the CPU and GPU
+/// deformers both see a plain mesh.
+fn detach_empty_skins(scene: &mut SceneAsset) {
+    for (n, node) in scene.nodes.iter_mut().enumerate() {
+        if let Some(s) = node.skin
+            && scene.skins.get(s).is_none_or(|skin| skin.joints.is_empty())
+        {
+            scene.warnings.push(format!(
+                "node {n}: skin {s} has no joints; the mesh is drawn rigidly with the node"
+            ));
+            node.skin = None;
+        }
+    }
+    let mut skinned = vec![false; scene.meshes.len()];
+    for node in &scene.nodes {
+        if let (Some(m), Some(_)) = (node.mesh, node.skin) {
+            skinned[m] = true;
+        }
+    }
+    for (mesh, skinned) in scene.meshes.iter_mut().zip(skinned) {
+        if !skinned {
+            mesh.skin_weights = None;
+        }
     }
 }
 
@@ -941,43 +1135,6 @@ impl Finite for Vec4 {
 }
 fn finite_or<T: Finite>(v: T, fallback: T) -> T {
     if v.all_finite() { v } else { fallback }
-}
-
-/// The bytes behind a glTF URI: a base64 data URI, or a (percent-encoded) path relative to `base_dir`.
-pub(super) fn read_uri(base_dir: &Path, uri: &str) -> Result<Vec<u8>, String> {
-    if let Some(rest) = uri.strip_prefix("data:") {
-        let (_, payload) = rest
-            .split_once(";base64,")
-            .ok_or("data URI is not base64")?;
-        return base64::engine::general_purpose::STANDARD
-            .decode(payload)
-            .map_err(|e| format!("bad base64 data URI: {e}"));
-    }
-    let file = base_dir.join(percent_decode(uri));
-    std::fs::read(&file).map_err(|e| format!("cannot read {}: {e}", file.display()))
-}
-
-/// glTF URIs are percent-encoded (`%20` for a space).
-pub(crate) fn percent_decode(uri: &str) -> String {
-    let bytes = uri.as_bytes();
-    let mut out = Vec::with_capacity(bytes.len());
-    let mut i = 0;
-    while i < bytes.len() {
-        if bytes[i] == b'%'
-            && i + 2 < bytes.len()
-            && let Ok(v) = u8::from_str_radix(
-                std::str::from_utf8(&bytes[i + 1..i + 3]).unwrap_or("zz"),
-                16,
-            )
-        {
-            out.push(v);
-            i += 3;
-            continue;
-        }
-        out.push(bytes[i]);
-        i += 1;
-    }
-    String::from_utf8_lossy(&out).into_owned()
 }
 
 fn describe_gltf_error(e: &gltf::Error) -> String {

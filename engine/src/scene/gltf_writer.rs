@@ -4,7 +4,7 @@
 //! own folder (and a GLB's binary chunk becomes `NAME.bin` beside it); a `.glb` output packs every buffer and
 //! external image into its one binary chunk.
 
-use super::gltf_loader::percent_decode;
+use super::inputs::Access;
 use super::{AlphaMode, Material};
 use gltf::json;
 use std::path::{Component, Path, PathBuf};
@@ -33,6 +33,7 @@ pub fn save_with_materials(
     source_bytes: &[u8],
     source_dir: &Path,
     source_name: &str,
+    access: Access,
     materials: &[Material],
     out: &Path,
 ) -> Result<(), SaveError> {
@@ -87,6 +88,7 @@ pub fn save_with_materials(
     let sources = Sources {
         dir: source_dir,
         blob: blob.as_deref(),
+        access,
     };
     let bytes = if glb {
         pack_glb(&mut root, &sources).map_err(source_err)?
@@ -151,11 +153,15 @@ fn apply_material(j: &mut json::Material, m: &Material) {
 struct Sources<'a> {
     dir: &'a Path,
     blob: Option<&'a [u8]>,
+    /// What the scene was loaded under: Save as embeds no file the load was not allowed to read (an image
+    /// the load refused, `/etc/passwd`, must not end up inside a GLB the user then shares).
+    access: Access,
 }
 
 impl Sources<'_> {
     fn read_uri(&self, uri: &str) -> Result<Vec<u8>, String> {
-        super::gltf_loader::read_uri(self.dir, uri)
+        let whole = super::inputs::ReadLimit::AtMost(u64::MAX);
+        super::inputs::read_uri(self.dir, uri, self.access, whole, &mut |_| {})
     }
 
     fn buffer(&self, buffer: &json::Buffer) -> Result<Vec<u8>, String> {
@@ -168,8 +174,10 @@ impl Sources<'_> {
     }
 }
 
-/// .gltf output: a GLB binary chunk becomes `STEM.bin` beside `out`; relative file URIs are rewritten to point
-/// from `out_dir` at the original files; data URIs stay.
+/// .gltf output: file URIs inside the output's folder are rewritten relative to it; files outside it (and a
+/// GLB binary chunk, as `STEM.bin`) are copied beside it, so the saved scene reads only files in its own
+/// folder and loads without `--allow-external-files`. A copy never replaces an existing file: a name in use
+/// by other bytes gets a `-1`, `-2` ... suffix. Data URIs stay.
 fn relocate_uris(
     root: &mut json::Root,
     sources: &Sources,
@@ -179,44 +187,90 @@ fn relocate_uris(
     let stem = out
         .file_stem()
         .map_or("scene".into(), |s| s.to_string_lossy().to_string());
+    let out_dir = out_dir
+        .canonicalize()
+        .map_err(|e| format!("{}: {e}", out_dir.display()))?;
+    let mut copier = Copier {
+        out_dir: &out_dir,
+        reserved: vec![
+            out.file_name()
+                .map(|n| n.to_os_string())
+                .unwrap_or_default(),
+        ],
+    };
     for buffer in &mut root.buffers {
-        match &buffer.uri {
-            None => {
-                let bytes = sources.buffer(buffer)?;
-                let name = format!("{stem}.bin");
-                let path = out_dir.join(&name);
-                crate::image_io::write_bytes_atomically(&path, &bytes)
-                    .map_err(|e| format!("{}: cannot write: {e}", path.display()))?;
-                buffer.uri = Some(percent_encode(&name));
-            }
-            Some(uri) => buffer.uri = Some(relocated(uri, sources.dir, out_dir)?),
-        }
+        let name = match &buffer.uri {
+            None => copier.place(&format!("{stem}.bin"), &sources.buffer(buffer)?)?,
+            Some(uri) => relocated(uri, sources, &mut copier)?,
+        };
+        buffer.uri = Some(name);
     }
     for image in &mut root.images {
         if let Some(uri) = &image.uri {
-            image.uri = Some(relocated(uri, sources.dir, out_dir)?);
+            image.uri = Some(relocated(uri, sources, &mut copier)?);
         }
     }
     Ok(())
 }
 
-fn relocated(uri: &str, source_dir: &Path, out_dir: &Path) -> Result<String, String> {
+/// The URI the saved file uses for `uri` of the source.
+fn relocated(uri: &str, sources: &Sources, copier: &mut Copier) -> Result<String, String> {
     if uri.starts_with("data:") {
         return Ok(uri.to_string());
     }
-    let file = source_dir.join(percent_decode(uri));
-    let file = file
-        .canonicalize()
-        .map_err(|e| format!("{}: {e}", file.display()))?;
-    let out_dir = out_dir
-        .canonicalize()
-        .map_err(|e| format!("{}: {e}", out_dir.display()))?;
-    let relative = relative_path(&out_dir, &file);
-    let text: Vec<String> = relative
-        .components()
-        .map(|c| c.as_os_str().to_string_lossy().to_string())
-        .collect();
-    Ok(percent_encode(&text.join("/")))
+    let file = super::inputs::resolve(sources.dir, uri, sources.access)?;
+    if file.starts_with(copier.out_dir) {
+        let relative = relative_path(copier.out_dir, &file);
+        let text: Vec<String> = relative
+            .components()
+            .map(|c| c.as_os_str().to_string_lossy().to_string())
+            .collect();
+        return Ok(percent_encode(&text.join("/")));
+    }
+    let name = file
+        .file_name()
+        .map_or("resource".into(), |n| n.to_string_lossy().to_string());
+    copier.place(&name, &sources.read_uri(uri)?)
+}
+
+/// Writes resources into the output folder under names no other file uses.
+struct Copier<'a> {
+    out_dir: &'a Path,
+    /// Names taken by this save (the output itself, earlier copies).
+    reserved: Vec<std::ffi::OsString>,
+}
+
+impl Copier<'_> {
+    /// Writes `bytes` as `name` (or `name-N`) in the output folder; returns its URI.
+    fn place(&mut self, name: &str, bytes: &[u8]) -> Result<String, String> {
+        let path = Path::new(name);
+        let stem = path
+            .file_stem()
+            .map_or(name.to_string(), |s| s.to_string_lossy().to_string());
+        let ext = path
+            .extension()
+            .map_or(String::new(), |e| format!(".{}", e.to_string_lossy()));
+        for n in 0.. {
+            let candidate = if n == 0 {
+                name.to_string()
+            } else {
+                format!("{stem}-{n}{ext}")
+            };
+            if self.reserved.iter().any(|r| *r == *candidate) {
+                continue;
+            }
+            let target = self.out_dir.join(&candidate);
+            match std::fs::read(&target) {
+                Ok(existing) if existing != bytes => continue,
+                Ok(_) => {}
+                Err(_) => crate::image_io::write_bytes_atomically(&target, bytes)
+                    .map_err(|e| format!("{}: cannot write: {e}", target.display()))?,
+            }
+            self.reserved.push(candidate.clone().into());
+            return Ok(percent_encode(&candidate));
+        }
+        unreachable!("some suffix is free")
+    }
 }
 
 /// The path from folder `from` to `to` (both absolute and canonical).
@@ -336,6 +390,7 @@ fn percent_encode(path: &str) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::scene::inputs::percent_decode;
 
     #[test]
     fn relative_paths_walk_up_then_down() {

@@ -4,15 +4,18 @@
 pub mod compose;
 mod gltf_loader;
 pub mod gltf_writer;
+pub mod inputs;
 mod materials;
+pub mod plausible;
 pub mod procedural;
 mod spawn;
 mod tangents;
+mod validate;
 
 pub use compose::{compose, unshare_deformable_meshes};
-pub(crate) use gltf_loader::percent_decode;
 pub use gltf_loader::{LoadOptions, load_gltf, load_gltf_slice};
 pub use gltf_writer::{SaveError, save_with_materials};
+pub(crate) use inputs::percent_decode;
 pub use materials::Materials;
 pub use spawn::{
     CameraComponent, GlobalTransform, MeshInstance, MorphWeights, SceneNode, SceneNodes,
@@ -46,6 +49,14 @@ pub enum SceneError {
     UnsupportedExtension { path: PathBuf, extension: String },
     #[error("{path}: the scene has no renderable triangles ({reason})")]
     Empty { path: PathBuf, reason: String },
+    /// The scene to display (`--scene N`) does not exist or is empty.
+    #[error("{path}: {reason}")]
+    Scene { path: PathBuf, reason: String },
+    /// A decoder panicked: a bug in raykin or a library it calls, never the user's fault.
+    #[error(
+        "{path}: internal error while reading the file (a bug; please report it with this file): {message}"
+    )]
+    Internal { path: PathBuf, message: String },
 }
 
 /// How a material treats base-colour alpha (glTF `alphaMode`).
@@ -364,6 +375,9 @@ pub struct SceneAsset {
     pub roots: Vec<usize>,
     /// Problems that were worked around (skipped primitives, missing textures...), one line each.
     pub warnings: Vec<String>,
+    /// The files the scene was read from (canonical paths): the .gltf/.glb and every buffer and image file
+    /// its URIs name. Outputs must never overwrite one of them.
+    pub files: Vec<PathBuf>,
 }
 
 impl SceneAsset {
@@ -382,14 +396,31 @@ impl SceneAsset {
         world
     }
 
-    /// World-space bounds of every mesh instance in the rest pose.
+    /// By node index: whether the node belongs to the displayed scene (reachable from [`Self::roots`]).
+    /// Nodes of other glTF scenes are loaded (animations and skins may name them) but never drawn.
+    pub fn displayed_nodes(&self) -> Vec<bool> {
+        let mut shown = vec![false; self.nodes.len()];
+        let mut stack = self.roots.clone();
+        while let Some(n) = stack.pop() {
+            if n < shown.len() && !shown[n] {
+                shown[n] = true;
+                stack.extend(&self.nodes[n].children);
+            }
+        }
+        shown
+    }
+
+    /// World-space bounds of every displayed mesh instance in the rest pose.
     pub fn rest_bounds(&self) -> Option<(Vec3, Vec3)> {
         let world = self.rest_world_matrices();
+        let shown = self.displayed_nodes();
         let mut lo = Vec3::splat(f32::MAX);
         let mut hi = Vec3::splat(f32::MIN);
         let mut any = false;
         for (i, node) in self.nodes.iter().enumerate() {
-            let Some(mesh) = node.mesh else { continue };
+            let Some(mesh) = node.mesh.filter(|_| shown[i]) else {
+                continue;
+            };
             for p in &self.meshes[mesh].positions {
                 let w = world[i].transform_point3(*p);
                 lo = lo.min(w);

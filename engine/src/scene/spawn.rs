@@ -93,6 +93,8 @@ pub fn spawn_scene(
     let root = world
         .spawn((SceneRoot, root_transform, GlobalTransform::default()))
         .id();
+    // Nodes of other glTF scenes get an entity (animations may target them) but draw nothing.
+    let shown = scene.displayed_nodes();
     let entities: Vec<Entity> = scene
         .nodes
         .iter()
@@ -103,6 +105,9 @@ pub fn spawn_scene(
                 Transform::from(node.transform),
                 GlobalTransform::default(),
             ));
+            if !shown[i] {
+                return e.id();
+            }
             if let Some(mesh) = node.mesh {
                 e.insert(MeshInstance { mesh });
                 let data = &scene.meshes[mesh];

@@ -73,7 +73,7 @@ pub fn resolve(spec: &str, assets: &Path) -> Result<BenchScene> {
         source_files: gltf_files(&path),
         ..BenchScene::still(
             name,
-            load_scene(&path)?,
+            load_scene(&path, &LoadOptions::default())?,
             CameraChoice::Auto,
             Environment::Sky,
         )
@@ -131,15 +131,21 @@ pub fn instanced_grid(asset: &Arc<SceneAsset>, copies: usize) -> (SceneAsset, Ca
 /// Loads the scaling asset without images (traversal time does not depend on texels).
 pub fn load_scaling_asset(assets: &Path) -> Result<Arc<SceneAsset>> {
     let path = assets.join(SCALING_ASSET);
-    let scene = raykin::scene::load_gltf(&path, &LoadOptions { skip_images: true })
-        .with_context(|| format!("scaling asset (from --assets {})", assets.display()))?;
+    let scene = raykin::scene::load_gltf(
+        &path,
+        &LoadOptions {
+            skip_images: true,
+            ..Default::default()
+        },
+    )
+    .with_context(|| format!("scaling asset (from --assets {})", assets.display()))?;
     Ok(Arc::new(scene))
 }
 
 /// CesiumMan, alone, with a fixed camera: the refit-vs-rebuild measurement walks it through its clip.
 pub fn cesium_man(assets: &Path) -> Result<(Arc<SceneAsset>, CameraChoice)> {
     let path = assets.join("CesiumMan/glTF-Binary/CesiumMan.glb");
-    let scene = load_scene(&path)
+    let scene = load_scene(&path, &LoadOptions::default())
         .with_context(|| format!("refit bench asset (from --assets {})", assets.display()))?;
     let camera = CameraChoice::LookAt {
         eye: Vec3::new(0.0, 0.8, 2.6),

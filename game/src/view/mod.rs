@@ -50,10 +50,7 @@ pub fn run(args: &ViewArgs) -> Result<()> {
     };
     let options = SessionOptions {
         fixed_render_size: image_size,
-        fixed_dt: args
-            .fixed_dt
-            .filter(|d| d.is_finite() && *d >= 0.0)
-            .or(deterministic.then_some(1.0 / 60.0)),
+        fixed_dt: args.fixed_dt.or(deterministic.then_some(1.0 / 60.0)),
         camera: args.camera.map_or(CameraChoice::Auto, CameraChoice::Index),
         animation: args.animation.clone(),
         prefs_path: if args.no_settings {
@@ -63,6 +60,7 @@ pub fn run(args: &ViewArgs) -> Result<()> {
         },
         spp_per_frame: args.spp_per_frame,
         max_depth: args.max_depth,
+        load: args.load.options(),
     };
     if args.offscreen {
         let ctx = crate::adapter::open_gpu()?;
@@ -92,6 +90,7 @@ pub fn run(args: &ViewArgs) -> Result<()> {
 pub fn run_default() -> Result<()> {
     let args = ViewArgs {
         scene: None,
+        load: Default::default(),
         script: None,
         offscreen: false,
         frames: 0,

@@ -76,6 +76,14 @@ pub struct OffscreenSetup {
 pub fn run(ctx: GpuContext, setup: OffscreenSetup) -> Result<()> {
     let stored = super::session::load_settings(&setup.options);
     let mut session = Session::new(ctx.clone(), setup.source, setup.options, stored)?;
+    if let Some(report) = &setup.report {
+        let output = crate::outputs::Output {
+            what: "--report",
+            path: report.clone(),
+        };
+        crate::outputs::refuse_overwrites(&[output], &session.scene().files)?;
+        crate::outputs::check_writable("--report", report)?;
+    }
     let (iw, ih) = session
         .options
         .fixed_render_size
@@ -248,12 +256,11 @@ pub fn run(ctx: GpuContext, setup: OffscreenSetup) -> Result<()> {
         rss_end.map_or("-".into(), |v| v.to_string()),
     );
     if let Some(path) = &setup.report {
-        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-            std::fs::create_dir_all(dir)
-                .with_context(|| format!("{}: cannot create", dir.display()))?;
-        }
-        std::fs::write(path, serde_json::to_string_pretty(&report)?)
-            .with_context(|| format!("{}: cannot write the report", path.display()))?;
+        raykin::image_io::write_bytes_atomically(
+            path,
+            serde_json::to_string_pretty(&report)?.as_bytes(),
+        )
+        .with_context(|| format!("--report {}: cannot write the report", path.display()))?;
         eprintln!("raykin: wrote {}", path.display());
     }
     Ok(())

@@ -28,6 +28,7 @@ pub fn start(
     ctx: &GpuContext,
     scene: Arc<SceneAsset>,
     scene_file: &Path,
+    scene_index: Option<usize>,
     request: RecordStart,
 ) -> Result<Recording> {
     let camera = match request.scene_camera {
@@ -55,6 +56,7 @@ pub fn start(
             aovs: Vec::new(),
             render: request.settings.clone(),
         },
+        scene: scene_index,
     };
     let settings = raykin::record::plan(&scene, &plan_request)?;
     let job = RecordJob {

@@ -50,6 +50,8 @@ pub struct SessionOptions {
     /// Command-line overrides of the persisted render settings.
     pub spp_per_frame: Option<u32>,
     pub max_depth: Option<u32>,
+    /// How scene files are read (`--scene`, `--allow-external-files`).
+    pub load: LoadOptions,
 }
 
 /// Settings as read at start-up.
@@ -87,10 +89,10 @@ struct LoadedScene {
     players: Vec<(usize, AnimationPlayer)>,
 }
 
-fn load(source: &SceneSource) -> Result<LoadedScene> {
+fn load(source: &SceneSource, options: &LoadOptions) -> Result<LoadedScene> {
     Ok(match source {
         SceneSource::File(path) => LoadedScene {
-            scene: Arc::new(raykin::scene::load_gltf(path, &LoadOptions::default())?),
+            scene: crate::scenes::load_scene(path, options)?,
             players: Vec::new(),
         },
         SceneSource::Embedded => LoadedScene {
@@ -138,7 +140,10 @@ impl Session {
         if !from_file && ctx.info.device_type == wgpu::DeviceType::Cpu {
             prefs.render_scale = 0.25;
         }
-        let loaded = load(&source)?;
+        if let Some((w, h)) = options.fixed_render_size {
+            crate::render_cmd::check_size(&ctx, w, h)?;
+        }
+        let loaded = load(&source, &options.load)?;
         let engine = build_engine(&ctx, &loaded, &source, &prefs, &options)?;
         let egui = egui::Context::default();
         let mut session = Self {
@@ -180,7 +185,12 @@ impl Session {
     /// Loads `path` in place of the current scene; on failure the current scene stays and the editor shows why.
     pub fn open(&mut self, path: &Path) -> Result<(), String> {
         let source = SceneSource::File(path.to_path_buf());
-        let result = load(&source)
+        // A file opened from the window is a new scene: the command line's --scene was for the first one.
+        let options = LoadOptions {
+            scene: None,
+            ..self.options.load.clone()
+        };
+        let result = load(&source, &options)
             .map_err(|e| format!("{e:#}"))
             .and_then(|loaded| {
                 // Carry the session's settings over to the new scene.
@@ -270,7 +280,8 @@ impl Session {
             return;
         };
         let dir = request.out_dir.clone();
-        match super::recording::start(&self.ctx, self.scene(), &file, request) {
+        let scene_index = self.options.load.scene;
+        match super::recording::start(&self.ctx, self.scene(), &file, scene_index, request) {
             Ok(recording) => {
                 self.recording = Some(recording);
                 self.state_mut().recording = Some(format!("recording into {}", dir.display()));
@@ -331,7 +342,8 @@ impl Session {
             }
         };
         let materials = self.world().resource::<Materials>().0.clone();
-        raykin::scene::save_with_materials(&bytes, &dir, &name, &materials, out)?;
+        let access = self.options.load.access();
+        raykin::scene::save_with_materials(&bytes, &dir, &name, access, &materials, out)?;
         Ok(())
     }
 
