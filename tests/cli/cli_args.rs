@@ -142,20 +142,25 @@ fn an_image_over_the_adapters_limits_is_a_clear_error() {
     refused(&out, &["image size 100000x100000", "at most"]);
 }
 
+/// A top-level tree obvhs builds deeper than the traversal stack (80 nested instances) is rebuilt balanced
+/// and renders (it was refused; before that, instances vanished without a word).
 #[test]
-fn a_top_level_bvh_deeper_than_the_stack_exits_non_zero() {
+fn a_top_level_tree_deeper_than_the_stack_renders() {
     let out = scratch("deep.exr");
     let result = raykin(&[
         &"render",
         &malformed("tlas_deeper_than_64.gltf"),
+        &"--width",
+        &"32",
+        &"--height",
+        &"32",
+        &"--spp",
+        &"1",
         &"--out",
         &out,
     ]);
-    refused(
-        &result,
-        &["tlas_deeper_than_64.gltf", "top-level BVH", "exceeds"],
-    );
-    assert!(!out.exists(), "no image is written");
+    assert!(result.status.success(), "{}", stderr(&result));
+    assert!(out.exists(), "the image is written");
 }
 
 /// A copy of a small scene (.gltf + .bin) in its own folder, named `name`.
