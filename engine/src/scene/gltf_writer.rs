@@ -53,7 +53,14 @@ pub fn save_with_materials(
         source_name: source_name.to_string(),
         reason,
     };
-    let gltf = gltf::Gltf::from_slice(source_bytes).map_err(|e| source_err(e.to_string()))?;
+    let gltf = super::extensions::parse(source_bytes).map_err(|e| {
+        source_err(match e {
+            super::extensions::ParseError::Unsupported(ext) => {
+                format!("it requires the unsupported extension `{ext}`")
+            }
+            super::extensions::ParseError::Invalid(reason) => reason,
+        })
+    })?;
     let blob = gltf.blob;
     let mut root = gltf.document.into_json();
     if root.materials.len() != materials.len() {
