@@ -222,7 +222,7 @@ fn texture_transform_test_parses_to_the_spec_values() {
     assert_eq!(transform("Offset U").offset, Vec2::new(0.5, 0.0));
     assert_eq!(transform("Offset V").offset, Vec2::new(0.0, 0.5));
     assert_eq!(transform("Offset UV").offset, Vec2::new(0.5, 0.5));
-    assert!((transform("Rotation").rotation - 0.392_699_1).abs() < 1e-6);
+    assert!((transform("Rotation").rotation - std::f32::consts::FRAC_PI_8).abs() < 1e-6);
     assert_eq!(transform("Scale").scale, Vec2::splat(1.5));
     let all = transform("All");
     assert_eq!(
@@ -524,7 +524,7 @@ fn sample_material_extensions_are_parsed() {
         |pick: &dyn Fn(&raykin::scene::Material) -> Option<raykin::scene::TextureRef>| {
             ttmt.materials
                 .iter()
-                .filter_map(|m| pick(m))
+                .filter_map(pick)
                 .any(|t| !t.transform.is_identity())
         };
     assert!(transformed(&|m| m.base_color_texture));

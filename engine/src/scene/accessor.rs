@@ -96,13 +96,13 @@ fn view_bytes<'b>(view: &gltf::buffer::View, buffers: &'b [Vec<u8>]) -> Result<&
 }
 
 /// Reads `count` elements of `width` bytes starting at `offset` with `stride` from a view's bytes.
-fn strided<'b>(
-    bytes: &'b [u8],
+fn strided(
+    bytes: &[u8],
     offset: usize,
     stride: usize,
     width: usize,
     count: usize,
-) -> Option<impl Iterator<Item = &'b [u8]>> {
+) -> Option<impl Iterator<Item = &[u8]>> {
     if count > 0 {
         let last = stride.checked_mul(count - 1)?.checked_add(offset)?;
         if last.checked_add(width)? > bytes.len() {

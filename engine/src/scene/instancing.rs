@@ -14,13 +14,16 @@ use glam::{Quat, Vec3};
 
 pub(super) const EXTENSION: &str = "EXT_mesh_gpu_instancing";
 
+/// A node's instance transforms and, when some were dropped, a note saying how many.
+pub(super) type Instances = (Vec<NodeTransform>, Option<String>);
+
 /// Reads a node's instance transforms. `Ok(None)` when the node has no instancing extension; instances with
 /// non-finite values are dropped and counted in the returned note.
 pub(super) fn read(
     node: &gltf::Node,
     document: &gltf::Document,
     buffers: &[Vec<u8>],
-) -> Result<Option<(Vec<NodeTransform>, Option<String>)>, String> {
+) -> Result<Option<Instances>, String> {
     let Some(extension) = node.extension_value(EXTENSION) else {
         return Ok(None);
     };

@@ -101,7 +101,7 @@ impl CompressedView {
         let mut out = vec![0u8; len];
         let code = match self.mode {
             Mode::Attributes => {
-                if self.stride == 0 || self.stride > 256 || self.stride % 4 != 0 {
+                if self.stride == 0 || self.stride > 256 || !self.stride.is_multiple_of(4) {
                     return Err(format!(
                         "ATTRIBUTES byteStride {} must be a multiple of 4 up to 256",
                         self.stride
@@ -125,7 +125,7 @@ impl CompressedView {
                         self.mode, self.stride
                     ));
                 }
-                if self.mode == Mode::Triangles && self.count % 3 != 0 {
+                if self.mode == Mode::Triangles && !self.count.is_multiple_of(3) {
                     return Err(format!(
                         "TRIANGLES count {} is not a multiple of 3",
                         self.count
@@ -177,7 +177,7 @@ impl CompressedView {
         let stride_ok = match self.filter {
             Filter::Octahedral | Filter::Color => self.stride == 4 || self.stride == 8,
             Filter::Quaternion => self.stride == 8,
-            Filter::Exponential => self.stride % 4 == 0,
+            Filter::Exponential => self.stride.is_multiple_of(4),
             Filter::None => true,
         };
         if !stride_ok {

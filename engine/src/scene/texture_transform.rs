@@ -152,7 +152,7 @@ mod tests {
         // The spec's example: offset (0, 1), rotation pi/2, scale 0.5 shows the lower-left quadrant of the
         // image turned clockwise: every UV of the unit square lands in u in [0, 0.5], v in [0.5, 1].
         let (t, note) = TextureTransform::from_json(&serde_json::json!({
-            "offset": [0, 1], "rotation": 1.57079632679, "scale": [0.5, 0.5]
+            "offset": [0, 1], "rotation": FRAC_PI_2, "scale": [0.5, 0.5]
         }));
         assert!(note.is_none());
         for (u, v) in [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0), (0.5, 0.5)] {
