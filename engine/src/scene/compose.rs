@@ -149,6 +149,8 @@ pub fn compose(
             copy.primitives
                 .iter_mut()
                 .for_each(|p| p.material = remap(p.material));
+            // A composed scene has no variants: the copies keep the materials selected when loading.
+            copy.primitive_variants.clear();
             let index = out.meshes.len();
             out.meshes.push(copy);
             if !mesh.is_deformable() {

@@ -247,7 +247,9 @@ impl<'a> Loader<'a> {
             let decoded = bytes.and_then(|b| {
                 if super::texture_basisu::is_ktx2(&b) {
                     return Err(
-                        "a KTX2 / Basis Universal image, which raykin does not decode".into(),
+                        "a KTX2 / Basis Universal image, which raykin does not decode; textures \
+                         with a PNG/JPEG source as well use that"
+                            .into(),
                     );
                 }
                 image::load_from_memory(&b)
