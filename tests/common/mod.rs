@@ -30,6 +30,27 @@ pub fn fresh_dir(name: &str) -> PathBuf {
     dir
 }
 
+/// Every .gltf and .glb file under `dir`, sorted.
+pub fn gltf_files_under(dir: &std::path::Path) -> Vec<PathBuf> {
+    let mut files = Vec::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(dir) = stack.pop() {
+        for entry in std::fs::read_dir(&dir).unwrap_or_else(|e| panic!("{}: {e}", dir.display())) {
+            let path = entry.unwrap().path();
+            if path.is_dir() {
+                stack.push(path);
+            } else if matches!(
+                path.extension().and_then(|e| e.to_str()),
+                Some("gltf" | "glb")
+            ) {
+                files.push(path);
+            }
+        }
+    }
+    files.sort();
+    files
+}
+
 /// One device per test binary; a lock serialises GPU tests (lavapipe has 2 cores to share).
 pub fn gpu() -> (GpuContext, std::sync::MutexGuard<'static, ()>) {
     static LOCK: Mutex<()> = Mutex::new(());

@@ -4,32 +4,11 @@
 use crate::common::*;
 use raykin::camera::CameraChoice;
 use raykin::render::{Environment, RenderSettings};
-use std::path::PathBuf;
 use std::sync::Arc;
-
-fn all_asset_files() -> Vec<PathBuf> {
-    let mut files = Vec::new();
-    let mut stack = vec![shared_assets()];
-    while let Some(dir) = stack.pop() {
-        for entry in std::fs::read_dir(&dir).unwrap_or_else(|e| panic!("{}: {e}", dir.display())) {
-            let path = entry.unwrap().path();
-            if path.is_dir() {
-                stack.push(path);
-            } else if matches!(
-                path.extension().and_then(|e| e.to_str()),
-                Some("gltf" | "glb")
-            ) {
-                files.push(path);
-            }
-        }
-    }
-    files.sort();
-    files
-}
 
 #[test]
 fn every_asset_loads_and_every_static_one_renders() {
-    let files = all_asset_files();
+    let files = gltf_files_under(&shared_assets());
     assert!(
         files.len() >= 20,
         "expected the shared assets beside the repo, found {}",

@@ -229,10 +229,7 @@ fn checker_scene() -> Arc<SceneAsset> {
     }
     let plane = Material {
         name: "checker".into(),
-        base_color_texture: Some(TextureRef {
-            texture: 0,
-            tex_coord: 0,
-        }),
+        base_color_texture: Some(TextureRef::new(0, 0)),
         metallic: 0.0,
         roughness: 0.8,
         ..Default::default()

@@ -15,6 +15,7 @@ mod deep_tlas;
 mod denoise;
 mod editor;
 mod furnace;
+mod gltf_conformance;
 mod gpu_deform;
 mod record;
 mod refit_stability;

@@ -110,20 +110,13 @@ pub fn compose(
                     image: t.image + image_offset,
                     ..*t
                 }));
-                let shift = |t: Option<TextureRef>| {
-                    t.map(|t| TextureRef {
-                        texture: t.texture + texture_offset,
-                        ..t
-                    })
-                };
-                out.materials
-                    .extend(asset.materials.iter().map(|m| Material {
-                        base_color_texture: shift(m.base_color_texture),
-                        metallic_roughness_texture: shift(m.metallic_roughness_texture),
-                        normal_texture: shift(m.normal_texture),
-                        emissive_texture: shift(m.emissive_texture),
-                        ..m.clone()
-                    }));
+                out.materials.extend(asset.materials.iter().map(|m| {
+                    let mut m = m.clone();
+                    for slot in m.texture_slots_mut().into_iter().flatten() {
+                        slot.texture += texture_offset;
+                    }
+                    m
+                }));
                 seen.push((key, material_offset, vec![None; asset.meshes.len()]));
                 seen.len() - 1
             }
@@ -154,6 +147,8 @@ pub fn compose(
             copy.primitives
                 .iter_mut()
                 .for_each(|p| p.material = remap(p.material));
+            // A composed scene has no variants: the copies keep the materials selected when loading.
+            copy.primitive_variants.clear();
             let index = out.meshes.len();
             out.meshes.push(copy);
             if !mesh.is_deformable() {

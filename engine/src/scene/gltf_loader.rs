@@ -3,14 +3,17 @@
 //! Problems confined to one primitive, texture or animation channel become warnings and that piece is
 //! skipped; problems that make the file unusable are a [`SceneError`] naming the file.
 
+use super::accessor::{self, Floats};
+use super::material_extensions::{SlotResolver, SlotSource};
 use super::*;
 use super::{inputs, validate};
+use gltf::accessor::DataType;
 use gltf::mesh::Mode;
-use std::collections::HashSet;
+use std::collections::{HashMap, HashSet};
 use std::path::Path;
 
-/// glTF extensions raykin honours when a file lists them as required.
-const SUPPORTED_REQUIRED_EXTENSIONS: &[&str] = &["KHR_materials_emissive_strength"];
+/// The largest meshopt fallback buffer raykin allocates for decoded data (4 GiB).
+const MAX_FALLBACK_BUFFER: usize = 1 << 32;
 
 #[derive(Clone, Debug, Default)]
 pub struct LoadOptions {
@@ -77,6 +80,8 @@ struct Loader<'a> {
     options: &'a LoadOptions,
     document: gltf::Document,
     buffers: Vec<Vec<u8>>,
+    /// Compressed (meshopt) bufferViews that failed to decode, with the reason.
+    failed_views: HashMap<usize, String>,
     warnings: std::cell::RefCell<Vec<String>>,
     /// Canonical paths of the files URIs named, as read.
     files: std::cell::RefCell<Vec<PathBuf>>,
@@ -92,38 +97,27 @@ impl<'a> Loader<'a> {
         options: &'a LoadOptions,
     ) -> Result<Self, SceneError> {
         let path = name.to_path_buf();
-        let invalid = |reason: String| SceneError::Invalid {
-            path: path.clone(),
-            reason,
-        };
-        if let Some(problem) = validate::glb_header_problem(bytes) {
-            return Err(invalid(problem));
-        }
-        let gltf = gltf::Gltf::from_slice_without_validation(bytes).map_err(|e| {
-            // A glTF 1.0 file is not even shaped like a 2.0 one: name its version, not the parse error.
-            invalid(validate::version_problem(bytes).unwrap_or_else(|| describe_gltf_error(&e)))
+        let parsed = super::extensions::parse(bytes).map_err(|e| match e {
+            super::extensions::ParseError::Unsupported(extension) => {
+                SceneError::UnsupportedExtension {
+                    path: path.clone(),
+                    extension,
+                }
+            }
+            super::extensions::ParseError::Invalid(reason) => SceneError::Invalid {
+                path: path.clone(),
+                reason,
+            },
         })?;
-        let mut root = gltf.document.into_json();
-        if let Some(ext) = root
-            .extensions_required
-            .iter()
-            .find(|ext| !SUPPORTED_REQUIRED_EXTENSIONS.contains(&ext.as_str()))
-        {
-            return Err(SceneError::UnsupportedExtension {
-                path,
-                extension: ext.clone(),
-            });
-        }
-        // Our checks first: the crate's validation and readers panic on some of what they catch.
-        let mut findings = validate::check(&mut root).map_err(invalid)?;
-        let document =
-            gltf::Document::from_json(root).map_err(|e| invalid(describe_gltf_error(&e)))?;
+        let mut findings = parsed.findings;
+        let document = gltf::Document::from_json_without_validation(parsed.root);
         let mut loader = Self {
             path,
             base_dir,
             options,
             document,
             buffers: Vec::new(),
+            failed_views: HashMap::new(),
             warnings: Default::default(),
             files: Default::default(),
             skip: Default::default(),
@@ -132,7 +126,16 @@ impl<'a> Loader<'a> {
             loader.warn(w);
         }
         loader.skip = findings;
-        loader.buffers = loader.load_buffers(gltf.blob)?;
+        loader.buffers = loader.load_buffers(parsed.blob)?;
+        for (view, reason) in super::meshopt::decode_views(&loader.document, &mut loader.buffers) {
+            loader.warn(format!(
+                "bufferView {view}: meshopt-compressed data cannot be decoded ({reason}); what reads it is skipped"
+            ));
+            loader.failed_views.insert(view, reason);
+        }
+        for w in super::extensions::ignored_warnings(&loader.document) {
+            loader.warn(w);
+        }
         Ok(loader)
     }
 
@@ -163,7 +166,23 @@ impl<'a> Loader<'a> {
                 },
                 reason,
             };
+            // A meshopt fallback buffer may have no data: its views are decoded into it later.
+            let fallback_without_data = super::meshopt::is_fallback_buffer(&buffer)
+                && matches!(buffer.source(), gltf::buffer::Source::Bin)
+                && (index > 0 || blob.is_none());
             let data = match buffer.source() {
+                _ if fallback_without_data => {
+                    if buffer.length() > MAX_FALLBACK_BUFFER {
+                        return Err(fail(
+                            "meshopt fallback buffer",
+                            format!(
+                                "byteLength {} is over the {MAX_FALLBACK_BUFFER}-byte limit",
+                                buffer.length()
+                            ),
+                        ));
+                    }
+                    vec![0; buffer.length()]
+                }
                 gltf::buffer::Source::Bin => blob
                     .take()
                     .ok_or_else(|| fail("GLB BIN chunk", "the .glb has no binary chunk".into()))?,
@@ -204,7 +223,15 @@ impl<'a> Loader<'a> {
         let images = self.load_images();
         let textures = self.load_textures(&images);
         let materials = self.load_materials(&textures);
-        let meshes = self.load_meshes(&materials)?;
+        for line in super::material_extensions::unrendered_report(&materials) {
+            self.warn(line);
+        }
+        let variants: Vec<String> = self
+            .document
+            .variants()
+            .map(|v| v.map(|v| v.name().to_string()).collect())
+            .unwrap_or_default();
+        let meshes = self.load_meshes(&materials, variants.len())?;
         let cameras = self.load_cameras();
         let (nodes, roots) = self.load_nodes()?;
         let skins = self.load_skins();
@@ -223,6 +250,8 @@ impl<'a> Loader<'a> {
             animations,
             nodes,
             roots,
+            variants,
+            active_variant: None,
             warnings: self.warnings.take(),
             files: self.files.take(),
         };
@@ -282,11 +311,21 @@ impl<'a> Loader<'a> {
                 continue;
             }
             let name = image.name().unwrap_or("").to_string();
+            let label = image_label(&image);
             let bytes = match self.skip.images.get(&image.index()) {
                 Some(reason) => Err(reason.clone()),
                 None => self.image_bytes(&image),
             };
-            let decoded = bytes.and_then(|b| inputs::decode_image(&b));
+            let decoded = bytes.and_then(|b| {
+                if super::texture_basisu::is_ktx2(&b) {
+                    return Err(
+                        "a KTX2 / Basis Universal image, which raykin does not decode; textures \
+                         with a PNG/JPEG source as well use that"
+                            .into(),
+                    );
+                }
+                inputs::decode_image(&b)
+            });
             match decoded {
                 Ok(rgba) => out.push(Some(Image {
                     name,
@@ -296,8 +335,7 @@ impl<'a> Loader<'a> {
                 })),
                 Err(reason) => {
                     self.warn(format!(
-                        "image {} `{name}` skipped ({reason}); materials using it fall back to their factors",
-                        image.index()
+                        "{label} skipped ({reason}); materials using it fall back to their factors"
                     ));
                     out.push(None);
                 }
@@ -334,12 +372,24 @@ impl<'a> Loader<'a> {
             .textures()
             .map(|t| {
                 let sampler = t.sampler();
-                let image = t.source().index();
+                // KHR_texture_basisu may leave out the core source; its KTX2 image is not decoded.
+                let image = super::texture_basisu::core_source(&self.document, t.index());
+                if image.is_none()
+                    && let Some(ktx2) = super::texture_basisu::basisu_source(&t)
+                {
+                    self.warn(format!(
+                        "texture {} has only a KHR_texture_basisu image ({}), which raykin does not decode; materials using it fall back to their factors",
+                        t.index(),
+                        self.document
+                            .images()
+                            .nth(ktx2)
+                            .map_or(format!("image {ktx2}, which does not exist"), |i| image_label(&i))
+                    ));
+                }
                 Texture {
-                    image: if images[image].is_some() {
-                        image as u32
-                    } else {
-                        u32::MAX
+                    image: match image {
+                        Some(i) if images.get(i).is_some_and(Option::is_some) => i as u32,
+                        _ => u32::MAX,
                     },
                     wrap_s: wrap(sampler.wrap_s()),
                     wrap_t: wrap(sampler.wrap_t()),
@@ -351,53 +401,44 @@ impl<'a> Loader<'a> {
 
     fn load_materials(&self, textures: &[Texture]) -> Vec<Material> {
         let mut out = Vec::new();
+        let mut occluded = Vec::new();
         let materials: Vec<_> = self.document.materials().collect();
         for m in materials {
             let name = m.name().unwrap_or("").to_string();
-            let texture = |info: Option<(gltf::Texture, u32)>,
-                           slot: &str,
-                           warnings: &mut Vec<String>| {
-                let (tex, tex_coord) = info?;
-                if textures[tex.index()].image == u32::MAX {
-                    return None;
-                }
-                if tex_coord > 1 {
-                    warnings.push(format!(
-                        "material `{name}`: {slot} texture uses TEXCOORD_{tex_coord}; only sets 0 and 1 are read, texture ignored"
-                    ));
-                    return None;
-                }
-                Some(TextureRef {
-                    texture: tex.index() as u32,
-                    tex_coord,
-                })
+            let usable: Vec<bool> = textures.iter().map(|t| t.image != u32::MAX).collect();
+            let mut slots = SlotResolver {
+                usable: &usable,
+                material: &name,
+                notes: Vec::new(),
             };
             let pbr = m.pbr_metallic_roughness();
-            let mut warnings = Vec::new();
-            let base_color_texture = texture(
-                pbr.base_color_texture()
-                    .map(|i| (i.texture(), i.tex_coord())),
+            let base_color_texture = slots.resolve(
+                pbr.base_color_texture().map(|i| SlotSource::from_info(&i)),
                 "baseColor",
-                &mut warnings,
             );
-            let metallic_roughness_texture = texture(
+            let metallic_roughness_texture = slots.resolve(
                 pbr.metallic_roughness_texture()
-                    .map(|i| (i.texture(), i.tex_coord())),
+                    .map(|i| SlotSource::from_info(&i)),
                 "metallicRoughness",
-                &mut warnings,
             );
             let normal = m.normal_texture();
-            let normal_texture = texture(
-                normal.as_ref().map(|n| (n.texture(), n.tex_coord())),
+            let normal_texture = slots.resolve(
+                normal.as_ref().map(|n| SlotSource {
+                    texture: n.texture().index(),
+                    tex_coord: n.tex_coord(),
+                    transform: n.extension_value("KHR_texture_transform").cloned(),
+                }),
                 "normal",
-                &mut warnings,
             );
-            let emissive_texture = texture(
-                m.emissive_texture().map(|i| (i.texture(), i.tex_coord())),
+            let emissive_texture = slots.resolve(
+                m.emissive_texture().map(|i| SlotSource::from_info(&i)),
                 "emissive",
-                &mut warnings,
             );
-            for w in warnings {
+            let extensions = super::material_extensions::read(&m, &mut slots);
+            if m.occlusion_texture().is_some() {
+                occluded.push(name.clone());
+            }
+            for w in slots.notes {
                 self.warn(w);
             }
             let mut material = Material {
@@ -421,6 +462,7 @@ impl<'a> Loader<'a> {
                     gltf::material::AlphaMode::Blend => AlphaMode::Blend,
                 },
                 double_sided: m.double_sided(),
+                extensions,
             };
             for note in super::plausible::clamp_factors(&mut material) {
                 self.warn(format!(
@@ -431,10 +473,21 @@ impl<'a> Loader<'a> {
             }
             out.push(material);
         }
+        if !occluded.is_empty() {
+            self.warn(format!(
+                "occlusion textures ignored ({} materials, e.g. `{}`): a path tracer computes occlusion itself",
+                occluded.len(),
+                occluded[0]
+            ));
+        }
         out
     }
 
-    fn load_meshes(&self, materials: &[Material]) -> Result<Vec<MeshData>, SceneError> {
+    fn load_meshes(
+        &self,
+        materials: &[Material],
+        variant_count: usize,
+    ) -> Result<Vec<MeshData>, SceneError> {
         let meshes: Vec<_> = self.document.meshes().collect();
         let mut out = Vec::with_capacity(meshes.len());
         // Meshes that use glTF's default material get it appended once, after the file's materials.
@@ -446,6 +499,7 @@ impl<'a> Loader<'a> {
                 ..Default::default()
             };
             let mut parts = Vec::new();
+            let mut mappings = Vec::new();
             for primitive in mesh.primitives() {
                 let label = format!(
                     "mesh {} `{}` primitive {}",
@@ -462,6 +516,16 @@ impl<'a> Loader<'a> {
                         if let Some(note) = note {
                             self.warn(format!("{label}: {note}"));
                         }
+                        let mut notes = Vec::new();
+                        mappings.push(super::variants::read_mappings(
+                            &primitive,
+                            variant_count,
+                            materials.len(),
+                            &mut notes,
+                        ));
+                        for n in notes {
+                            self.warn(format!("{label}: {n}"));
+                        }
                         parts.push((
                             part,
                             primitive
@@ -471,6 +535,19 @@ impl<'a> Loader<'a> {
                         ));
                     }
                     Err(reason) => self.warn(format!("{label} skipped: {reason}")),
+                }
+            }
+            if mappings.iter().any(|m| !m.is_empty()) {
+                let mut first = 0u32;
+                for ((part, material), mappings) in parts.iter().zip(mappings) {
+                    let count = part.triangles.len() as u32;
+                    data.primitive_variants
+                        .push(super::variants::PrimitiveVariants {
+                            triangles: first..first + count,
+                            file_material: *material,
+                            mappings,
+                        });
+                    first += count;
                 }
             }
             merge_primitives(&mut data, parts);
@@ -492,12 +569,22 @@ impl<'a> Loader<'a> {
         &self,
         primitive: &gltf::Primitive,
     ) -> Result<(PrimitiveData, Option<String>), String> {
-        let buffers = &self.buffers;
-        let reader = primitive.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
+        // Refuse points and lines before decoding anything.
+        assemble_triangles(primitive.mode(), &[])?;
+        let draco = primitive
+            .extension_value(super::draco::EXTENSION)
+            .map(|ext| super::draco::decode(primitive, ext, &self.document, &self.buffers))
+            .transpose()?;
+        let source = VertexSource {
+            loader: self,
+            draco: draco.as_ref(),
+        };
         let position_accessor = primitive
             .get(&gltf::Semantic::Positions)
             .ok_or("it has no POSITION attribute")?;
-        let count = position_accessor.count();
+        let count = draco
+            .as_ref()
+            .map_or(position_accessor.count(), |d| d.vertex_count);
         let expect = |n: usize, what: &str| -> Result<(), String> {
             if n == count {
                 Ok(())
@@ -507,9 +594,10 @@ impl<'a> Loader<'a> {
                 ))
             }
         };
-        let positions: Vec<Vec3> = reader
-            .read_positions()
-            .ok_or("POSITION accessor lies outside its buffer or is not float VEC3")?
+        let positions: Vec<Vec3> = source
+            .vectors::<3>(primitive, gltf::Semantic::Positions, POSITION_TYPES)?
+            .ok_or("it has no POSITION attribute")?
+            .into_iter()
             .map(Vec3::from)
             .collect();
         expect(positions.len(), "POSITION")?;
@@ -518,39 +606,77 @@ impl<'a> Loader<'a> {
             positions,
             ..Default::default()
         };
-        if let Some(n) = reader.read_normals() {
-            let normals: Vec<Vec3> = n.map(|v| finite_or(Vec3::from(v), Vec3::ZERO)).collect();
+        if let Some(n) =
+            source.vectors::<3>(primitive, gltf::Semantic::Normals, UNIT_VECTOR_TYPES)?
+        {
+            let normals: Vec<Vec3> = n
+                .into_iter()
+                .map(|v| finite_or(Vec3::from(v), Vec3::ZERO))
+                .collect();
             expect(normals.len(), "NORMAL")?;
             part.normals = Some(normals);
         }
-        if let Some(t) = reader.read_tangents() {
-            let tangents: Vec<Vec4> = t.map(|v| finite_or(Vec4::from(v), Vec4::ZERO)).collect();
+        if let Some(t) =
+            source.vectors::<4>(primitive, gltf::Semantic::Tangents, UNIT_VECTOR_TYPES)?
+        {
+            let tangents: Vec<Vec4> = t
+                .into_iter()
+                .map(|v| finite_or(Vec4::from(v), Vec4::ZERO))
+                .collect();
             expect(tangents.len(), "TANGENT")?;
             part.tangents = Some(tangents);
         }
         for set in 0..2 {
-            if let Some(uv) = reader.read_tex_coords(set) {
+            if let Some(uv) =
+                source.vectors::<2>(primitive, gltf::Semantic::TexCoords(set), TEXCOORD_TYPES)?
+            {
                 let uv: Vec<Vec2> = uv
-                    .into_f32()
+                    .into_iter()
                     .map(|v| finite_or(Vec2::from(v), Vec2::ZERO))
                     .collect();
                 expect(uv.len(), "TEXCOORD")?;
                 part.uv[set as usize] = Some(uv);
             }
         }
-        if let Some(c) = reader.read_colors(0) {
-            let colors: Vec<Vec4> = c
-                .into_rgba_f32()
-                .map(|v| finite_or(Vec4::from(v), Vec4::ONE))
+        if let Some(c) = source.floats(primitive, gltf::Semantic::Colors(0), COLOR_TYPES)? {
+            let colors: Vec<Vec4> = match c.dims {
+                3 => c
+                    .to_arrays::<3>()
+                    .into_iter()
+                    .map(|v| Vec3::from(v).extend(1.0))
+                    .collect(),
+                4 => c.to_arrays::<4>().into_iter().map(Vec4::from).collect(),
+                d => return Err(format!("COLOR_0 has {d} components; VEC3 or VEC4 expected")),
+            };
+            let colors: Vec<Vec4> = colors
+                .into_iter()
+                .map(|v| finite_or(v, Vec4::ONE))
                 .collect();
             expect(colors.len(), "COLOR_0")?;
             part.colors = Some(colors);
         }
         let mut sets = 0;
-        while let (Some(j), Some(w)) = (reader.read_joints(sets), reader.read_weights(sets)) {
-            let joints: Vec<[u16; 4]> = j.into_u16().collect();
+        while let (Some(j), Some(w)) = (
+            source.vectors::<4>(primitive, gltf::Semantic::Joints(sets), JOINT_TYPES)?,
+            source.vectors::<4>(primitive, gltf::Semantic::Weights(sets), WEIGHT_TYPES)?,
+        ) {
+            let joints: Vec<[u16; 4]> = j
+                .into_iter()
+                .map(|j| {
+                    j.map(|x| {
+                        if x.fract() == 0.0 && (0.0..=65535.0).contains(&x) {
+                            Ok(x as u16)
+                        } else {
+                            Err(format!("JOINTS_{sets} holds {x}, not a joint index"))
+                        }
+                    })
+                    .into_iter()
+                    .collect::<Result<Vec<u16>, String>>()
+                    .map(|v| [v[0], v[1], v[2], v[3]])
+                })
+                .collect::<Result<_, _>>()?;
             let weights: Vec<[f32; 4]> = w
-                .into_f32()
+                .into_iter()
                 .map(|w| w.map(|x| if x.is_finite() { x.max(0.0) } else { 0.0 }))
                 .collect();
             expect(joints.len(), "JOINTS")?;
@@ -559,15 +685,24 @@ impl<'a> Loader<'a> {
             part.weights.push(weights);
             sets += 1;
         }
-        for (i, (p, n, t)) in reader.read_morph_targets().enumerate() {
-            let positions: Vec<Vec3> = p
-                .map(|p| p.map(|v| finite_or(Vec3::from(v), Vec3::ZERO)).collect())
+        for (i, target) in primitive.morph_targets().enumerate() {
+            let read =
+                |a: Option<gltf::Accessor>, types: &[(DataType, Option<bool>)], what: &str| {
+                    a.map(|a| source.accessor_vectors::<3>(&a, types, what))
+                        .transpose()
+                        .map(|v| {
+                            v.map(|v| {
+                                v.into_iter()
+                                    .map(|p| finite_or(Vec3::from(p), Vec3::ZERO))
+                                    .collect::<Vec<Vec3>>()
+                            })
+                        })
+                };
+            let positions = read(target.positions(), MORPH_POSITION_TYPES, "morph POSITION")?
                 .unwrap_or_else(|| vec![Vec3::ZERO; count]);
             expect(positions.len(), &format!("morph target {i} POSITION"))?;
-            let normals: Option<Vec<Vec3>> =
-                n.map(|n| n.map(|v| finite_or(Vec3::from(v), Vec3::ZERO)).collect());
-            let tangents: Option<Vec<Vec3>> =
-                t.map(|t| t.map(|v| finite_or(Vec3::from(v), Vec3::ZERO)).collect());
+            let normals = read(target.normals(), UNIT_VECTOR_TYPES, "morph NORMAL")?;
+            let tangents = read(target.tangents(), UNIT_VECTOR_TYPES, "morph TANGENT")?;
             if let Some(n) = &normals {
                 expect(n.len(), "morph target NORMAL")?;
             }
@@ -581,18 +716,14 @@ impl<'a> Loader<'a> {
             });
         }
 
-        let indices: Vec<u32> = match reader.read_indices() {
-            Some(i) => i.into_u32().collect(),
-            None if primitive.indices().is_some() => {
-                return Err("its index accessor lies outside its buffer".into());
+        let indices: Vec<u32> = match (&draco, primitive.indices()) {
+            (Some(d), _) => d.indices.clone(),
+            (None, Some(accessor)) => {
+                source.check_view(&accessor)?;
+                accessor::read_indices(&accessor, &self.buffers)?
             }
-            None => (0..count as u32).collect(),
+            (None, None) => (0..count as u32).collect(),
         };
-        if let Some(accessor) = primitive.indices()
-            && indices.len() != accessor.count()
-        {
-            return Err("its index accessor lies outside its buffer".into());
-        }
         if let Some(&bad) = indices.iter().find(|&&i| i as usize >= count) {
             return Err(format!(
                 "index {bad} is out of range: the primitive has {count} vertices"
@@ -744,6 +875,31 @@ impl<'a> Loader<'a> {
         if let Some(n) = (0..nodes.len()).find(|n| !seen.contains(n)) {
             return Err(self.invalid(format!("the node hierarchy has a cycle through node {n}")));
         }
+        let mut instanced = Vec::new();
+        for node in self.document.nodes() {
+            let label = format!("node {} `{}`", node.index(), node.name().unwrap_or(""));
+            match super::instancing::read(&node, &self.document, &self.buffers) {
+                Ok(None) => {}
+                Ok(Some(_)) if node.mesh().is_none() => self.warn(format!(
+                    "{label}: EXT_mesh_gpu_instancing on a node without a mesh; ignored"
+                )),
+                Ok(Some((transforms, note))) => {
+                    if let Some(note) = note {
+                        self.warn(format!("{label}: {note}"));
+                    }
+                    if node.skin().is_some() {
+                        self.warn(format!(
+                            "{label}: instances of a skinned mesh all follow the skin's joints, so they coincide"
+                        ));
+                    }
+                    instanced.push((node.index(), transforms));
+                }
+                Err(reason) => self.warn(format!(
+                    "{label}: instancing ignored ({reason}); the mesh is drawn once"
+                )),
+            }
+        }
+        super::instancing::expand(&mut nodes, instanced);
         Ok((nodes, roots))
     }
 
@@ -964,6 +1120,118 @@ fn detach_empty_skins(scene: &mut SceneAsset) {
     }
 }
 
+/// Component types each attribute may have: glTF 2.0's, widened by KHR_mesh_quantization
+/// (`Some(true)`: normalized only, `Some(false)`: unnormalized only, `None`: either).
+const POSITION_TYPES: &[(DataType, Option<bool>)] = &[
+    (DataType::F32, Some(false)),
+    (DataType::I8, None),
+    (DataType::U8, None),
+    (DataType::I16, None),
+    (DataType::U16, None),
+];
+const UNIT_VECTOR_TYPES: &[(DataType, Option<bool>)] = &[
+    (DataType::F32, Some(false)),
+    (DataType::I8, Some(true)),
+    (DataType::I16, Some(true)),
+];
+const TEXCOORD_TYPES: &[(DataType, Option<bool>)] = POSITION_TYPES;
+const MORPH_POSITION_TYPES: &[(DataType, Option<bool>)] = &[
+    (DataType::F32, Some(false)),
+    (DataType::I8, None),
+    (DataType::I16, None),
+];
+const COLOR_TYPES: &[(DataType, Option<bool>)] = &[
+    (DataType::F32, Some(false)),
+    (DataType::U8, Some(true)),
+    (DataType::U16, Some(true)),
+];
+const JOINT_TYPES: &[(DataType, Option<bool>)] =
+    &[(DataType::U8, Some(false)), (DataType::U16, Some(false))];
+const WEIGHT_TYPES: &[(DataType, Option<bool>)] = &[
+    (DataType::F32, Some(false)),
+    (DataType::U8, Some(true)),
+    (DataType::U16, Some(true)),
+];
+
+/// Where a primitive's vertex attributes come from: its accessors, or a decoded Draco bitstream (for the
+/// attributes the bitstream carries).
+struct VertexSource<'l, 'a> {
+    loader: &'l Loader<'a>,
+    draco: Option<&'l super::draco::DracoPrimitive>,
+}
+
+impl VertexSource<'_, '_> {
+    /// An attribute's values, or `None` when the primitive lacks it.
+    fn floats(
+        &self,
+        primitive: &gltf::Primitive,
+        semantic: gltf::Semantic,
+        types: &[(DataType, Option<bool>)],
+    ) -> Result<Option<Floats>, String> {
+        let name = semantic.to_string();
+        let Some(accessor) = primitive.get(&semantic) else {
+            return Ok(None);
+        };
+        if let Some(draco) = self.draco
+            && draco.has(&name)
+        {
+            return Ok(draco.floats(&name, &accessor));
+        }
+        accessor::check_attribute_type(&accessor, types, &name)?;
+        self.check_view(&accessor)?;
+        accessor::read_floats(&accessor, &self.loader.buffers, &name).map(Some)
+    }
+
+    fn vectors<const N: usize>(
+        &self,
+        primitive: &gltf::Primitive,
+        semantic: gltf::Semantic,
+        types: &[(DataType, Option<bool>)],
+    ) -> Result<Option<Vec<[f32; N]>>, String> {
+        let name = semantic.to_string();
+        match self.floats(primitive, semantic, types)? {
+            None => Ok(None),
+            Some(f) if f.dims == N => Ok(Some(f.to_arrays())),
+            Some(f) => Err(format!(
+                "{name} has {} components per element, {N} expected",
+                f.dims
+            )),
+        }
+    }
+
+    /// Reads an accessor that is never Draco-compressed (morph targets).
+    fn accessor_vectors<const N: usize>(
+        &self,
+        accessor: &gltf::Accessor,
+        types: &[(DataType, Option<bool>)],
+        what: &str,
+    ) -> Result<Vec<[f32; N]>, String> {
+        accessor::check_attribute_type(accessor, types, what)?;
+        self.check_view(accessor)?;
+        accessor::read_vectors::<N>(accessor, &self.loader.buffers, what)
+    }
+
+    /// Fails when the accessor's data is in a compressed bufferView that did not decode.
+    fn check_view(&self, accessor: &gltf::Accessor) -> Result<(), String> {
+        let views = accessor.view().into_iter().chain(
+            accessor
+                .sparse()
+                .into_iter()
+                .flat_map(|s| [s.indices().view(), s.values().view()]),
+        );
+        for view in views {
+            if let Some(reason) = self.loader.failed_views.get(&view.index()) {
+                return Err(format!(
+                    "accessor {} reads bufferView {}, whose meshopt-compressed data cannot be decoded ({reason})",
+                    accessor.index(),
+                    view.index()
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
 /// One primitive's attributes before merging into its mesh.
 #[derive(Default)]
 struct PrimitiveData {
@@ -1100,6 +1368,23 @@ fn assemble_triangles(mode: Mode, indices: &[u32]) -> Result<Vec<[u32; 3]>, Stri
     })
 }
 
+/// Names an image in messages: index, then its name, else its URI, else its MIME type and bufferView.
+fn image_label(image: &gltf::Image) -> String {
+    let what = match (image.name(), image.source()) {
+        (Some(name), _) if !name.is_empty() => format!("`{name}`"),
+        (_, gltf::image::Source::Uri { uri, .. }) if !uri.starts_with("data:") => {
+            format!("`{uri}`")
+        }
+        (_, gltf::image::Source::Uri { mime_type, .. }) => {
+            format!("(data URI, {})", mime_type.unwrap_or("no MIME type"))
+        }
+        (_, gltf::image::Source::View { view, mime_type }) => {
+            format!("({mime_type} in bufferView {})", view.index())
+        }
+    };
+    format!("image {} {what}", image.index())
+}
+
 /// A 1x1 white image standing in for one that failed to load (its textures are already detached).
 fn placeholder_image() -> Image {
     Image {
@@ -1135,18 +1420,4 @@ impl Finite for Vec4 {
 }
 fn finite_or<T: Finite>(v: T, fallback: T) -> T {
     if v.all_finite() { v } else { fallback }
-}
-
-fn describe_gltf_error(e: &gltf::Error) -> String {
-    match e {
-        gltf::Error::Validation(errors) => {
-            let list: Vec<String> = errors
-                .iter()
-                .take(5)
-                .map(|(path, err)| format!("{path}: {err}"))
-                .collect();
-            format!("validation failed: {}", list.join("; "))
-        }
-        other => other.to_string(),
-    }
 }

@@ -54,9 +54,16 @@ pub fn save_with_materials(
         source_name: source_name.to_string(),
         reason,
     };
-    let gltf = gltf::Gltf::from_slice(source_bytes).map_err(|e| source_err(e.to_string()))?;
-    let blob = gltf.blob;
-    let mut root = gltf.document.into_json();
+    let parsed = super::extensions::parse(source_bytes).map_err(|e| {
+        source_err(match e {
+            super::extensions::ParseError::Unsupported(ext) => {
+                format!("it requires the unsupported extension `{ext}`")
+            }
+            super::extensions::ParseError::Invalid(reason) => reason,
+        })
+    })?;
+    let blob = parsed.blob;
+    let mut root = parsed.root;
     if root.materials.len() != materials.len() {
         return Err(SaveError::MaterialCount {
             source_name: source_name.to_string(),
@@ -97,6 +104,13 @@ pub fn save_with_materials(
         root.to_vec_pretty()
             .map_err(|e| source_err(e.to_string()))?
     };
+    // gltf-json writes some values it cannot read back (non-finite numbers as null): never write a file the
+    // loader would refuse.
+    if let Err(e) = gltf::Gltf::from_slice_without_validation(&bytes) {
+        return Err(source_err(format!(
+            "the saved file would not load ({e}); nothing was written"
+        )));
+    }
     crate::image_io::write_bytes_atomically(out, &bytes).map_err(|e| write_err(out, e.to_string()))
 }
 

@@ -1,26 +1,37 @@
 //! Scenes on the CPU: the asset data a glTF file becomes (meshes, materials, images, cameras, node tree),
 //! and the ECS side: one entity per node with its transform, mesh instance and camera.
 
+mod accessor;
 pub mod compose;
+mod draco;
+mod extensions;
 mod gltf_loader;
 pub mod gltf_writer;
 pub mod inputs;
+mod instancing;
+pub mod material_extensions;
 mod materials;
+mod meshopt;
 pub mod plausible;
 pub mod procedural;
 mod spawn;
 mod tangents;
+mod texture_basisu;
+mod texture_transform;
 mod validate;
+pub mod variants;
 
 pub use compose::{compose, unshare_deformable_meshes};
 pub use gltf_loader::{LoadOptions, load_gltf, load_gltf_slice};
 pub use gltf_writer::{SaveError, save_with_materials};
 pub(crate) use inputs::percent_decode;
+pub use material_extensions::MaterialExtensions;
 pub use materials::Materials;
 pub use spawn::{
     CameraComponent, GlobalTransform, MeshInstance, MorphWeights, SceneNode, SceneNodes,
     ScenePlugin, SceneRoot, SkinnedMesh, Transform, propagate_transforms, spawn_scene,
 };
+pub use texture_transform::TextureTransform;
 
 use bevy_ecs::prelude::Resource;
 use glam::{Mat4, Quat, Vec2, Vec3, Vec4};
@@ -57,6 +68,12 @@ pub enum SceneError {
         "{path}: internal error while reading the file (a bug; please report it with this file): {message}"
     )]
     Internal { path: PathBuf, message: String },
+    #[error("{path}: no material variant is called `{name}`: {known}")]
+    UnknownVariant {
+        path: PathBuf,
+        name: String,
+        known: String,
+    },
 }
 
 /// How a material treats base-colour alpha (glTF `alphaMode`).
@@ -69,12 +86,25 @@ pub enum AlphaMode {
     Blend,
 }
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TextureRef {
     /// Index into [`SceneAsset::textures`].
     pub texture: u32,
-    /// TEXCOORD_n set (0 or 1).
+    /// TEXCOORD_n set (0 or 1), after KHR_texture_transform's override.
     pub tex_coord: u32,
+    /// KHR_texture_transform of this slot (identity without it).
+    pub transform: TextureTransform,
+}
+
+impl TextureRef {
+    /// A slot without a texture transform.
+    pub fn new(texture: u32, tex_coord: u32) -> Self {
+        Self {
+            texture,
+            tex_coord,
+            transform: TextureTransform::IDENTITY,
+        }
+    }
 }
 
 /// The glTF metallic-roughness material, with the extensions raykin renders.
@@ -96,12 +126,35 @@ pub struct Material {
     pub emissive_texture: Option<TextureRef>,
     pub alpha_mode: AlphaMode,
     pub double_sided: bool,
+    /// The KHR material extensions beyond metallic-roughness (parsed; not shaded yet).
+    pub extensions: MaterialExtensions,
 }
 
 impl Material {
     /// Emitted radiance (before the emissive texture): factor x strength.
     pub fn emitted_radiance(&self) -> Vec3 {
         self.emissive * self.emissive_strength
+    }
+
+    /// Every texture slot in use, core and extensions.
+    pub fn texture_slots(&self) -> Vec<TextureRef> {
+        let mut m = self.clone();
+        m.texture_slots_mut()
+            .into_iter()
+            .filter_map(|t| *t)
+            .collect()
+    }
+
+    /// Every texture slot, core and extensions, for remapping texture indices.
+    pub fn texture_slots_mut(&mut self) -> Vec<&mut Option<TextureRef>> {
+        let mut slots = vec![
+            &mut self.base_color_texture,
+            &mut self.metallic_roughness_texture,
+            &mut self.normal_texture,
+            &mut self.emissive_texture,
+        ];
+        slots.extend(self.extensions.texture_slots_mut());
+        slots
     }
 }
 
@@ -122,6 +175,7 @@ impl Default for Material {
             emissive_texture: None,
             alpha_mode: AlphaMode::Opaque,
             double_sided: false,
+            extensions: MaterialExtensions::default(),
         }
     }
 }
@@ -200,6 +254,8 @@ pub struct MeshData {
     pub skin_weights: Option<SkinWeights>,
     pub morph_targets: Vec<MorphTarget>,
     pub default_morph_weights: Vec<f32>,
+    /// KHR_materials_variants mappings, one per primitive (empty when the mesh has none).
+    pub primitive_variants: Vec<variants::PrimitiveVariants>,
 }
 
 impl MeshData {
@@ -373,6 +429,10 @@ pub struct SceneAsset {
     pub nodes: Vec<NodeData>,
     /// Root nodes of the displayed glTF scene.
     pub roots: Vec<usize>,
+    /// KHR_materials_variants names, in file order.
+    pub variants: Vec<String>,
+    /// The selected variant (index into `variants`), `None` for the file's own materials.
+    pub active_variant: Option<usize>,
     /// Problems that were worked around (skipped primitives, missing textures...), one line each.
     pub warnings: Vec<String>,
     /// The files the scene was read from (canonical paths): the .gltf/.glb and every buffer and image file
