@@ -311,7 +311,7 @@ impl<'a> Loader<'a> {
                 continue;
             }
             let name = image.name().unwrap_or("").to_string();
-            let label = image_label(&image);
+            let label = image_label(self.document.as_json(), image.index());
             let bytes = match self.skip.images.get(&image.index()) {
                 Some(reason) => Err(reason.clone()),
                 None => self.image_bytes(&image),
@@ -380,10 +380,7 @@ impl<'a> Loader<'a> {
                     self.warn(format!(
                         "texture {} has only a KHR_texture_basisu image ({}), which raykin does not decode; materials using it fall back to their factors",
                         t.index(),
-                        self.document
-                            .images()
-                            .nth(ktx2)
-                            .map_or(format!("image {ktx2}, which does not exist"), |i| image_label(&i))
+                        image_label(self.document.as_json(), ktx2)
                     ));
                 }
                 Texture {
@@ -1369,20 +1366,31 @@ fn assemble_triangles(mode: Mode, indices: &[u32]) -> Result<Vec<[u32; 3]>, Stri
 }
 
 /// Names an image in messages: index, then its name, else its URI, else its MIME type and bufferView.
-fn image_label(image: &gltf::Image) -> String {
-    let what = match (image.name(), image.source()) {
-        (Some(name), _) if !name.is_empty() => format!("`{name}`"),
-        (_, gltf::image::Source::Uri { uri, .. }) if !uri.starts_with("data:") => {
-            format!("`{uri}`")
-        }
-        (_, gltf::image::Source::Uri { mime_type, .. }) => {
-            format!("(data URI, {})", mime_type.unwrap_or("no MIME type"))
-        }
-        (_, gltf::image::Source::View { view, mime_type }) => {
-            format!("({mime_type} in bufferView {})", view.index())
-        }
+/// "image N `name`" for messages, from the JSON: `gltf::Image::source` panics on an image with neither a uri
+/// nor a bufferView (which validate.rs reports, and this label names).
+fn image_label(root: &gltf::json::Root, index: usize) -> String {
+    let Some(json) = root.images.get(index) else {
+        return format!("image {index}, which does not exist");
     };
-    format!("image {} {what}", image.index())
+    let what = match (json.name.as_deref(), &json.uri, json.buffer_view) {
+        (Some(name), _, _) if !name.is_empty() => format!("`{name}`"),
+        (_, Some(uri), _) if !uri.starts_with("data:") => format!("`{uri}`"),
+        (_, Some(_), _) => format!(
+            "(data URI, {})",
+            json.mime_type
+                .as_ref()
+                .map_or("no MIME type", |m| m.0.as_str())
+        ),
+        (_, None, Some(view)) => format!(
+            "({} in bufferView {})",
+            json.mime_type
+                .as_ref()
+                .map_or("no MIME type", |m| m.0.as_str()),
+            view.value()
+        ),
+        (_, None, None) => "(no uri or bufferView)".to_string(),
+    };
+    format!("image {index} {what}")
 }
 
 /// A 1x1 white image standing in for one that failed to load (its textures are already detached).

@@ -314,11 +314,18 @@ fn view_in_buffer(root: &json::Root, v: usize) -> Result<(), String> {
 
 use ComponentType::{F32, I8, I16, U8, U16, U32};
 
-/// Formats the spec allows for a vertex attribute the loader reads (glTF 2.0, 3.7.2.1); `None` for
-/// attributes it never reads. KHR_mesh_quantization widens these: a loader that implements it must widen
-/// them here too.
-fn attribute_formats(semantic: &Semantic) -> Option<(&'static [ComponentType], &'static [Type])> {
+/// Formats a vertex attribute the loader reads may have: glTF 2.0's (3.7.2.1), widened by
+/// KHR_mesh_quantization when the file uses it (`quantized`; `accessor.rs` checks the normalized flags);
+/// `None` for attributes it never reads.
+fn attribute_formats(
+    semantic: &Semantic,
+    quantized: bool,
+) -> Option<(&'static [ComponentType], &'static [Type])> {
     Some(match semantic {
+        Semantic::Positions if quantized => (&[F32, I8, U8, I16, U16], &[Type::Vec3]),
+        Semantic::Normals if quantized => (&[F32, I8, I16], &[Type::Vec3]),
+        Semantic::Tangents if quantized => (&[F32, I8, I16], &[Type::Vec4]),
+        Semantic::TexCoords(0 | 1) if quantized => (&[F32, I8, U8, I16, U16], &[Type::Vec2]),
         Semantic::Positions | Semantic::Normals => (&[F32], &[Type::Vec3]),
         Semantic::Tangents => (&[F32], &[Type::Vec4]),
         Semantic::TexCoords(0 | 1) => (&[F32, U8, U16], &[Type::Vec2]),
@@ -362,6 +369,10 @@ fn check_primitives(
     accessors: &[Result<Format, String>],
     findings: &mut Findings,
 ) {
+    let quantized = root
+        .extensions_used
+        .iter()
+        .any(|e| e == "KHR_mesh_quantization");
     for (m, mesh) in root.meshes.iter_mut().enumerate() {
         let name = mesh.name.clone().unwrap_or_default();
         for (p, primitive) in mesh.primitives.iter_mut().enumerate() {
@@ -371,7 +382,11 @@ fn check_primitives(
                 .get(&Checked::Valid(Semantic::Positions))
                 .map(|i| i.value());
             let required = position
-                .map(|i| require(accessors, i, &[F32], &[Type::Vec3]))
+                .map(|i| {
+                    let (components, types) = attribute_formats(&Semantic::Positions, quantized)
+                        .expect("POSITION is read");
+                    require(accessors, i, components, types)
+                })
                 .transpose()
                 .map_err(|e| format!("POSITION: {e}"))
                 .and_then(|_| {
@@ -390,7 +405,7 @@ fn check_primitives(
                 let Checked::Valid(semantic) = semantic else {
                     return true;
                 };
-                let Some((components, types)) = attribute_formats(semantic) else {
+                let Some((components, types)) = attribute_formats(semantic, quantized) else {
                     return true;
                 };
                 match require(accessors, index.value(), components, types) {
@@ -420,6 +435,8 @@ fn check_primitives(
                     primitive.attributes.remove(&weights);
                 }
             }
+            // KHR_mesh_quantization: morph targets may be normalized or unnormalized bytes and shorts.
+            let morph_formats: &[ComponentType] = if quantized { &[F32, I8, I16] } else { &[F32] };
             for (t, target) in primitive.targets.iter_mut().flatten().enumerate() {
                 for (what, slot) in [
                     ("POSITION", &mut target.positions),
@@ -428,7 +445,7 @@ fn check_primitives(
                 ] {
                     if let Some(index) = *slot
                         && let Err(reason) =
-                            require(accessors, index.value(), &[F32], &[Type::Vec3])
+                            require(accessors, index.value(), morph_formats, &[Type::Vec3])
                     {
                         dropped.push(format!("morph target {t} {what}: {reason}"));
                         *slot = None;
