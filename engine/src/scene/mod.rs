@@ -9,7 +9,9 @@ pub mod procedural;
 mod spawn;
 mod tangents;
 
-pub use compose::{CrowdScene, compose, crowd_scene, unshare_deformable_meshes};
+pub use compose::{
+    CrowdScene, InteriorScene, compose, crowd_scene, interior_scene, unshare_deformable_meshes,
+};
 pub(crate) use gltf_loader::percent_decode;
 pub use gltf_loader::{LoadOptions, load_gltf, load_gltf_slice};
 pub use gltf_writer::{SaveError, save_with_materials};

@@ -143,6 +143,7 @@ pub fn refit_vs_rebuild(
         environment: base.environment,
         players: Vec::new(),
         source_files: Vec::new(),
+        switchable_light: None,
     };
     // CPU deformation: its refit and rebuild run synchronously in the frame they are asked for, so each pose
     // is traced with exactly the tree this comparison is about (the GPU backend rebuilds asynchronously).

@@ -47,6 +47,7 @@ pub fn triangles(
             environment: base.environment,
             players: Vec::new(),
             source_files: Vec::new(),
+            switchable_light: None,
         };
         let row = super::frame_loop::measure(ctx, &bench, base.clone(), 1, frames)?;
         rows.push(TriangleScalingRow {

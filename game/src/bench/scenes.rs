@@ -15,6 +15,8 @@ enum Source {
     File(&'static str),
     /// `raykin::scene::crowd_scene`: 64 CesiumMan + 32 Fox, animated.
     Crowd,
+    /// `raykin::scene::interior_scene`: CesiumMan and the Fox walking in the Cornell box, lit by its light.
+    Interior,
 }
 
 struct Named {
@@ -59,6 +61,14 @@ const NAMED: &[Named] = &[
         environment: SKY,
     },
     Named {
+        name: "interior",
+        source: Source::Interior,
+        eye: [-278.0, 273.0, 800.0],
+        target: [-278.0, 273.0, 0.0],
+        yfov_deg: 39.3077,
+        environment: Environment::Constant([0.0; 3]),
+    },
+    Named {
         name: "crowd",
         source: Source::Crowd,
         eye: [0.0, 6.0, 18.0],
@@ -96,6 +106,8 @@ pub struct BenchScene {
     pub players: Vec<(usize, AnimationPlayer)>,
     /// Files whose bytes define the scene (the reference cache hashes them).
     pub source_files: Vec<PathBuf>,
+    /// A light the motion bench switches on mid-run: its material and emitted radiance.
+    pub switchable_light: Option<(usize, Vec3)>,
 }
 
 impl BenchScene {
@@ -124,9 +136,11 @@ pub fn resolve(spec: &str, assets: &Path) -> Result<BenchScene> {
             environment: SKY,
             players: Vec::new(),
             source_files: gltf_files(&path),
+            switchable_light: None,
         });
     };
     let camera = named_camera(named.name).unwrap_or_default();
+    let mut switchable_light = None;
     let (scene, players, source_files) = match named.source {
         Source::File(rel) => {
             let path = assets.join(rel);
@@ -152,6 +166,24 @@ pub fn resolve(spec: &str, assets: &Path) -> Result<BenchScene> {
             .collect();
             (Arc::new(crowd.scene), crowd.players, files)
         }
+        Source::Interior => {
+            let interior = raykin::scene::interior_scene(assets).with_context(|| {
+                format!(
+                    "bench scene `interior` (from --assets {})",
+                    assets.display()
+                )
+            })?;
+            let files = [
+                "CornellBox/CornellBox.glb",
+                "CesiumMan/glTF-Binary/CesiumMan.glb",
+                "Fox/glTF-Binary/Fox.glb",
+            ]
+            .iter()
+            .map(|f| assets.join(f))
+            .collect();
+            switchable_light = Some((interior.lamp_material, interior.lamp_radiance));
+            (Arc::new(interior.scene), interior.players, files)
+        }
     };
     Ok(BenchScene {
         name: named.name.to_string(),
@@ -160,6 +192,7 @@ pub fn resolve(spec: &str, assets: &Path) -> Result<BenchScene> {
         environment: named.environment,
         players,
         source_files,
+        switchable_light,
     })
 }
 

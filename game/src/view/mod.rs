@@ -63,6 +63,7 @@ pub fn run(args: &ViewArgs) -> Result<()> {
         },
         spp_per_frame: args.spp_per_frame,
         max_depth: args.max_depth,
+        mode: args.mode.map(Into::into),
     };
     if args.offscreen {
         let ctx = crate::render_cmd::open_gpu()?;
@@ -107,6 +108,7 @@ pub fn run_default() -> Result<()> {
         animation: None,
         assets: PathBuf::from("../shared/assets"),
         no_settings: false,
+        mode: None,
     };
     match run(&args) {
         Err(e) if e.downcast_ref::<window::WindowUnavailable>().is_some() => {

@@ -48,6 +48,8 @@ pub struct SessionOptions {
     /// Command-line overrides of the persisted render settings.
     pub spp_per_frame: Option<u32>,
     pub max_depth: Option<u32>,
+    /// Real-time or accumulation (default: the settings file's, else accumulation).
+    pub mode: Option<raykin::render::RenderMode>,
 }
 
 /// Settings as read at start-up.
@@ -456,6 +458,9 @@ fn build_engine(
         }
         if let Some(d) = options.max_depth {
             s.max_depth = d;
+        }
+        if let Some(mode) = options.mode {
+            s.mode = mode;
         }
     }
     if matches!(source, SceneSource::Embedded) {

@@ -74,17 +74,18 @@ impl GpuScene {
         self.memory.instances_and_tlas =
             (instance_bytes.len() + tlas_bytes.len() + emitter_bytes.len()) as u64;
         self.uploaded_instances = ordered;
+        self.emitter_list = emitters;
     }
 
-    /// Uploads the materials that differ from what the GPU holds; returns how many changed. When the set of
+    /// Uploads the materials that differ from what the GPU holds; returns their indices. When the set of
     /// emissive triangles or their power changes, the emitter list is rebuilt for the current instances.
     pub fn update_materials(
         &mut self,
         ctx: &GpuContext,
         scene: &SceneAsset,
         materials: &[crate::scene::Material],
-    ) -> usize {
-        let mut changed = 0;
+    ) -> Vec<u32> {
+        let mut changed = Vec::new();
         let mut emission_changed = false;
         for (i, m) in materials.iter().enumerate().take(self.material_data.len()) {
             let gpu = gpu_material(m);
@@ -98,7 +99,7 @@ impl GpuScene {
                 (i * std::mem::size_of::<GpuMaterial>()) as u64,
                 bytemuck::bytes_of(&gpu),
             );
-            changed += 1;
+            changed.push(i as u32);
         }
         if emission_changed {
             for (m, mesh) in scene.meshes.iter().enumerate() {
@@ -121,6 +122,7 @@ impl GpuScene {
                 self.generation += 1;
             }
             self.emitter_count = emitters.len() as u32;
+            self.emitter_list = emitters;
             self.uploaded_instances = instances;
         }
         changed
