@@ -301,6 +301,53 @@ impl HeadlessApp {
         }
     }
 
+    /// The linear radiance the display shows (the real-time image, the hand-over's mix or the accumulation).
+    pub fn displayed_radiance(&self) -> Vec<[f32; 3]> {
+        crate::render::queries::displayed_radiance(self.app.world())
+    }
+
+    /// The real-time path's colour history: mean radiance and history length per pixel.
+    pub fn realtime_history(&self) -> Vec<([f32; 3], f32)> {
+        crate::render::queries::realtime_history(self.app.world())
+    }
+
+    /// The real-time G-buffer of the last real-time frame.
+    pub fn realtime_gbuffer(&self) -> Vec<crate::render::layout::GpuSurface> {
+        crate::render::queries::realtime_gbuffer(self.app.world())
+    }
+
+    /// This frame's GPU instance (top-level BVH leaf order, as `PrimaryHit::instance`) of a real-time stable
+    /// object id (`GpuSurface::object`).
+    pub fn instance_of_object(&self, object: u32) -> Option<u32> {
+        let world = self.app.world();
+        let entity = world
+            .resource::<crate::render::realtime::scene_motion::MotionObjects>()
+            .entity(object)?;
+        world
+            .resource::<crate::render::gpu_scene::InstanceMap>()
+            .entities
+            .iter()
+            .position(|e| *e == entity)
+            .map(|i| i as u32)
+    }
+
+    /// The entity behind a real-time stable object id.
+    pub fn entity_of_object(&self, object: u32) -> Option<bevy_ecs::entity::Entity> {
+        self.app
+            .world()
+            .resource::<crate::render::realtime::scene_motion::MotionObjects>()
+            .entity(object)
+    }
+
+    /// Drops every real-time history at the next frame (a camera cut the renderer cannot see).
+    pub fn reset_realtime_history(&mut self) {
+        self.app
+            .world_mut()
+            .resource_mut::<crate::render::realtime::Realtime>()
+            .state
+            .reset_requested = true;
+    }
+
     pub fn aovs(&self) -> Aovs {
         self.view().read_aovs(&self.ctx, self.samples())
     }

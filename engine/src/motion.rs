@@ -162,22 +162,7 @@ impl PreviousPose {
 pub fn motion_vectors(app: &HeadlessApp, previous: &PreviousPose) -> Vec<[f32; 3]> {
     let hits = app.primary_hits();
     let scene = app.scene();
-    let world = app.app.world();
-    let view = app.view();
-    let frames = TwoFrames {
-        now: world,
-        before: previous.app.world(),
-        nodes_before: &previous.nodes,
-        gpu_scene: app.gpu_scene(),
-        instances: world.resource::<crate::render::systems::InstanceMap>(),
-        scene: &scene,
-        projection_now: Projection {
-            view: app.camera(),
-            width: view.width,
-            height: view.height,
-        },
-        projection_before: previous.projection,
-    };
+    let frames = two_frames(app, previous, &scene);
     hits.par_iter()
         .enumerate()
         .map(
@@ -189,13 +174,48 @@ pub fn motion_vectors(app: &HeadlessApp, previous: &PreviousPose) -> Vec<[f32; 3
         .collect()
 }
 
+/// Where the surface point of `hit` (any point of a triangle, not only a pixel centre's) is on the renderer's
+/// screen now and where it was in `previous`'s pose, in pixels; `None` behind a camera. The CPU reference the
+/// real-time path's GPU motion vectors are checked against (tests/realtime.rs).
+pub fn surface_screen_positions(
+    app: &HeadlessApp,
+    previous: &PreviousPose,
+    hit: &PrimaryHit,
+) -> Option<(Vec2, Vec2)> {
+    let scene = app.scene();
+    two_frames(app, previous, &scene).positions(hit)
+}
+
+fn two_frames<'a>(
+    app: &'a HeadlessApp,
+    previous: &'a PreviousPose,
+    scene: &'a SceneAsset,
+) -> TwoFrames<'a> {
+    let world = app.app.world();
+    let view = app.view();
+    TwoFrames {
+        now: world,
+        before: previous.app.world(),
+        nodes_before: &previous.nodes,
+        gpu_scene: app.gpu_scene(),
+        instances: world.resource::<crate::render::gpu_scene::InstanceMap>(),
+        scene,
+        projection_now: Projection {
+            view: app.camera(),
+            width: view.width,
+            height: view.height,
+        },
+        projection_before: previous.projection,
+    }
+}
+
 /// The current frame (the renderer's world and GPU scene) and the previous pose, read-only.
 struct TwoFrames<'a> {
     now: &'a World,
     before: &'a World,
     nodes_before: &'a [Entity],
     gpu_scene: &'a crate::render::GpuScene,
-    instances: &'a crate::render::systems::InstanceMap,
+    instances: &'a crate::render::gpu_scene::InstanceMap,
     scene: &'a SceneAsset,
     projection_now: Projection,
     projection_before: Projection,
@@ -205,7 +225,7 @@ impl TwoFrames<'_> {
     fn pixel_motion(&self, pixel: u32, hit: &PrimaryHit) -> Option<(Vec2, f32)> {
         let width = self.projection_now.width;
         let centre = Vec2::new((pixel % width) as f32 + 0.5, (pixel / width) as f32 + 0.5);
-        let Some(instance) = hit.instance else {
+        if hit.instance.is_none() {
             // A still camera sees a still environment: exactly 0, not a rounding residue.
             if self.projection_before.view == self.projection_now.view {
                 return Some((Vec2::ZERO, STATUS_ENVIRONMENT));
@@ -213,7 +233,13 @@ impl TwoFrames<'_> {
             let d = self.projection_now.ray_direction(centre);
             let before = self.projection_before.direction(d)?;
             return Some((before - centre, STATUS_ENVIRONMENT));
-        };
+        }
+        let (now, before) = self.positions(hit)?;
+        Some((before - now, STATUS_SURFACE))
+    }
+
+    fn positions(&self, hit: &PrimaryHit) -> Option<(Vec2, Vec2)> {
+        let instance = hit.instance?;
         let entity = *self.instances.entities.get(instance as usize)?;
         let mesh = self.now.get::<MeshInstance>(entity)?.mesh;
         let node = self.now.get::<SceneNode>(entity)?.node;
@@ -229,8 +255,9 @@ impl TwoFrames<'_> {
             world_triangle(self.before, self.scene, entity_before, mesh, verts)?,
             hit.barycentrics,
         );
-        let xy_now = self.projection_now.point(now)?;
-        let xy_before = self.projection_before.point(before)?;
-        Some((xy_before - xy_now, STATUS_SURFACE))
+        Some((
+            self.projection_now.point(now)?,
+            self.projection_before.point(before)?,
+        ))
     }
 }

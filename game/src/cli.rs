@@ -79,6 +79,27 @@ pub struct ViewArgs {
     /// Neither read nor write the settings file.
     #[arg(long)]
     pub no_settings: bool,
+    /// realtime: temporal reuse, ReSTIR DI and a spatial filter while anything moves, plain accumulation
+    /// for stills; accumulate: restart accumulation whenever anything moves (the default, or the settings
+    /// file's mode).
+    #[arg(long, value_enum)]
+    pub mode: Option<ModeArg>,
+}
+
+/// `--mode`: how frames are made while anything moves.
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ModeArg {
+    Realtime,
+    Accumulate,
+}
+
+impl From<ModeArg> for raykin::render::RenderMode {
+    fn from(m: ModeArg) -> Self {
+        match m {
+            ModeArg::Realtime => Self::Realtime,
+            ModeArg::Accumulate => Self::Accumulate,
+        }
+    }
 }
 
 /// How a scene file is read: which of its glTF scenes, and whether it may read files outside its folder.
@@ -375,6 +396,11 @@ pub struct RecordArgs {
     /// Encode the PNG frames into this video with ffmpeg once every frame is complete.
     #[arg(long)]
     pub video: Option<PathBuf>,
+    /// Record what the viewer shows: the frames in sequence through the real-time path (one path per pixel
+    /// per frame, history carried from frame to frame), instead of each frame converged on its own. Not
+    /// resumable; writes DIR/realtime.json.
+    #[arg(long, conflicts_with_all = ["range", "time_budget_ms", "merge", "aovs"])]
+    pub realtime: bool,
     /// Fold the part manifests of --range runs in this folder into manifest.json and report missing frames.
     #[arg(long, conflicts_with_all = ["out", "range", "force"])]
     pub merge: Option<PathBuf>,

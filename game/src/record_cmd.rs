@@ -17,6 +17,40 @@ use std::process::{Command, ExitCode, Stdio};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
+/// `--realtime`: the frames in sequence through the real-time path, then the optional video.
+fn record_realtime(
+    scene: Arc<raykin::scene::SceneAsset>,
+    settings: &raykin::record::RecordSettings,
+    out: &Path,
+    video: Option<&Path>,
+) -> Result<ExitCode> {
+    let ctx = open_gpu()?;
+    let cancel = Arc::new(AtomicBool::new(false));
+    install_interrupt_handler(cancel.clone());
+    let bar = progress_bar(settings.frames as u64);
+    let recording =
+        raykin::record::record_realtime(ctx, scene, settings, out, &cancel, &mut |done| {
+            bar.set_position(done as u64)
+        })?;
+    bar.finish_and_clear();
+    let mut ms = recording.frame_ms.clone();
+    ms.sort_by(f64::total_cmp);
+    eprintln!(
+        "raykin: real-time recording: {} frames in {}, {:.1} ms per frame median (pose, frame, readback, write)",
+        recording.files.len(),
+        out.display(),
+        ms.get(ms.len() / 2).copied().unwrap_or(0.0)
+    );
+    if recording.interrupted {
+        eprintln!("raykin: interrupted: a real-time recording cannot resume; run it again whole");
+        return Ok(ExitCode::from(EXIT_INTERRUPTED));
+    }
+    if let Some(video) = video {
+        encode_video(out, settings.fps, video)?;
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
 /// Exit status of a run stopped by Ctrl-C (128 + SIGINT, as shells report it).
 const EXIT_INTERRUPTED: u8 = 130;
 
@@ -81,6 +115,9 @@ fn run(args: &RecordArgs) -> Result<ExitCode> {
             "raykin: note: {} has no animations: recording {} frames of the still scene, each with its own seed",
             scene.source, settings.frames
         );
+    }
+    if args.realtime {
+        return record_realtime(scene, &settings, out, args.video.as_deref());
     }
     let slice = args
         .range

@@ -38,6 +38,9 @@ pub enum Source {
     File(&'static str),
     /// `raykin::animation::crowd_scene`: 64 CesiumMan + 32 Fox, animated.
     Crowd,
+    /// `raykin::animation::interior_scene`: CesiumMan and the Fox walking in the Cornell box, lit by its
+    /// light, with a lamp the motion bench switches on.
+    Interior,
 }
 
 pub struct NamedScene {
@@ -53,6 +56,8 @@ pub struct LoadedNamedScene {
     pub scene: Arc<SceneAsset>,
     pub players: Vec<(usize, AnimationPlayer)>,
     pub source_files: Vec<PathBuf>,
+    /// A light the motion bench switches on mid-run: its material and emitted radiance.
+    pub switchable_light: Option<(usize, Vec3)>,
 }
 
 // Cameras: the Cornell box's is the classic one (and the Mitsuba reference test's); FlightHelmet's and the
@@ -103,7 +108,15 @@ pub const CROWD: NamedScene = NamedScene {
     environment: Environment::Sky,
 };
 
-const NAMED: &[&NamedScene] = &[&CORNELL, &FLIGHT_HELMET, &SPHERES, &CROWD];
+/// The animated interior, seen through the Cornell box's classic camera.
+pub const INTERIOR: NamedScene = NamedScene {
+    name: "interior",
+    source: Source::Interior,
+    view: CORNELL.view,
+    environment: Environment::Constant([0.0; 3]),
+};
+
+const NAMED: &[&NamedScene] = &[&CORNELL, &FLIGHT_HELMET, &SPHERES, &INTERIOR, &CROWD];
 
 /// The named scene called `name`, if any.
 pub fn named(name: &str) -> Option<&'static NamedScene> {
@@ -130,6 +143,7 @@ impl NamedScene {
                     scene: load_scene(&path, &LoadOptions::default()).with_context(context)?,
                     players: Vec::new(),
                     source_files: gltf_files(&path),
+                    switchable_light: None,
                 }
             }
             Source::Crowd => {
@@ -145,6 +159,23 @@ impl NamedScene {
                     .iter()
                     .map(|f| assets.join(f))
                     .collect(),
+                    switchable_light: None,
+                }
+            }
+            Source::Interior => {
+                let interior = raykin::animation::interior_scene(assets).with_context(context)?;
+                LoadedNamedScene {
+                    scene: Arc::new(interior.scene),
+                    players: interior.players,
+                    source_files: [
+                        "CornellBox/CornellBox.glb",
+                        "CesiumMan/glTF-Binary/CesiumMan.glb",
+                        "Fox/glTF-Binary/Fox.glb",
+                    ]
+                    .iter()
+                    .map(|f| assets.join(f))
+                    .collect(),
+                    switchable_light: Some((interior.lamp_material, interior.lamp_radiance)),
                 }
             }
         })

@@ -73,9 +73,25 @@ struct PathResult {
     hit: bool,
 }
 
+// How a path begins. The real-time integrator (integrator/realtime.wgsl) starts from the camera ray's first hit,
+// already traced into its G-buffer, and may estimate direct light at that hit itself (ReSTIR DI): then this
+// integrator does no next-event estimation there, and emitters its BSDF-sampled ray hits next count for
+// nothing, so that light is counted once.
+struct PathStart {
+    ray: Ray,
+    first_hit: Hit,
+    has_first_hit: bool,
+    primary_direct_elsewhere: bool,
+}
+
 fn trace_path(camera_ray: Ray, forward: vec3<f32>, sampler: Sampler) -> PathResult {
+    return trace_path_from(PathStart(camera_ray, Hit(MISS, NONE, 0u, vec2<f32>(0.0)), false, false), forward, sampler);
+}
+
+fn trace_path_from(start: PathStart, forward: vec3<f32>, sampler: Sampler) -> PathResult {
     var result = PathResult(vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0), 0.0, false);
-    var ray = camera_ray;
+    var ray = start.ray;
+    var first_pending = start.has_first_hit;
     var throughput = vec3<f32>(1.0);
     var depth = 0u;
     var pass_throughs = 0u;
@@ -86,14 +102,19 @@ fn trace_path(camera_ray: Ray, forward: vec3<f32>, sampler: Sampler) -> PathResu
     var shadow_pending = false;
     var path_alive = true;
     loop {
-        rays_traced++;
         var next = ray;
         var t_max = MISS;
         if shadow_pending {
             next = shadow.ray;
             t_max = shadow.t_max;
         }
-        let hit = trace(next, t_max, shadow_pending);
+        var hit = start.first_hit;
+        if first_pending {
+            first_pending = false;
+        } else {
+            rays_traced++;
+            hit = trace(next, t_max, shadow_pending);
+        }
         if shadow_pending {
             if hit.instance == NONE { result.radiance += shadow.contribution; }
             shadow_pending = false;
@@ -124,6 +145,7 @@ fn trace_path(camera_ray: Ray, forward: vec3<f32>, sampler: Sampler) -> PathResu
             if nee && last_bsdf_pdf > 0.0 {
                 weight = power_heuristic(last_bsdf_pdf, direct_pdf_of_hit(hit, s, ray.dir));
             }
+            if depth == 1u && start.primary_direct_elsewhere { weight = 0.0; }
             result.radiance += throughput * s.emission * weight;
             if depth == 0u { result.unscattered += throughput * s.emission * weight; }
         }
@@ -132,7 +154,7 @@ fn trace_path(camera_ray: Ray, forward: vec3<f32>, sampler: Sampler) -> PathResu
         let dims = bounce_dimensions(depth);
         let tbn = basis(s.n);
         let wo = -ray.dir * tbn;
-        if nee {
+        if nee && !(depth == 0u && start.primary_direct_elsewhere) {
             shadow = sample_direct(s, wo, tbn, sampler, dims);
             shadow.contribution *= throughput;
             shadow_pending = any(shadow.contribution != vec3<f32>(0.0));

@@ -140,7 +140,7 @@ fn every_instance_of_a_deep_top_level_tree_is_traced() {
     app.step();
     let world = app.app.world_mut();
     let inputs = world
-        .resource::<raykin::render::systems::InstanceMap>()
+        .resource::<raykin::render::gpu_scene::InstanceMap>()
         .inputs()
         .to_vec();
     assert_eq!(inputs.len(), n);

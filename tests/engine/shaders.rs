@@ -236,3 +236,65 @@ fn gpu_deform_structs_match_wgsl() {
     );
     same_layout!(refit, "BvhNode", raykin::bvh::GpuBvhNode, []);
 }
+
+#[test]
+fn realtime_structs_match_wgsl() {
+    use passes::gradient::FilterStep;
+    use passes::handover::HandoverParams;
+    use raykin::render::layout::*;
+    let gbuffer = WgslLayouts::of(&passes::gbuffer::KERNEL);
+    same_layout!(
+        gbuffer,
+        "RealtimeFrame",
+        GpuRealtimeFrame,
+        [
+            camera_from_world,
+            prev_camera_from_world,
+            prev_camera_origin,
+            prev_tan_half_fov,
+            flags,
+            history_cap,
+            strata_width,
+            strata_height,
+            restir_candidates,
+            restir_neighbours,
+            restir_radius,
+            restir_max_confidence,
+            depth_tolerance,
+            normal_tolerance
+        ]
+    );
+    same_layout!(
+        gbuffer,
+        "MotionInstance",
+        GpuMotionInstance,
+        [prev_world_from_object, object]
+    );
+    same_layout!(
+        gbuffer,
+        "GSurface",
+        GpuSurface,
+        [
+            position, depth, object, triangle, bary, normal, geometric, bsdf, motion, prev_depth,
+            material
+        ]
+    );
+    same_layout!(
+        WgslLayouts::of(&passes::temporal::KERNEL),
+        "RealtimeSample",
+        GpuRealtimeSample,
+        [radiance, valid, unscattered]
+    );
+    same_layout!(
+        WgslLayouts::of(&passes::handover::KERNEL),
+        "Params",
+        HandoverParams,
+        [width, height, weight]
+    );
+    same_layout!(
+        WgslLayouts::of(&passes::gradient::KERNEL),
+        "FilterStep",
+        FilterStep,
+        [step]
+    );
+}

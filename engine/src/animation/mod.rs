@@ -3,8 +3,10 @@
 
 mod crowd;
 mod deform;
+mod interior;
 
 pub use crowd::{CrowdScene, crowd_scene};
+pub use interior::{InteriorScene, interior_scene};
 
 pub use deform::{
     DeformedElsewhere, DeformedMesh, DeformedMeshes, MeshPose, MeshPoses, deform_mesh,

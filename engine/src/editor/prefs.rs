@@ -3,7 +3,9 @@
 
 use super::EditorState;
 use crate::camera::CameraRig;
-use crate::render::{AovView, Environment, RenderSettings, Tonemapper};
+use crate::render::{
+    AovView, Environment, RealtimeSettings, RenderMode, RenderSettings, Tonemapper,
+};
 use bevy_ecs::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -30,6 +32,9 @@ pub struct ViewerPrefs {
     /// Fly/orbit movement speed in scene units per second (None: from the scene's size).
     pub camera_speed: Option<f32>,
     pub last_scene: Option<PathBuf>,
+    /// Real-time while anything moves (the viewer's default), or accumulation only.
+    pub mode: RenderMode,
+    pub realtime: RealtimeSettings,
 }
 
 impl Default for ViewerPrefs {
@@ -53,6 +58,8 @@ impl Default for ViewerPrefs {
             window_height: 800,
             camera_speed: None,
             last_scene: None,
+            mode: RenderMode::Realtime,
+            realtime: render.realtime,
         }
     }
 }
@@ -127,6 +134,8 @@ impl ViewerPrefs {
             s.nee = self.nee;
             s.russian_roulette = self.russian_roulette;
             s.denoise = self.denoise;
+            s.mode = self.mode;
+            s.realtime = self.realtime;
         }
         if let Some(mut e) = world.get_resource_mut::<EditorState>() {
             e.render_scale = self.render_scale.clamp(0.05, 1.0);
@@ -155,6 +164,8 @@ impl ViewerPrefs {
             self.nee = s.nee;
             self.russian_roulette = s.russian_roulette;
             self.denoise = s.denoise;
+            self.mode = s.mode;
+            self.realtime = s.realtime;
         }
         if let Some(e) = world.get_resource::<EditorState>() {
             self.render_scale = e.render_scale;

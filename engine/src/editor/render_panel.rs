@@ -1,7 +1,7 @@
 //! Render settings: sampling, environment, display transform, AOV view, resolution and frame pacing.
 
 use super::EditorState;
-use crate::render::{AovView, Environment, RenderSettings, Tonemapper};
+use crate::render::{AovView, Environment, RenderMode, RenderSettings, Tonemapper};
 use bevy_ecs::prelude::*;
 
 pub fn show(ui: &mut egui::Ui, world: &mut World, state: &mut EditorState) {
@@ -10,6 +10,20 @@ pub fn show(ui: &mut egui::Ui, world: &mut World, state: &mut EditorState) {
     egui::Grid::new("render settings")
         .num_columns(2)
         .show(ui, |ui| {
+            ui.label("mode");
+            ui.horizontal(|ui| {
+                ui.selectable_value(&mut s.mode, RenderMode::Realtime, "real-time")
+                    .on_hover_text(
+                        "While anything moves: temporal reuse, ReSTIR DI and a spatial filter; a still \
+                         hands over to plain accumulation",
+                    );
+                ui.selectable_value(&mut s.mode, RenderMode::Accumulate, "accumulate")
+                    .on_hover_text("Restart accumulation whenever anything moves");
+            });
+            ui.end_row();
+            if s.mode == RenderMode::Realtime {
+                realtime_rows(ui, &mut s);
+            }
             ui.label("samples / frame");
             ui.add(egui::DragValue::new(&mut s.spp_per_frame).range(1..=256));
             ui.end_row();
@@ -134,4 +148,52 @@ pub fn show(ui: &mut egui::Ui, world: &mut World, state: &mut EditorState) {
     if s != before {
         world.insert_resource(s);
     }
+}
+
+/// The real-time path's stages and their main tuning.
+fn realtime_rows(ui: &mut egui::Ui, s: &mut RenderSettings) {
+    let r = &mut s.realtime;
+    ui.label("  temporal");
+    ui.horizontal(|ui| {
+        ui.checkbox(&mut r.temporal, "reprojection");
+        ui.checkbox(&mut r.gradients, "gradients");
+        ui.checkbox(&mut r.spatial, "spatial filter");
+    });
+    ui.end_row();
+    ui.label("  history length");
+    ui.add(egui::DragValue::new(&mut r.history_cap).range(1..=1024))
+        .on_hover_text(
+            "Frames of history at most; beyond, an exponential average of weight 1 / length",
+        );
+    ui.end_row();
+    ui.label("  ReSTIR DI");
+    ui.horizontal(|ui| {
+        ui.checkbox(&mut r.restir.enabled, "on");
+        ui.checkbox(&mut r.restir.temporal, "temporal");
+        ui.checkbox(&mut r.restir.spatial, "spatial");
+        ui.checkbox(&mut r.restir.unbiased, "unbiased")
+            .on_hover_text(
+                "Visibility in the reuse weights: unbiased, two shadow rays per neighbour",
+            );
+    });
+    ui.end_row();
+    ui.label("  candidates / neighbours");
+    ui.horizontal(|ui| {
+        ui.add(egui::DragValue::new(&mut r.restir.candidates).range(1..=64));
+        ui.add(egui::DragValue::new(&mut r.restir.neighbours).range(0..=8));
+    });
+    ui.end_row();
+    ui.label("  hand-over");
+    ui.horizontal(|ui| {
+        ui.checkbox(&mut r.handover, "");
+        ui.add(
+            egui::DragValue::new(&mut r.handover_spp)
+                .range(0..=4096)
+                .suffix(" spp"),
+        )
+        .on_hover_text(
+            "Samples of plain accumulation over which a still fades out the real-time image",
+        );
+    });
+    ui.end_row();
 }

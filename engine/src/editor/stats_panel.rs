@@ -50,7 +50,15 @@ pub fn show(ui: &mut egui::Ui, world: &mut World) {
         match stats.last_gpu.and_then(|g| g.passes) {
             Some(p) => ui.add(
                 egui::Label::new(format!(
-                    "trace {:.2}, tonemap {:.3}{}{}{}",
+                    "{}trace {:.2}, tonemap {:.3}{}{}{}",
+                    if p.gbuffer_ms > 0.0 {
+                        format!(
+                            "G-buffer {:.3}, ReSTIR {:.3}, gradients {:.3}, temporal {:.3}, ",
+                            p.gbuffer_ms, p.restir_ms, p.gradient_ms, p.temporal_ms
+                        )
+                    } else {
+                        String::new()
+                    },
                     p.trace_ms,
                     p.tonemap_ms,
                     if p.denoise_ms > 0.0 {
@@ -89,13 +97,22 @@ pub fn show(ui: &mut egui::Ui, world: &mut World) {
         );
         ui.end_row();
         let memory = world.resource::<GpuScene>().memory;
+        let realtime = world
+            .get_resource::<crate::render::realtime::Realtime>()
+            .and_then(|r| r.targets.as_ref())
+            .map_or(0, |t| t.memory_bytes());
         ui.label("GPU memory");
         ui.add(
             egui::Label::new(format!(
-                "{} geometry+BVH, {} textures, {} total",
+                "{} geometry+BVH, {} textures, {} total{}",
                 mib(memory.geometry_and_bvh()),
                 mib(memory.texels),
-                mib(memory.total())
+                mib(memory.total()),
+                if realtime + memory.motion > 0 {
+                    format!(", real-time path {}", mib(realtime + memory.motion))
+                } else {
+                    String::new()
+                }
             ))
             .wrap(),
         );

@@ -153,6 +153,18 @@ pub(crate) fn compute_pipeline(
     layouts: &[Option<&wgpu::BindGroupLayout>],
     entry: &str,
 ) -> wgpu::ComputePipeline {
+    let [pipeline] = compute_pipelines(device, label, source, layouts, [entry]);
+    pipeline
+}
+
+/// One pipeline per entry point of one module, compiled once, over the same layouts.
+pub(crate) fn compute_pipelines<const N: usize>(
+    device: &wgpu::Device,
+    label: &str,
+    source: String,
+    layouts: &[Option<&wgpu::BindGroupLayout>],
+    entries: [&str; N],
+) -> [wgpu::ComputePipeline; N] {
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some(label),
         source: wgpu::ShaderSource::Wgsl(source.into()),
@@ -162,12 +174,14 @@ pub(crate) fn compute_pipeline(
         bind_group_layouts: layouts,
         immediate_size: 0,
     });
-    device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-        label: Some(label),
-        layout: Some(&layout),
-        module: &module,
-        entry_point: Some(entry),
-        compilation_options: Default::default(),
-        cache: None,
+    entries.map(|entry| {
+        device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some(if N == 1 { label } else { entry }),
+            layout: Some(&layout),
+            module: &module,
+            entry_point: Some(entry),
+            compilation_options: Default::default(),
+            cache: None,
+        })
     })
 }

@@ -386,6 +386,12 @@ impl GpuDeformer {
         let mut encoded = false;
         self.timed = false;
         if refitting {
+            // The real-time path's motion vectors need where the vertices were before this frame.
+            for (i, d) in self.meshes.iter().enumerate() {
+                if active[i] & DEFORM != 0 {
+                    gpu.keep_previous_positions(&mut encoder, d.mesh);
+                }
+            }
             let ts = |pair: u32| self.timestamps.as_ref().map(|t| t.pass_writes(pair));
             self.deform_pass.encode(
                 &mut encoder,

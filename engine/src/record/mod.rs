@@ -10,6 +10,7 @@
 pub mod manifest;
 pub mod output;
 pub mod plan;
+mod realtime;
 mod recorder;
 
 pub use manifest::{FrameRecord, Manifest, MergeSummary, merge};
@@ -18,6 +19,7 @@ pub use plan::{
     Aov, CameraSpec, FrameFormat, FrameOptions, RecordRequest, RecordSettings, Sampling,
     frame_seed, parse_range, plan, resolve_range,
 };
+pub use realtime::{RealtimeRecording, record_realtime};
 pub use recorder::{RecordEvent, RecordJob, RecordSummary, Recorder};
 
 use std::path::PathBuf;

@@ -1,24 +1,44 @@
 //! The frame: every GPU pass of one frame, in order, in one submission.
 //!
+//! Accumulation (the default, and any still):
 //! 1. deform + refit: recorded by the deform plugin earlier in the frame ([`DeformCommands`]);
 //! 2. trace: `spp_per_frame` samples per pixel into the view's accumulation (skipped once converged);
 //! 3. denoise: when the display shows the denoised image;
 //! 4. tonemap: when the display runs each frame (the viewer).
 //!
 //! Accumulation restarts here, before the trace, when anything that changes the image happened.
+//!
+//! The real-time path (`RenderMode::Realtime`, while anything moves; [`encode_realtime_frame`]):
+//! 1. deform + refit, as above;
+//! 2. gbuffer: one jittered camera ray per pixel, what it hit and where that was last frame;
+//! 3. restir_di: light candidates, temporal and spatial reuse, direct light at the first hit;
+//! 4. gradient: last frame's gradient samples shaded again, filtered (A-SVGF);
+//! 5. realtime_trace: one path per pixel from the G-buffer hit;
+//! 6. temporal: history reprojected, shortened by the gradients, the new sample blended in;
+//! 7. denoise: the a-trous filter over the history, with its temporal variance;
+//! 8. tonemap.
+//!
+//! Once nothing moves, the still accumulates as above and the display hands over from the last real-time image
+//! to the accumulation ([`encode_handover`]).
 
 use super::accumulation::Accumulation;
 use super::gpu_scene::GpuScene;
 use super::layout::{FRAME_HIT_AOV, FRAME_MOMENTS, FRAME_NEE, GpuFrame};
 use super::passes::denoise::{DenoiseInputs, Denoiser};
+use super::passes::gradient::FILTERED;
+use super::passes::handover::{HandoverBuffers, HandoverParams};
 use super::passes::tonemap::{TonemapInput, TonemapParams, TonemapPass};
 use super::passes::trace::TracePass;
+use super::realtime::{
+    Realtime, RealtimePasses, RealtimeTargets, SceneGroups, Shown, runs as realtime_runs,
+};
 use super::scene_bindings::SceneBindings;
 use super::settings::{AovView, Environment, RenderSettings};
-use super::stats::{FrameStats, TONEMAP_PAIR, TRACE_PAIR};
+use super::stats::*;
 use super::view::ViewTargets;
 use crate::camera::CameraView;
 use crate::gpu::GpuContext;
+use crate::scene::SceneAssets;
 use bevy_ecs::prelude::*;
 
 /// GPU work other plugins recorded for this frame, submitted before the trace in the frame's submission (the
@@ -32,7 +52,8 @@ pub fn render_frame(
     ctx: Res<GpuContext>,
     settings: Res<RenderSettings>,
     camera: Res<CameraView>,
-    scene: Res<GpuScene>,
+    assets: Res<SceneAssets>,
+    mut scene: ResMut<GpuScene>,
     mut bindings: ResMut<SceneBindings>,
     mut view: ResMut<ViewTargets>,
     mut accumulation: ResMut<Accumulation>,
@@ -41,18 +62,50 @@ pub fn render_frame(
     mut denoiser: ResMut<Denoiser>,
     mut stats: ResMut<FrameStats>,
     mut deform: ResMut<DeformCommands>,
+    mut realtime: ResMut<Realtime>,
 ) {
     if view.resize(&ctx, settings.width, settings.height) {
         denoiser.release();
+        realtime.release_targets();
     }
-    if accumulation.begin_frame(&settings, &camera) {
+    let changed = accumulation.begin_frame(&settings, &camera);
+    let deform = std::mem::take(&mut deform.0);
+    if realtime_runs(&settings) {
+        // Anything moved (or the hand-over is off): a real-time frame; a still accumulates below.
+        if changed || !settings.realtime.handover {
+            if scene.motion.is_none() {
+                scene.enable_motion(&ctx, &assets.0);
+            }
+            encode_realtime_frame(
+                &ctx,
+                &settings,
+                &camera,
+                &mut scene,
+                &mut bindings,
+                &view,
+                &mut realtime,
+                &tonemap,
+                &mut stats,
+                deform,
+            );
+            return;
+        }
+    } else if changed {
+        realtime.state.skipped_frame();
+    }
+    if let Some(motion) = scene.motion.as_mut() {
+        // Nothing moved this frame (or the real-time path is off): no previous positions to keep.
+        motion.write_mesh_motion(&ctx);
+    }
+    if changed || accumulation.samples == 0 {
+        // A new accumulation (after real-time frames the view still holds an older still's).
         view.clear(&ctx);
     }
-    let deform = std::mem::take(&mut deform.0);
+    let handover = realtime_runs(&settings).then(|| handover_weight(&settings, &accumulation));
     if accumulation.converged() && deform.is_empty() {
         if accumulation.display_each_frame {
             let mut encoder = ctx.device.create_command_encoder(&Default::default());
-            encode_display(
+            encode_accumulation_display(
                 &ctx,
                 &mut encoder,
                 &view,
@@ -60,6 +113,8 @@ pub fn render_frame(
                 &tonemap,
                 &denoiser,
                 &stats,
+                &mut realtime,
+                handover,
             );
             ctx.queue.submit([encoder.finish()]);
         }
@@ -88,9 +143,14 @@ pub fn render_frame(
         stats.pass_writes(TRACE_PAIR),
     );
     accumulation.samples += spp;
+    let handover = realtime_runs(&settings).then(|| handover_weight(&settings, &accumulation));
     let display = accumulation.display_each_frame;
+    if !display && handover.is_some() {
+        // Nothing is displayed, so nothing is mixed: what a still shows is its accumulation.
+        realtime.state.shown = Shown::Accumulation;
+    }
     let denoised = display
-        && encode_display(
+        && encode_accumulation_display(
             &ctx,
             &mut encoder,
             &view,
@@ -98,11 +158,14 @@ pub fn render_frame(
             &tonemap,
             &denoiser,
             &stats,
+            &mut realtime,
+            handover,
         );
     if let Some(t) = &stats.timestamps {
         t.resolve(&mut encoder, if display { 2 } else { 1 });
     }
     stats.denoised_last_frame = denoised;
+    stats.realtime_last_frame = false;
     stats.frames += 1;
     stats.encode_async(&mut encoder, &view.ray_counter, denoised);
     ctx.queue
@@ -111,6 +174,242 @@ pub fn render_frame(
     if stats.time_passes {
         stats.last_pass_times = stats.read_pass_times(&ctx);
     }
+}
+
+/// A still's hand-over: the accumulation's weight in the displayed image (1: the accumulation alone).
+fn handover_weight(settings: &RenderSettings, accumulation: &Accumulation) -> f32 {
+    let spp = settings.realtime.handover_spp;
+    if spp == 0 {
+        return 1.0;
+    }
+    (accumulation.samples as f32 / spp as f32).min(1.0)
+}
+
+/// The accumulation's display transform; during a still's hand-over (`handover` < 1 after a real-time
+/// frame), mixed with the last real-time image first. True when it denoised.
+#[allow(clippy::too_many_arguments)]
+fn encode_accumulation_display(
+    ctx: &GpuContext,
+    encoder: &mut wgpu::CommandEncoder,
+    view: &ViewTargets,
+    settings: &RenderSettings,
+    tonemap: &TonemapPass,
+    denoiser: &Denoiser,
+    stats: &FrameStats,
+    realtime: &mut Realtime,
+    handover: Option<f32>,
+) -> bool {
+    let mixing = handover.is_some_and(|w| w < 1.0)
+        && realtime.targets.is_some()
+        && realtime.state.shown != Shown::Accumulation;
+    if !mixing {
+        if handover.is_some() {
+            realtime.state.shown = Shown::Accumulation;
+        }
+        return encode_display(ctx, encoder, view, settings, tonemap, denoiser, stats);
+    }
+    let weight = handover.unwrap_or(1.0);
+    realtime.state.shown = Shown::Handover;
+    let denoise = shows_denoised(settings);
+    let accumulated = if denoise {
+        encode_denoise(ctx, encoder, view, settings, denoiser, stats)
+    } else {
+        &view.accum
+    };
+    let (Some(passes), Some(targets)) = (realtime.passes.as_ref(), realtime.targets.as_ref())
+    else {
+        return encode_display(ctx, encoder, view, settings, tonemap, denoiser, stats);
+    };
+    passes.handover.encode(
+        ctx,
+        encoder,
+        &HandoverBuffers {
+            realtime: realtime_image(targets, settings),
+            accumulated,
+            output: &targets.handover,
+        },
+        &HandoverParams {
+            width: view.width,
+            height: view.height,
+            weight,
+            _pad: 0,
+        },
+    );
+    tonemap.encode(
+        ctx,
+        encoder,
+        view,
+        TonemapInput::Denoised(&targets.handover),
+        &tonemap_params(view, settings),
+        stats.pass_writes(TONEMAP_PAIR),
+    );
+    denoise
+}
+
+/// The last real-time frame's displayed radiance (in the accumulation's layout): the spatial filter's output,
+/// or the history itself when the filter is off.
+pub fn realtime_image<'t>(
+    targets: &'t RealtimeTargets,
+    settings: &RenderSettings,
+) -> &'t wgpu::Buffer {
+    if settings.realtime.spatial {
+        targets.denoiser.output().unwrap_or(&targets.history.accum)
+    } else {
+        &targets.history.accum
+    }
+}
+
+/// The real-time path's frame: the passes in the order of the module documentation, one submission.
+#[allow(clippy::too_many_arguments)]
+pub fn encode_realtime_frame(
+    ctx: &GpuContext,
+    settings: &RenderSettings,
+    camera: &CameraView,
+    scene: &mut GpuScene,
+    bindings: &mut SceneBindings,
+    view: &ViewTargets,
+    realtime: &mut Realtime,
+    tonemap: &TonemapPass,
+    stats: &mut FrameStats,
+    deform: Vec<wgpu::CommandBuffer>,
+) {
+    let lights = scene.emitter_count > 0;
+    realtime.targets_for(ctx, view.width, view.height);
+    let Realtime {
+        passes,
+        targets,
+        state,
+    } = realtime;
+    let targets = targets.as_mut().expect("made by targets_for");
+    let passes = passes.get_or_insert_with(|| RealtimePasses::new(ctx, &bindings.layout));
+    let motion = scene
+        .motion
+        .as_mut()
+        .expect("the real-time path's scene motion is enabled before its frame");
+    let plan = state.begin_frame(
+        settings,
+        camera,
+        (view.width, view.height),
+        lights,
+        motion.lights_remapped,
+        targets.strata,
+    );
+    if plan.restir {
+        targets.ensure_restir(ctx);
+    }
+    if !state.edited_materials.is_empty() {
+        targets.write_edited_materials(ctx, &state.edited_materials);
+    }
+    motion.write_mesh_motion(ctx);
+    let motion_group = passes.motion_group(ctx, motion);
+    write_frame_constants(
+        ctx,
+        view,
+        scene,
+        settings,
+        camera,
+        FrameConstants {
+            sample_base: state.frame_index,
+            spp: 1,
+            max_depth: settings.max_depth,
+            keep_denoiser_inputs: false,
+        },
+    );
+    ctx.queue
+        .write_buffer(&targets.uniform, 0, bytemuck::bytes_of(&plan.uniform));
+    let scene_group = bindings.group(ctx, scene).clone();
+    let groups = SceneGroups {
+        scene: &scene_group,
+        motion: &motion_group,
+    };
+    let targets = &*targets;
+    let mut encoder = ctx.device.create_command_encoder(&Default::default());
+    encoder.clear_buffer(&view.ray_counter, 0, None);
+    passes.gbuffer.encode(
+        ctx,
+        &mut encoder,
+        &groups,
+        view,
+        targets,
+        stats.realtime_writes(GBUFFER_PAIR),
+    );
+    if plan.restir {
+        let ts = stats.realtime_writes(RESTIR_PAIR);
+        passes
+            .restir
+            .encode(ctx, &mut encoder, &groups, view, targets, ts);
+    } else {
+        stats.time_skipped(&mut encoder, RESTIR_PAIR);
+    }
+    if plan.gradients {
+        let ts = stats.realtime_writes(GRADIENT_PAIR);
+        passes
+            .gradient
+            .encode(ctx, &mut encoder, &groups, view, targets, ts);
+    } else {
+        // No gradients this frame: the temporal pass reads none.
+        encoder.clear_buffer(&targets.gradients[FILTERED], 0, None);
+        stats.time_skipped(&mut encoder, GRADIENT_PAIR);
+    }
+    passes.trace.encode(
+        ctx,
+        &mut encoder,
+        &groups,
+        view,
+        targets,
+        stats.realtime_writes(REALTIME_TRACE_PAIR),
+    );
+    passes.temporal.encode(
+        ctx,
+        &mut encoder,
+        view,
+        targets,
+        stats.realtime_writes(TEMPORAL_PAIR),
+    );
+    let image = if plan.spatial {
+        let h = &targets.history;
+        targets.denoiser.encode(
+            ctx,
+            &mut encoder,
+            &DenoiseInputs {
+                accum: &h.accum,
+                albedo_depth: &h.albedo_depth,
+                normal_hits: &h.normal_hits,
+                moments: &h.moments,
+                width: view.width,
+                height: view.height,
+            },
+            &settings.denoise_params,
+            stats.realtime_writes(SPATIAL_PAIR),
+        )
+    } else {
+        stats.time_skipped(&mut encoder, SPATIAL_PAIR);
+        &targets.history.accum
+    };
+    tonemap.encode(
+        ctx,
+        &mut encoder,
+        view,
+        TonemapInput::Denoised(image),
+        &tonemap_params(view, settings),
+        stats.pass_writes(TONEMAP_PAIR),
+    );
+    stats.resolve_realtime(&mut encoder);
+    if let Some(t) = &stats.timestamps {
+        // The accumulation trace's pair is not written on real-time frames; the tone mapper's is.
+        t.resolve(&mut encoder, 2);
+    }
+    stats.denoised_last_frame = false;
+    stats.realtime_last_frame = true;
+    stats.frames += 1;
+    stats.encode_async(&mut encoder, &view.ray_counter, false);
+    ctx.queue
+        .submit(deform.into_iter().chain([encoder.finish()]));
+    stats.after_submit();
+    if stats.time_passes {
+        stats.last_pass_times = stats.read_pass_times(ctx);
+    }
+    state.end_frame(camera, &plan);
 }
 
 /// Whether the display shows the denoised image (colour view with the denoiser on).
@@ -159,7 +458,19 @@ pub fn encode_display(
     } else {
         TonemapInput::Accumulation
     };
-    let params = TonemapParams {
+    tonemap.encode(
+        ctx,
+        encoder,
+        view,
+        input,
+        &tonemap_params(view, settings),
+        stats.pass_writes(TONEMAP_PAIR),
+    );
+    denoise
+}
+
+fn tonemap_params(view: &ViewTargets, settings: &RenderSettings) -> TonemapParams {
+    TonemapParams {
         width: view.width,
         height: view.height,
         tonemapper: settings.tonemapper as u32,
@@ -167,16 +478,7 @@ pub fn encode_display(
         exposure_scale: 2f32.powf(settings.exposure),
         depth_scale: settings.depth_view_scale,
         _pad: [0; 2],
-    };
-    tonemap.encode(
-        ctx,
-        encoder,
-        view,
-        input,
-        &params,
-        stats.pass_writes(TONEMAP_PAIR),
-    );
-    denoise
+    }
 }
 
 /// What varies between dispatches of the same view.

@@ -127,7 +127,107 @@ pub const WGSL_CONSTANTS: &[(&str, u32)] = &[
     ("WIDE_STACK_SIZE", crate::bvh::wide::MAX_WIDE_DEPTH),
     ("DEFORM_GROUP", DEFORM_GROUP),
     ("REFIT_GROUP", REFIT_GROUP),
+    ("RT_TEMPORAL", RT_TEMPORAL),
+    ("RT_HISTORY", RT_HISTORY),
+    ("RT_GRADIENTS", RT_GRADIENTS),
+    ("RT_RESTIR", RT_RESTIR),
+    ("RT_RESTIR_TEMPORAL", RT_RESTIR_TEMPORAL),
+    ("RT_RESTIR_SPATIAL", RT_RESTIR_SPATIAL),
+    ("RT_RESTIR_UNBIASED", RT_RESTIR_UNBIASED),
+    ("RT_RESTIR_VISIBILITY", RT_RESTIR_VISIBILITY),
+    ("RT_RESTIR_HISTORY", RT_RESTIR_HISTORY),
+    ("RT_LIGHTS_REMAPPED", RT_LIGHTS_REMAPPED),
+    ("RT_MATERIALS_EDITED", RT_MATERIALS_EDITED),
+    ("RT_INJECT_NONFINITE", RT_INJECT_NONFINITE),
+    ("GRADIENT_STRATUM", GRADIENT_STRATUM),
 ];
+
+/// `GpuRealtimeFrame::flags`: which stages of the real-time path run this frame, and what history exists.
+/// Temporal accumulation of colour.
+pub const RT_TEMPORAL: u32 = 1;
+/// The previous frame's G-buffer and colour history are valid (same size, nothing reset).
+pub const RT_HISTORY: u32 = 2;
+/// A-SVGF temporal gradients shorten the history where lighting changed.
+pub const RT_GRADIENTS: u32 = 4;
+/// Direct light at the first hit from ReSTIR DI (else next-event estimation in the path).
+pub const RT_RESTIR: u32 = 8;
+pub const RT_RESTIR_TEMPORAL: u32 = 16;
+pub const RT_RESTIR_SPATIAL: u32 = 32;
+/// Visibility in the MIS weights of reuse (unbiased; shadow rays per neighbour).
+pub const RT_RESTIR_UNBIASED: u32 = 64;
+/// Test the initial candidate's visibility before reuse (always on with `RT_RESTIR_UNBIASED`).
+pub const RT_RESTIR_VISIBILITY: u32 = 128;
+/// Last frame's reservoirs are valid.
+pub const RT_RESTIR_HISTORY: u32 = 256;
+/// The light list changed since last frame: reservoirs' light indices go through `light_remap`.
+pub const RT_LIGHTS_REMAPPED: u32 = 512;
+/// Some materials were edited since last frame (`edited_materials` lists them).
+pub const RT_MATERIALS_EDITED: u32 = 1024;
+/// Tests only: the real-time trace writes NaN and infinite samples at some pixels.
+pub const RT_INJECT_NONFINITE: u32 = 2048;
+/// Side of a temporal-gradient stratum in pixels (A-SVGF: 3).
+pub const GRADIENT_STRATUM: u32 = 3;
+
+/// The real-time path's per-frame constants (`shaders/realtime/frame.wgsl` `RealtimeFrame`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct GpuRealtimeFrame {
+    pub camera_from_world: [[f32; 4]; 4],
+    pub prev_camera_from_world: [[f32; 4]; 4],
+    pub prev_camera_origin: [f32; 3],
+    pub prev_tan_half_fov: f32,
+    pub flags: u32,
+    pub history_cap: f32,
+    pub strata_width: u32,
+    pub strata_height: u32,
+    pub restir_candidates: u32,
+    pub restir_neighbours: u32,
+    pub restir_radius: f32,
+    pub restir_max_confidence: f32,
+    pub depth_tolerance: f32,
+    pub normal_tolerance: f32,
+    pub _pad: [u32; 2],
+}
+
+/// An instance's previous placement and stable object id (`shaders/realtime/motion.wgsl` `MotionInstance`),
+/// by current instance index.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct GpuMotionInstance {
+    pub prev_world_from_object: [[f32; 4]; 3],
+    pub object: u32,
+    pub _pad: [u32; 3],
+}
+
+/// One pixel of the real-time G-buffer (`shaders/realtime/gbuffer.wgsl` `GSurface`), as read back.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct GpuSurface {
+    pub position: [f32; 3],
+    /// Camera depth; < 0 where the ray left the scene.
+    pub depth: f32,
+    /// Stable object id, [`NONE`] where nothing was hit.
+    pub object: u32,
+    pub triangle: u32,
+    pub bary: [f32; 2],
+    pub normal: u32,
+    pub geometric: u32,
+    pub bsdf: [u32; 2],
+    /// Previous minus current screen position of the hit, pixels (+y down).
+    pub motion: [f32; 2],
+    pub prev_depth: f32,
+    pub material: u32,
+}
+
+/// One pixel's real-time sample (`shaders/realtime/sample.wgsl` `RealtimeSample`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct GpuRealtimeSample {
+    pub radiance: [f32; 3],
+    pub valid: u32,
+    pub unscattered: [f32; 3],
+    pub _pad: u32,
+}
 
 /// Per-dispatch constants of the view (a uniform buffer, `shaders/view.wgsl` `Frame`).
 #[repr(C)]

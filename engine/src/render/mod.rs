@@ -3,7 +3,7 @@
 //! - [`gpu_scene`]: the scene packed into storage buffers (meshes, BLASes, materials, textures, instances,
 //!   emitters); [`scene_bindings`]: group 0 over them.
 //! - [`view`]: the view's targets (accumulation, AOVs, display image); [`accumulation`]: its sample count and
-//!   restart flag.
+//!   restart flag; [`realtime`]: the real-time path's targets and state (G-buffers, histories, reservoirs).
 //! - [`passes`]: one struct per GPU pass beside its WGSL kernel; [`shaders`]: the WGSL library they compose.
 //! - [`frame`]: the frame's passes in order, in one submission; [`systems`]: what runs before it (refit on the
 //!   CPU backend, the top-level BVH, material edits); [`queries`]: GPU work run on demand; [`picking`].
@@ -16,6 +16,7 @@ pub mod layout;
 pub mod passes;
 pub mod picking;
 pub mod queries;
+pub mod realtime;
 pub mod scene_bindings;
 pub mod settings;
 pub mod shaders;
@@ -26,7 +27,9 @@ pub mod view;
 pub use accumulation::Accumulation;
 pub use gpu_scene::{GpuMemory, GpuScene, InstanceInput, UploadError};
 pub use passes::denoise::{DenoiseParams, Denoiser};
-pub use settings::{AovView, Environment, RenderSettings, Tonemapper};
+pub use settings::{
+    AovView, Environment, RealtimeSettings, RenderMode, RenderSettings, RestirSettings, Tonemapper,
+};
 pub use stats::{FrameStats, GpuFrameStats, PassTimes, RayCastTiming};
 pub use view::{Aovs, PrimaryHit, ViewTargets};
 
@@ -69,6 +72,9 @@ pub fn insert_resources(
     world.insert_resource(OnFirstUse::<RaycastPass>::default());
     world.insert_resource(ViewTargets::new(ctx, settings.width, settings.height));
     world.insert_resource(FrameStats::new(ctx));
+    // A new scene: nothing the real-time path kept applies.
+    world.insert_resource(realtime::Realtime::default());
+    world.insert_resource(realtime::scene_motion::MotionObjects::default());
     world.insert_resource(bindings);
     world.insert_resource(gpu_scene);
     Ok(notes)
@@ -91,7 +97,12 @@ impl Plugin for RenderPlugin {
             .add_systems(
                 Update,
                 (
-                    (systems::refit_deformed, systems::update_instances)
+                    realtime::scene_motion::sync_scene_motion.in_set(FrameSet::Deform),
+                    (
+                        systems::refit_deformed,
+                        systems::update_instances,
+                        realtime::scene_motion::update_scene_motion,
+                    )
                         .chain()
                         .in_set(FrameSet::Bvh),
                     systems::upload_materials.in_set(FrameSet::Upload),

@@ -5,10 +5,10 @@
 //! AOV at every accumulation restart: a ray per pixel per frame while an animation plays).
 
 use super::gpu_scene::GpuScene;
+use super::gpu_scene::InstanceMap;
 use super::passes::OnFirstUse;
 use super::passes::pick::PickPass;
 use super::scene_bindings::SceneBindings;
-use super::systems::InstanceMap;
 use super::view::ViewTargets;
 use crate::gpu::GpuContext;
 use crate::scene::{MeshInstance, SceneAssets};

@@ -96,3 +96,56 @@ pub fn cast_rays(world: &World, diffuse_bounce: bool) -> Option<RayCastTiming> {
         rays: view.read_ray_count(ctx),
     })
 }
+
+/// The linear radiance the display shows: the last real-time image, the hand-over's mix, or the accumulation
+/// (denoised when the settings say so). Row-major from the top-left.
+pub fn displayed_radiance(world: &World) -> Vec<[f32; 3]> {
+    use super::realtime::{Realtime, Shown, runs};
+    let ctx = world.resource::<GpuContext>();
+    let settings = world.resource::<RenderSettings>();
+    let realtime = world.resource::<Realtime>();
+    let buffer = match (&realtime.targets, realtime.state.shown, runs(settings)) {
+        (Some(t), Shown::Realtime, true) => super::frame::realtime_image(t, settings),
+        (Some(t), Shown::Handover, true) => &t.handover,
+        _ => {
+            return if settings.denoise {
+                denoised_radiance(world)
+            } else {
+                world.resource::<ViewTargets>().read_radiance(ctx)
+            };
+        }
+    };
+    mean_rgb(&ctx.read_buffer(buffer, buffer.size()))
+}
+
+/// The real-time path's colour history after the last real-time frame: mean radiance and history length per
+/// pixel (empty before the first real-time frame).
+pub fn realtime_history(world: &World) -> Vec<([f32; 3], f32)> {
+    let ctx = world.resource::<GpuContext>();
+    let Some(targets) = &world.resource::<super::realtime::Realtime>().targets else {
+        return Vec::new();
+    };
+    let bytes = ctx.read_buffer(&targets.history.accum, targets.history.accum.size());
+    bytemuck::cast_slice::<u8, [f32; 4]>(&bytes)
+        .iter()
+        .take(targets.pixels() as usize)
+        .map(|p| {
+            let n = p[3].max(1.0);
+            ([p[0] / n, p[1] / n, p[2] / n], p[3])
+        })
+        .collect()
+}
+
+/// The real-time G-buffer of the last real-time frame (empty before the first).
+pub fn realtime_gbuffer(world: &World) -> Vec<super::layout::GpuSurface> {
+    let ctx = world.resource::<GpuContext>();
+    let Some(targets) = &world.resource::<super::realtime::Realtime>().targets else {
+        return Vec::new();
+    };
+    let bytes = ctx.read_buffer(&targets.gbuffer, targets.gbuffer.size());
+    bytemuck::cast_slice::<u8, super::layout::GpuSurface>(&bytes)
+        .iter()
+        .take(targets.pixels() as usize)
+        .copied()
+        .collect()
+}

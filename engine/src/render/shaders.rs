@@ -61,6 +61,29 @@ pub const LIBRARY: &[ShaderModule] = library! {
         "sampler",
         "math",
     ],
+    "realtime/frame" => ["constants", "view", "sampler"],
+    "realtime/gbuffer" => ["constants", "bsdf/gltf"],
+    "realtime/sample" => [],
+    "realtime/motion" => ["constants", "math", "realtime/frame", "scene/vertex"],
+    "restir/reservoir" => ["constants", "math"],
+    "restir/target" => [
+        "integrator/path",
+        "lights/light_sampler",
+        "lights/area",
+        "bsdf/gltf",
+        "traversal/tlas",
+        "color",
+        "math",
+    ],
+    "integrator/realtime" => [
+        "integrator/path",
+        "realtime/gbuffer",
+        "realtime/motion",
+        "restir/target",
+        "octahedral",
+        "camera",
+        "sampler",
+    ],
 };
 
 /// The generated module of shared constants.

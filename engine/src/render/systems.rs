@@ -15,20 +15,7 @@ use bevy_ecs::prelude::*;
 #[derive(Resource, Default)]
 pub struct GeometryChanged(pub bool);
 
-/// The scene's instances as last uploaded, and the entity behind each GPU instance (TLAS leaf order), to map
-/// primary hits back to scene nodes.
-#[derive(Resource, Default)]
-pub struct InstanceMap {
-    last_inputs: Vec<InstanceInput>,
-    pub entities: Vec<Entity>,
-}
-
-impl InstanceMap {
-    /// The placements last uploaded, in the order the top-level build received them.
-    pub fn inputs(&self) -> &[InstanceInput] {
-        &self.last_inputs
-    }
-}
+pub use super::gpu_scene::InstanceMap;
 
 /// Collects mesh instances; rebuilds the TLAS and re-uploads instances when any placement or deformed mesh
 /// changed, and restarts accumulation.
@@ -113,6 +100,7 @@ pub fn refit_deformed(
     let (ratios, upload_seconds) = if deformed.changed.is_empty() {
         (Vec::new(), 0.0)
     } else {
+        keep_previous_positions(&ctx, &mut scene, &deformed);
         scene.apply_deformations(&ctx, asset, &deformed, stats.policy)
     };
     for (m, ratio) in ratios {
@@ -148,18 +136,42 @@ pub fn refit_deformed(
     stats.last_rebuild_seconds = start.elapsed().as_secs_f64();
 }
 
-/// Uploads edited materials (only those that differ from the GPU's copy) and restarts accumulation.
+/// Uploads edited materials (only those that differ from the GPU's copy), restarts accumulation, and tells
+/// the real-time path which materials changed (their pixels' history is stale).
 pub fn upload_materials(
     ctx: Res<GpuContext>,
     assets: Res<SceneAssets>,
     materials: Res<Materials>,
     mut scene: ResMut<GpuScene>,
     mut accumulation: ResMut<Accumulation>,
+    mut realtime: ResMut<super::realtime::Realtime>,
 ) {
     if !materials.is_changed() {
         return;
     }
-    if scene.update_materials(&ctx, &assets.0, &materials.0) > 0 {
+    let edited = scene.update_materials(&ctx, &assets.0, &materials.0);
+    if !edited.is_empty() {
         accumulation.restart();
+        realtime.state.edited_materials.extend(edited);
     }
+}
+
+/// CPU backend, real-time path on: keeps the positions the deformed meshes had before this frame's writes
+/// replace them. The copy goes in a submission of its own, ahead of the queued writes, which land at the
+/// start of the next one.
+fn keep_previous_positions(
+    ctx: &GpuContext,
+    scene: &mut GpuScene,
+    deformed: &crate::animation::DeformedMeshes,
+) {
+    if scene.motion.is_none() {
+        return;
+    }
+    let mut encoder = ctx.device.create_command_encoder(&Default::default());
+    for &m in &deformed.changed {
+        if deformed.meshes.get(m).is_some_and(Option::is_some) {
+            scene.keep_previous_positions(&mut encoder, m);
+        }
+    }
+    ctx.queue.submit([encoder.finish()]);
 }

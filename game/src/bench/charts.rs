@@ -473,3 +473,82 @@ pub fn scaling(
         Ok(())
     })
 }
+
+/// The real-time path in motion, one scene: the displayed frame's relMSE against the frame index (warm-up and
+/// the lamp switch visible), and each method's settled error against its GPU time per frame.
+pub fn motion(path: &Path, title: &Title, m: &super::motion::MotionScene) -> Result<()> {
+    draw_png(path, (1500, 620), title, |area| {
+        let panels = area.split_evenly((1, 2));
+        let errors = || {
+            m.curves
+                .iter()
+                .flat_map(|c| c.points.iter().map(|p| p.rel_mse))
+        };
+        let mut chart = ChartBuilder::on(&panels[0])
+            .margin(12)
+            .x_label_area_size(45)
+            .y_label_area_size(70)
+            .caption("relMSE of the displayed frame vs frame", (SANS, 16))
+            .build_cartesian_2d(0.0..m.frames as f64, log_range(errors()).log_scale())?;
+        chart
+            .configure_mesh()
+            .x_desc(format!("frame (dt {:.4} s)", m.dt))
+            .y_desc("relMSE (tone-mapped) vs converged pose")
+            .x_label_formatter(&fmt_num)
+            .y_label_formatter(&fmt_num)
+            .label_style((SANS, 13))
+            .draw()?;
+        for (i, c) in m.curves.iter().enumerate() {
+            let col = color(i);
+            let points: Vec<(f64, f64)> = c
+                .points
+                .iter()
+                .map(|p| (p.frame as f64, p.rel_mse))
+                .collect();
+            chart
+                .draw_series(LineSeries::new(points.clone(), col.stroke_width(2)))?
+                .label(c.method.as_str())
+                .legend(legend(col));
+            chart.draw_series(points.iter().map(|&p| Circle::new(p, 3, col.filled())))?;
+        }
+        if let Some(k0) = m
+            .curves
+            .iter()
+            .find_map(|c| c.lag.as_ref().map(|l| l.switch_frame))
+        {
+            let y = chart.y_range();
+            chart.draw_series(LineSeries::new(
+                [(k0 as f64, y.start), (k0 as f64, y.end)],
+                BLACK.mix(0.4).stroke_width(1),
+            ))?;
+        }
+        draw_legend(&mut chart, SeriesLabelPosition::UpperRight)?;
+
+        let times = || m.curves.iter().map(|c| c.gpu_ms.median);
+        let steady = || m.curves.iter().map(|c| c.steady_rel_mse);
+        let mut chart = ChartBuilder::on(&panels[1])
+            .margin(12)
+            .x_label_area_size(45)
+            .y_label_area_size(70)
+            .caption("settled relMSE vs GPU time per frame", (SANS, 16))
+            .build_cartesian_2d(
+                log_range(times()).log_scale(),
+                log_range(steady()).log_scale(),
+            )?;
+        log_x_axes(
+            &mut chart,
+            "GPU ms per frame (every pass, median)",
+            "relMSE (tone-mapped), mean from K/4",
+        )?;
+        for (i, c) in m.curves.iter().enumerate() {
+            let col = color(i);
+            chart
+                .draw_series([EmptyElement::at((c.gpu_ms.median, c.steady_rel_mse))
+                    + Circle::new((0, 0), 5, col.filled())
+                    + Text::new(c.method.clone(), (8, -14), (SANS, 12))])?
+                .label(c.method.as_str())
+                .legend(legend(col));
+        }
+        Ok(())
+    })
+}

@@ -252,9 +252,14 @@ fn min_max(v: &[f64]) -> (f64, f64) {
 }
 
 /// The reference's cache key: a hash of everything that defines its pixels (scene file bytes, camera,
-/// image-affecting settings, size, sample count, seeds) and of the kernel source, so that a changed
-/// renderer never reuses an old reference.
-fn reference_key(scene: &BenchScene, base: &RenderSettings, spp: u32) -> Result<String> {
+/// image-affecting settings, size, sample count, seeds, and `extra`: what else a caller varies, such as the
+/// pose) and of the kernel source, so that a changed renderer never reuses an old reference.
+pub(super) fn reference_key(
+    scene: &BenchScene,
+    base: &RenderSettings,
+    spp: u32,
+    extra: &str,
+) -> Result<String> {
     let mut hasher = sha2::Sha256::new();
     for file in &scene.source_files {
         let bytes =
@@ -265,11 +270,13 @@ fn reference_key(scene: &BenchScene, base: &RenderSettings, spp: u32) -> Result<
     let image_settings = RenderSettings {
         spp_per_frame: 1,
         seed: 0,
+        mode: raykin::render::RenderMode::Accumulate,
+        realtime: Default::default(),
         ..base.clone()
     };
     hasher.update(format!("{:?}", scene.camera).as_bytes());
     hasher.update(serde_json::to_vec(&image_settings)?);
-    hasher.update(format!("{spp} {REFERENCE_SEEDS:?}").as_bytes());
+    hasher.update(format!("{spp} {REFERENCE_SEEDS:?} {extra}").as_bytes());
     hasher.update(
         raykin::render::shaders::compose(&raykin::render::passes::trace::KERNEL).as_bytes(),
     );
@@ -278,13 +285,13 @@ fn reference_key(scene: &BenchScene, base: &RenderSettings, spp: u32) -> Result<
 }
 
 /// A reference image (mean of two halves) and what is known about it.
-struct Reference {
-    mean: Vec<[f32; 3]>,
+pub(super) struct Reference {
+    pub mean: Vec<[f32; 3]>,
     /// relMSE of the mean against the truth, estimated from the halves: tone-mapped and linear.
-    noise: f64,
-    noise_linear: f64,
-    key: String,
-    from_cache: bool,
+    pub noise: f64,
+    pub noise_linear: f64,
+    pub key: String,
+    pub from_cache: bool,
 }
 
 /// The reference for `scene` at `base`: from the cache, or rendered and cached.
@@ -295,10 +302,43 @@ fn reference(
     suite: &super::suite::Suite,
     cache: &Path,
 ) -> Result<Reference> {
-    let key = reference_key(scene, base, suite.reference_spp)?;
+    let key = reference_key(scene, base, suite.reference_spp, "")?;
     let dir = cache.join(format!("{}-{key}", scene.name));
+    cached_reference(&dir, key, (base.width, base.height), &scene.name, |seed| {
+        let settings = RenderSettings {
+            seed,
+            ..base.clone()
+        };
+        let mut app = super::open_app(ctx, scene, settings)?;
+        accumulate_reference(ctx, &mut app, suite.reference_spp / 2);
+        Ok(app.radiance())
+    })
+}
+
+/// Accumulates `spp` samples in chunks sized for the adapter.
+pub(super) fn accumulate_reference(
+    ctx: &GpuContext,
+    app: &mut raykin::headless::HeadlessApp,
+    spp: u32,
+) {
+    let chunk = if ctx.info.device_type == raykin::gpu::DeviceType::Cpu {
+        8
+    } else {
+        64
+    };
+    app.accumulate(spp, chunk, |_| {});
+}
+
+/// Two independent halves of a reference in `dir` (`half_a.exr`, `half_b.exr`): read when they are there at
+/// `size`, else each rendered by `render(seed)` and written.
+pub(super) fn cached_reference(
+    dir: &Path,
+    key: String,
+    (w, h): (u32, u32),
+    what: &str,
+    render: impl Fn(u32) -> Result<Vec<[f32; 3]>>,
+) -> Result<Reference> {
     let halves = [dir.join("half_a.exr"), dir.join("half_b.exr")];
-    let (w, h) = (base.width, base.height);
     let cached = halves
         .iter()
         .map(|p| raykin::image_io::read_exr(p).ok())
@@ -312,29 +352,16 @@ fn reference(
         }
         None => {
             eprintln!(
-                "raykin bench: {}: rendering the {}-spp reference at {w}x{h} (cached as {})",
-                scene.name,
-                suite.reference_spp,
+                "raykin bench: {what}: rendering a reference at {w}x{h} (cached as {})",
                 dir.display()
             );
-            std::fs::create_dir_all(&dir)
+            std::fs::create_dir_all(dir)
                 .with_context(|| format!("{}: cannot create the cache folder", dir.display()))?;
             let mut images = Vec::new();
             for (seed, path) in REFERENCE_SEEDS.iter().zip(&halves) {
-                let settings = RenderSettings {
-                    seed: *seed,
-                    ..base.clone()
-                };
-                let mut app = super::open_app(ctx, scene, settings)?;
-                let chunk = if ctx.info.device_type == raykin::gpu::DeviceType::Cpu {
-                    8
-                } else {
-                    64
-                };
-                app.accumulate(suite.reference_spp / 2, chunk, |_| {});
-                let image = app.radiance();
+                let image = render(*seed)?;
                 if image.iter().flatten().any(|v| !v.is_finite()) {
-                    anyhow::bail!("{}: the reference has non-finite pixels", scene.name);
+                    anyhow::bail!("{what}: the reference has non-finite pixels");
                 }
                 raykin::image_io::write_atomically(path, |p| {
                     raykin::image_io::write_exr(p, w, h, &image)

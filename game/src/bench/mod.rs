@@ -12,6 +12,7 @@ mod charts;
 mod error_curves;
 mod frame_loop;
 mod metrics;
+pub mod motion;
 mod scaling;
 mod scenes;
 mod suite;
@@ -27,7 +28,7 @@ use scenes::BenchScene;
 use std::path::Path;
 
 /// The parts `--parts` can pick (all by default).
-pub const PARTS: &[&str] = &["frames", "errors", "bvh", "refit", "scaling"];
+pub const PARTS: &[&str] = &["frames", "errors", "bvh", "refit", "scaling", "motion"];
 
 /// The per-scene table of docs/BENCHMARKS.md.
 #[derive(serde::Serialize)]
@@ -71,6 +72,7 @@ struct Results {
     refit_vs_rebuild: Option<bvh_quality::RefitResult>,
     scaling_triangles: Vec<scaling::TriangleScalingRow>,
     scaling_resolution: Vec<scaling::ResolutionScalingRow>,
+    motion: Vec<motion::MotionScene>,
     charts: Vec<String>,
     wall_seconds: f64,
     /// /proc/loadavg at the start and the end (Linux): on a CPU adapter other processes slow every figure.
@@ -327,6 +329,71 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         })?;
     }
 
+    let mut motion_scenes = Vec::new();
+    if wants(args, "motion") {
+        let names: Vec<String> = if args.scene.is_empty() && !args.crowd {
+            suite.motion_scenes.clone()
+        } else {
+            scene_names.clone()
+        };
+        let plan = motion::MotionPlan {
+            size: match (args.width, args.height) {
+                (None, None) => suite.motion_size,
+                (w, h) => (w.unwrap_or(64).max(1), h.unwrap_or(36).max(1)),
+            },
+            frames: args.frames.unwrap_or(suite.motion_frames).max(2),
+            eval_every: suite.motion_eval_every,
+            reference_spp: suite.motion_reference_spp,
+            lag_window: suite.motion_lag_window,
+        };
+        for name in &names {
+            let scene = match loaded.iter().find(|s| &s.name == name) {
+                Some(s) => s,
+                None => {
+                    loaded.push(scenes::resolve(name, &args.assets)?);
+                    loaded.last().expect("just pushed")
+                }
+            };
+            if !scene.animated() {
+                eprintln!("raykin bench: {name}: not animated, no motion part");
+                continue;
+            }
+            let m = motion::measure(&ctx, scene, &base, &plan, &args.cache)?;
+            for c in &m.curves {
+                eprintln!(
+                    "raykin bench: {} motion {}x{}: {}: relMSE {:.4} FLIP {:.4} settled, GPU {:.2} ms/frame{}{}",
+                    m.scene,
+                    m.width,
+                    m.height,
+                    c.method,
+                    c.steady_rel_mse,
+                    c.steady_flip,
+                    c.gpu_ms.median,
+                    c.band_to_rest.map_or(String::new(), |r| format!(
+                        ", disoccluded/rest error {r:.2}"
+                    )),
+                    c.lag.as_ref().map_or(String::new(), |l| format!(
+                        ", lamp switch settles in {}",
+                        l.frames_to_settle
+                            .map_or("> window".into(), |f| format!("{f} frames"))
+                    )),
+                );
+            }
+            let file = format!("motion-{}.png", m.scene);
+            chart(&file, &|p| {
+                charts::motion(
+                    p,
+                    &title(&format!(
+                        "{}: the real-time path in motion, {}x{}, {} frames at 1/60 s",
+                        m.scene, m.width, m.height, m.frames
+                    )),
+                    &m,
+                )
+            })?;
+            motion_scenes.push(m);
+        }
+    }
+
     let table = table(&loaded, &rows, &errors);
     let results = Results {
         adapter: ctx.info.name.clone(),
@@ -346,6 +413,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         refit_vs_rebuild: refit,
         scaling_triangles: tri_scaling,
         scaling_resolution: res_scaling,
+        motion: motion_scenes,
         charts,
         wall_seconds: started.elapsed().as_secs_f64(),
         load_average_start,
@@ -453,6 +521,29 @@ fn write_outputs(out: &Path, results: &Results) -> Result<()> {
         }
     }
     write("curves.csv", curves)?;
+    let mut motion = String::from(
+        "scene,method,frame,rel_mse,flip,rel_mse_band,rel_mse_rest,band_fraction,gpu_ms_median\n",
+    );
+    for m in &results.motion {
+        for c in &m.curves {
+            for p in &c.points {
+                let opt = |v: Option<f64>| v.map_or(String::new(), |x| format!("{x:.6e}"));
+                motion += &format!(
+                    "{},\"{}\",{},{:.6e},{:.6},{},{},{:.4},{:.4}\n",
+                    m.scene,
+                    c.method,
+                    p.frame,
+                    p.rel_mse,
+                    p.flip,
+                    opt(p.rel_mse_band),
+                    opt(p.rel_mse_rest),
+                    p.band_fraction,
+                    c.gpu_ms.median
+                );
+            }
+        }
+    }
+    write("motion.csv", motion)?;
     write("summary.md", summary_markdown(results))
 }
 
@@ -522,5 +613,32 @@ path-trace kernel; relMSE on tone-mapped images against the cached reference, it
 ~ = extrapolated along the fitted power law (the curve did not get there within the suite's samples); \
 ray casting: the shading-free pass (camera rays through pixel centres, then one cosine-distributed bounce ray \
 per hit), per size.\n";
+    if !r.motion.is_empty() {
+        s += "\n| scene | size | method | GPU ms/frame (median, p99) | settled relMSE | settled FLIP | disoccluded / rest error | lamp switch settles in |\n";
+        s += "|---|---|---|---|---|---|---|---|\n";
+        for m in &r.motion {
+            for c in &m.curves {
+                s += &format!(
+                    "| {} | {}x{} | {} | {:.2} / {:.2} | {:.4} | {:.4} | {} | {} |\n",
+                    m.scene,
+                    m.width,
+                    m.height,
+                    c.method,
+                    c.gpu_ms.median,
+                    c.gpu_ms.p99,
+                    c.steady_rel_mse,
+                    c.steady_flip,
+                    c.band_to_rest.map_or("-".into(), |x| format!("{x:.2}")),
+                    c.lag.as_ref().map_or("-".into(), |l| l
+                        .frames_to_settle
+                        .map_or("> window".into(), |f| format!("{f} frames"))),
+                );
+            }
+        }
+        s += "\nMotion: the displayed frame of each method against a converged render of the same pose (tone-mapped \
+relMSE and FLIP), settled = mean over the evaluated frames from K/4 (before the lamp switch); GPU ms: every pass of \
+the frame (deform, G-buffer, ReSTIR, gradients, trace, temporal, spatial filter, tone map); disoccluded = pixels \
+whose history (reprojection without gradients) is at most 8 frames long.\n";
+    }
     s
 }

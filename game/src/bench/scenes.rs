@@ -21,6 +21,8 @@ pub struct BenchScene {
     pub players: Vec<(usize, AnimationPlayer)>,
     /// Files whose bytes define the scene (the reference cache hashes them).
     pub source_files: Vec<PathBuf>,
+    /// A light the motion bench switches on mid-run: its material and emitted radiance.
+    pub switchable_light: Option<(usize, Vec3)>,
 }
 
 impl BenchScene {
@@ -38,6 +40,7 @@ impl BenchScene {
             environment,
             players: Vec::new(),
             source_files: Vec::new(),
+            switchable_light: None,
         }
     }
 
@@ -57,6 +60,7 @@ pub fn resolve(spec: &str, assets: &Path) -> Result<BenchScene> {
             environment: named.environment,
             players: loaded.players,
             source_files: loaded.source_files,
+            switchable_light: loaded.switchable_light,
         });
     }
     let path = PathBuf::from(spec);

@@ -43,6 +43,14 @@ pub struct Suite {
     pub scaling_size: (u32, u32),
     pub scaling_resolutions: Vec<(u32, u32)>,
     pub scaling_frames: usize,
+    /// The real-time path in motion: scenes, image size, frames at 1/60 s, every how many frames the displayed
+    /// image is compared, the references' samples per pixel, and the frames evaluated after a light switch.
+    pub motion_scenes: Vec<String>,
+    pub motion_size: (u32, u32),
+    pub motion_frames: usize,
+    pub motion_eval_every: usize,
+    pub motion_reference_spp: u32,
+    pub motion_lag_window: usize,
 }
 
 fn named(list: &[&str]) -> Vec<String> {
@@ -75,6 +83,12 @@ impl Suite {
                 scaling_size: (32, 18),
                 scaling_resolutions: vec![(16, 9), (32, 18), (64, 36)],
                 scaling_frames: 3,
+                motion_scenes: named(&["interior", "crowd"]),
+                motion_size: (40, 30),
+                motion_frames: 32,
+                motion_eval_every: 8,
+                motion_reference_spp: 256,
+                motion_lag_window: 8,
             }),
             ("full", false) => Ok(Self {
                 name: "full".into(),
@@ -104,6 +118,12 @@ impl Suite {
                     (3840, 2160),
                 ],
                 scaling_frames: 50,
+                motion_scenes: named(&["crowd", "interior"]),
+                motion_size: (2560, 1440),
+                motion_frames: 120,
+                motion_eval_every: 15,
+                motion_reference_spp: 1024,
+                motion_lag_window: 12,
             }),
             ("full", true) => {
                 let s = CPU_LINEAR_SCALE;
@@ -135,6 +155,12 @@ impl Suite {
                         .map(|&(w, h)| scaled(w, h))
                         .collect(),
                     scaling_frames: 6,
+                    motion_scenes: named(&["crowd", "interior"]),
+                    motion_size: scaled(2560, 1440),
+                    motion_frames: 48,
+                    motion_eval_every: 12,
+                    motion_reference_spp: 256,
+                    motion_lag_window: 12,
                 })
             }
             (other, _) => anyhow::bail!("unknown suite `{other}`: quick or full"),

@@ -61,6 +61,7 @@ pub fn run(args: &ViewArgs) -> Result<()> {
         spp_per_frame: args.spp_per_frame,
         max_depth: args.max_depth,
         load: args.load.options(),
+        mode: args.mode.map(Into::into),
     };
     if args.offscreen {
         let ctx = crate::adapter::open_gpu()?;
@@ -106,6 +107,7 @@ pub fn run_default() -> Result<()> {
         animation: None,
         assets: PathBuf::from("../shared/assets"),
         no_settings: false,
+        mode: None,
     };
     match run(&args) {
         Err(e) if e.downcast_ref::<window::WindowUnavailable>().is_some() => {

@@ -112,6 +112,10 @@ pub fn run(ctx: GpuContext, setup: OffscreenSetup) -> Result<()> {
     let (mut trace, mut tonemap, mut denoise, mut rays_per_s, mut ui_gpu) =
         (Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new());
     let (mut wait_schedule, mut wait_ui) = (Vec::new(), Vec::new());
+    // The real-time path's passes (on its frames): G-buffer, ReSTIR DI, gradients, temporal, and the sum of
+    // every pass of the frame.
+    let (mut gbuffer, mut restir, mut gradient, mut temporal, mut realtime_total) =
+        (Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new());
     let mut pacer = super::ui_render::FramePacer::default();
     let mut rss_after_warmup = None;
     // Resident memory every tenth of the run, to see that it stays flat.
@@ -167,6 +171,23 @@ pub fn run(ctx: GpuContext, setup: OffscreenSetup) -> Result<()> {
                     }
                     if p.trace_ms > 0.0 {
                         rays_per_s.push(g.rays as f64 / (p.trace_ms * 1e-3));
+                    }
+                    if p.gbuffer_ms > 0.0 {
+                        gbuffer.push(p.gbuffer_ms);
+                        restir.push(p.restir_ms);
+                        gradient.push(p.gradient_ms);
+                        temporal.push(p.temporal_ms);
+                        realtime_total.push(
+                            p.gbuffer_ms
+                                + p.restir_ms
+                                + p.gradient_ms
+                                + p.trace_ms
+                                + p.temporal_ms
+                                + p.denoise_ms
+                                + p.tonemap_ms
+                                + p.skin_ms
+                                + p.refit_ms,
+                        );
                     }
                 }
             }
@@ -232,7 +253,14 @@ pub fn run(ctx: GpuContext, setup: OffscreenSetup) -> Result<()> {
             "tonemap": spread(&tonemap),
             "denoise": spread(&denoise),
             "ui_and_display": spread(&ui_gpu),
+            "gbuffer": spread(&gbuffer),
+            "restir_di": spread(&restir),
+            "gradients": spread(&gradient),
+            "temporal": spread(&temporal),
+            "realtime_frame_total": spread(&realtime_total),
         },
+        "mode": format!("{:?}", settings.mode),
+        "realtime": settings.realtime,
         "gpu_wait_ms": setup.sync_passes.then(|| serde_json::json!({
             "frame_schedule": spread(&wait_schedule),
             "ui_and_display": spread(&wait_ui),

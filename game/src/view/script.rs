@@ -7,7 +7,7 @@ use anyhow::{Context, Result, bail};
 use raykin::animation::AnimationPlayer;
 use raykin::camera::{CameraInput, CameraMode, CameraRig};
 use raykin::editor::EditorState;
-use raykin::render::{Accumulation, AovView, Environment, RenderSettings, Tonemapper};
+use raykin::render::{Accumulation, AovView, Environment, RenderMode, RenderSettings, Tonemapper};
 use raykin::scene::{AlphaMode, Materials};
 use std::path::{Path, PathBuf};
 
@@ -38,6 +38,11 @@ pub enum Setting {
     SampleLimit(u32),
     Seed(u32),
     Denoise(bool),
+    Mode(RenderMode),
+    /// A real-time stage on or off: temporal, gradients, spatial, restir, restir_temporal, restir_spatial,
+    /// restir_unbiased.
+    Stage(String, bool),
+    HistoryCap(u32),
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -177,6 +182,20 @@ fn parse_line(line: &str) -> Result<Option<Command>> {
                     _ => bail!("denoise: on or off"),
                 }),
                 "env" => Setting::Env(floats::<3>(values)?),
+                "mode" => Setting::Mode(match values {
+                    ["realtime"] => RenderMode::Realtime,
+                    ["accumulate"] => RenderMode::Accumulate,
+                    _ => bail!("mode: realtime or accumulate"),
+                }),
+                "history_cap" => Setting::HistoryCap(uint(values)?.clamp(1, 1 << 20) as u32),
+                stage if REALTIME_STAGES.contains(&stage) => Setting::Stage(
+                    stage.to_string(),
+                    match values {
+                        ["on"] => true,
+                        ["off"] => false,
+                        _ => bail!("{stage}: on or off"),
+                    },
+                ),
                 "tonemapper" => Setting::Tonemapper(match values {
                     ["aces"] => Tonemapper::AcesFitted,
                     ["reinhard"] => Tonemapper::Reinhard,
@@ -191,7 +210,8 @@ fn parse_line(line: &str) -> Result<Option<Command>> {
                     _ => bail!("view: color, albedo, normal or depth"),
                 }),
                 other => bail!(
-                    "unknown setting `{other}` (spp, max_depth, exposure, sample_limit, seed, sky, env, tonemapper, view, denoise)"
+                    "unknown setting `{other}` (spp, max_depth, exposure, sample_limit, seed, sky, env, tonemapper, view, denoise, mode, history_cap, {})",
+                    REALTIME_STAGES.join(", ")
                 ),
             })
         }
@@ -449,6 +469,32 @@ fn edit_material(session: &mut Session, name: &str, edit: &MaterialEdit) -> Resu
     Ok(())
 }
 
+/// The real-time path's switchable stages, by their script names.
+const REALTIME_STAGES: &[&str] = &[
+    "temporal",
+    "gradients",
+    "spatial",
+    "restir",
+    "restir_temporal",
+    "restir_spatial",
+    "restir_unbiased",
+];
+
+/// The setting a stage name switches.
+fn stage_flag<'a>(s: &'a mut RenderSettings, stage: &str) -> Option<&'a mut bool> {
+    let r = &mut s.realtime;
+    Some(match stage {
+        "temporal" => &mut r.temporal,
+        "gradients" => &mut r.gradients,
+        "spatial" => &mut r.spatial,
+        "restir" => &mut r.restir.enabled,
+        "restir_temporal" => &mut r.restir.temporal,
+        "restir_spatial" => &mut r.restir.spatial,
+        "restir_unbiased" => &mut r.restir.unbiased,
+        _ => return None,
+    })
+}
+
 fn apply_setting(session: &mut Session, setting: &Setting) {
     let world = session.world();
     if let Setting::SampleLimit(n) = setting {
@@ -468,6 +514,13 @@ fn apply_setting(session: &mut Session, setting: &Setting) {
         Setting::Env(c) => s.environment = Environment::Constant(c),
         Setting::Seed(n) => s.seed = n,
         Setting::Denoise(on) => s.denoise = on,
+        Setting::Mode(mode) => s.mode = mode,
+        Setting::HistoryCap(n) => s.realtime.history_cap = n,
+        Setting::Stage(ref stage, on) => {
+            if let Some(flag) = stage_flag(&mut s, stage) {
+                *flag = on;
+            }
+        }
         Setting::SampleLimit(_) => {}
     }
 }

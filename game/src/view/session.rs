@@ -52,6 +52,8 @@ pub struct SessionOptions {
     pub max_depth: Option<u32>,
     /// How scene files are read (`--scene`, `--allow-external-files`).
     pub load: LoadOptions,
+    /// Real-time or accumulation (default: the settings file's, else accumulation).
+    pub mode: Option<raykin::render::RenderMode>,
 }
 
 /// Settings as read at start-up.
@@ -261,7 +263,7 @@ impl Session {
                     Err(e) => state.report(Severity::Error, e.to_string()),
                 }
             }
-            EditorAction::Record(request) => self.start_recording(request),
+            EditorAction::Record(request) => self.start_recording(*request),
             EditorAction::StopRecording => {
                 if let Some(r) = &self.recording {
                     r.stop();
@@ -468,6 +470,9 @@ fn build_engine(
         }
         if let Some(d) = options.max_depth {
             s.max_depth = d;
+        }
+        if let Some(mode) = options.mode {
+            s.mode = mode;
         }
     }
     if matches!(source, SceneSource::Embedded) {

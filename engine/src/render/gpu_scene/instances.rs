@@ -8,6 +8,7 @@ use crate::gpu::GpuContext;
 use crate::gpu::bind::write_or_grow;
 use crate::render::layout::*;
 use crate::scene::SceneAsset;
+use bevy_ecs::prelude::{Entity, Resource};
 use glam::{Mat4, Vec3};
 
 /// Per-instance data the renderer needs each frame: world matrix and mesh.
@@ -74,17 +75,18 @@ impl GpuScene {
         self.memory.instances_and_tlas =
             (instance_bytes.len() + tlas_bytes.len() + emitter_bytes.len()) as u64;
         self.uploaded_instances = ordered;
+        self.emitter_list = emitters;
     }
 
-    /// Uploads the materials that differ from what the GPU holds; returns how many changed. When the set of
+    /// Uploads the materials that differ from what the GPU holds; returns their indices. When the set of
     /// emissive triangles or their power changes, the emitter list is rebuilt for the current instances.
     pub fn update_materials(
         &mut self,
         ctx: &GpuContext,
         scene: &SceneAsset,
         materials: &[crate::scene::Material],
-    ) -> usize {
-        let mut changed = 0;
+    ) -> Vec<u32> {
+        let mut changed = Vec::new();
         let mut emission_changed = false;
         for (i, m) in materials.iter().enumerate().take(self.material_data.len()) {
             let gpu = gpu_material(m);
@@ -98,7 +100,7 @@ impl GpuScene {
                 (i * std::mem::size_of::<GpuMaterial>()) as u64,
                 bytemuck::bytes_of(&gpu),
             );
-            changed += 1;
+            changed.push(i as u32);
         }
         if emission_changed {
             for (m, mesh) in scene.meshes.iter().enumerate() {
@@ -121,6 +123,7 @@ impl GpuScene {
                 self.generation += 1;
             }
             self.emitter_count = emitters.len() as u32;
+            self.emitter_list = emitters;
             self.uploaded_instances = instances;
         }
         changed
@@ -194,4 +197,19 @@ pub fn transform_box(m: Mat4, lo: Vec3, hi: Vec3) -> (Vec3, Vec3) {
         out_hi = out_hi.max(p);
     }
     (out_lo, out_hi)
+}
+
+/// The scene's instances as last uploaded, and the entity behind each GPU instance (TLAS leaf order), to map
+/// primary hits back to scene nodes.
+#[derive(Resource, Default)]
+pub struct InstanceMap {
+    pub(crate) last_inputs: Vec<InstanceInput>,
+    pub entities: Vec<Entity>,
+}
+
+impl InstanceMap {
+    /// The placements last uploaded, in the order the top-level build received them.
+    pub fn inputs(&self) -> &[InstanceInput] {
+        &self.last_inputs
+    }
 }

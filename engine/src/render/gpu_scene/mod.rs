@@ -4,9 +4,10 @@
 
 mod deformed;
 mod instances;
+pub mod motion;
 mod packing;
 
-pub use instances::{InstanceInput, transform_box};
+pub use instances::{InstanceInput, InstanceMap, transform_box};
 pub use packing::{gpu_material, luminance};
 
 use super::layout::*;
@@ -108,6 +109,8 @@ pub struct GpuMemory {
     /// GPU deformation: rest attributes, influences, morph deltas, per-frame matrices/weights and refit
     /// tables of the meshes the GPU deforms (0 on the CPU backend).
     pub deform: u64,
+    /// The real-time path's previous-frame scene data ([`motion::SceneMotion`]; 0 while it is off).
+    pub motion: u64,
 }
 
 impl GpuMemory {
@@ -145,6 +148,10 @@ pub struct GpuScene {
     emissive_triangles: Vec<Vec<(u32, u32)>>,
     /// Instances as last uploaded (TLAS leaf order): material edits rebuild the emitter list from them.
     uploaded_instances: Vec<GpuInstance>,
+    /// The emitter list as last uploaded.
+    emitter_list: Vec<GpuEmitter>,
+    /// The real-time path's previous-frame data, while it runs.
+    pub motion: Option<motion::SceneMotion>,
     /// Bumped whenever buffers are recreated, so bind groups are rebuilt.
     pub generation: u64,
     /// Build quality of the upload (rebuilds of the upload tree use it).
@@ -282,6 +289,7 @@ impl GpuScene {
             texels: (texels.len() * 4) as u64,
             instances_and_tlas: 0,
             deform: 0,
+            motion: 0,
         };
         let gpu_scene = Self {
             blas_nodes: storage(ctx, "blas nodes", bytemuck::cast_slice(&blas_nodes)),
@@ -303,6 +311,8 @@ impl GpuScene {
             instance_order: Vec::new(),
             emissive_triangles,
             uploaded_instances: Vec::new(),
+            emitter_list: Vec::new(),
+            motion: None,
             generation: 1,
             bvh_quality: quality,
             build_seconds: start.elapsed().as_secs_f64(),

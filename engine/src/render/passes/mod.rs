@@ -5,9 +5,15 @@
 pub mod deform;
 pub mod denoise;
 pub mod display;
+pub mod gbuffer;
+pub mod gradient;
+pub mod handover;
 pub mod pick;
 pub mod raycast;
+pub mod realtime_trace;
 pub mod refit;
+pub mod restir_di;
+pub mod temporal;
 pub mod tonemap;
 pub mod trace;
 
@@ -24,6 +30,12 @@ pub fn all_kernels() -> Vec<(&'static str, String)> {
         &display::KERNEL,
         &deform::KERNEL,
         &refit::KERNEL,
+        &gbuffer::KERNEL,
+        &restir_di::KERNEL,
+        &realtime_trace::KERNEL,
+        &gradient::KERNEL,
+        &temporal::KERNEL,
+        &handover::KERNEL,
     ]
     .into_iter()
     .map(|k: &ShaderModule| (k.name, compose(k)))

@@ -191,6 +191,11 @@ impl Denoiser {
         self.targets = OnceLock::new();
     }
 
+    /// The output buffer of the last [`Self::encode`] (`None` before the first).
+    pub fn output(&self) -> Option<&wgpu::Buffer> {
+        self.targets.get().map(|t| &t.output)
+    }
+
     /// GPU memory held for the current view (0 until the denoiser first runs).
     pub fn memory_bytes(&self) -> u64 {
         self.targets.get().map_or(0, |t| t.bytes)

@@ -2,7 +2,7 @@
 //! RGBA8 into the view's `rgba8` target; or one of the AOVs for inspection.
 
 use crate::gpu::GpuContext;
-use crate::gpu::bind::{Binding, CachedGroup, bind_group, compute_layout, uniform_buffer};
+use crate::gpu::bind::{Binding, bind_group, compute_layout, uniform_buffer};
 use crate::render::shaders::{ShaderModule, compose};
 use crate::render::view::ViewTargets;
 use bevy_ecs::prelude::Resource;
@@ -35,16 +35,23 @@ pub struct TonemapPass {
     pipeline: wgpu::ComputePipeline,
     layout: wgpu::BindGroupLayout,
     params: wgpu::Buffer,
-    /// Over the accumulation [0] and over the denoiser's output [1], remade when the view changes. Behind a
-    /// lock so that a one-off transform (a screenshot, a recorded frame) can run through a shared borrow.
-    groups: Mutex<[CachedGroup<u64>; 2]>,
+    /// Over the accumulation and over the last few other inputs (the denoiser's output, the real-time
+    /// image), by view generation and input; remade when the view changes. Behind a lock so that a one-off
+    /// transform (a screenshot, a recorded frame) can run through a shared borrow.
+    groups: Mutex<Vec<(GroupKey, wgpu::BindGroup)>>,
 }
+
+/// A bind group's view generation and radiance input (`None`: the view's accumulation).
+type GroupKey = (u64, Option<wgpu::Buffer>);
+
+/// Bind groups kept: the accumulation, the denoiser's output, the real-time image and the hand-over's.
+const CACHED_GROUPS: usize = 4;
 
 /// Which radiance the transform reads.
 #[derive(Clone, Copy)]
 pub enum TonemapInput<'a> {
     Accumulation,
-    /// The denoiser's output (same layout as the accumulation).
+    /// Another buffer in the accumulation's layout: the denoiser's output, the real-time image.
     Denoised(&'a wgpu::Buffer),
 }
 
@@ -70,27 +77,32 @@ impl TonemapPass {
 
     /// The bind group over the view and `input` (made again only when the view was replaced).
     fn group(&self, ctx: &GpuContext, view: &ViewTargets, input: TonemapInput) -> wgpu::BindGroup {
-        let (radiance, slot) = match input {
-            TonemapInput::Accumulation => (&view.accum, 0),
-            TonemapInput::Denoised(b) => (b, 1),
+        let (radiance, key) = match input {
+            TonemapInput::Accumulation => (&view.accum, (view.generation, None)),
+            TonemapInput::Denoised(b) => (b, (view.generation, Some(b.clone()))),
         };
         let mut groups = self.groups.lock().unwrap_or_else(|e| e.into_inner());
-        groups[slot]
-            .get_or_make(view.generation, || {
-                bind_group(
-                    ctx,
-                    "tonemap",
-                    &self.layout,
-                    &[
-                        radiance,
-                        &view.albedo_depth,
-                        &view.normal_hits,
-                        &view.rgba8,
-                        &self.params,
-                    ],
-                )
-            })
-            .clone()
+        if let Some((_, g)) = groups.iter().find(|(k, _)| *k == key) {
+            return g.clone();
+        }
+        let group = bind_group(
+            ctx,
+            "tonemap",
+            &self.layout,
+            &[
+                radiance,
+                &view.albedo_depth,
+                &view.normal_hits,
+                &view.rgba8,
+                &self.params,
+            ],
+        );
+        groups.retain(|(k, _)| k.0 == view.generation);
+        if groups.len() >= CACHED_GROUPS {
+            groups.remove(0);
+        }
+        groups.push((key, group.clone()));
+        group
     }
 
     /// Records the transform of `input` into the view's `rgba8`.

@@ -1,0 +1,97 @@
+//! The G-buffer pass of the real-time path: one jittered camera ray per pixel and what it hit, with motion
+//! vectors from the previous camera, placements and deformed positions (`gbuffer.wgsl`). It moves each
+//! pixel's previous surface to the previous-frame G-buffer as it writes the new one.
+
+use crate::gpu::GpuContext;
+use crate::gpu::bind::{Binding, CachedGroup, bind_group, compute_layout};
+use crate::render::realtime::{RealtimeTargets, SceneGroups};
+use crate::render::shaders::{ShaderModule, compose};
+use crate::render::view::ViewTargets;
+
+pub const KERNEL: ShaderModule = ShaderModule {
+    name: "gbuffer",
+    source: include_str!("gbuffer.wgsl"),
+    requires: &[
+        "constants",
+        "camera",
+        "sampler",
+        "octahedral",
+        "integrator/path",
+        "realtime/frame",
+        "realtime/gbuffer",
+        "realtime/motion",
+    ],
+};
+
+pub struct GBufferPass {
+    pipeline: wgpu::ComputePipeline,
+    layout: wgpu::BindGroupLayout,
+    group: CachedGroup<(u64, u64)>,
+}
+
+impl GBufferPass {
+    pub fn new(
+        ctx: &GpuContext,
+        scene_layout: &wgpu::BindGroupLayout,
+        motion_layout: &wgpu::BindGroupLayout,
+    ) -> Self {
+        use Binding::*;
+        // frame, real-time frame, G-buffer, previous G-buffer, ray counter
+        let layout = compute_layout(
+            ctx,
+            "gbuffer",
+            &[Uniform, Uniform, ReadWrite, ReadWrite, ReadWrite],
+        );
+        let pipeline = crate::gpu::compute_pipeline(
+            &ctx.device,
+            "gbuffer",
+            compose(&KERNEL),
+            &[Some(scene_layout), Some(&layout), Some(motion_layout)],
+            "write_gbuffer",
+        );
+        Self {
+            pipeline,
+            layout,
+            group: CachedGroup::default(),
+        }
+    }
+
+    /// Records the pass; the view's frame uniform and the targets' real-time uniform hold this frame's.
+    pub fn encode(
+        &mut self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        groups: &SceneGroups,
+        view: &ViewTargets,
+        targets: &RealtimeTargets,
+        timestamp_writes: Option<wgpu::ComputePassTimestampWrites>,
+    ) {
+        let layout = &self.layout;
+        let group = self
+            .group
+            .get_or_make((view.generation, targets.generation), || {
+                bind_group(
+                    ctx,
+                    "gbuffer",
+                    layout,
+                    &[
+                        &view.frame,
+                        &targets.uniform,
+                        &targets.gbuffer,
+                        &targets.gbuffer_prev,
+                        &view.ray_counter,
+                    ],
+                )
+            });
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("gbuffer"),
+            timestamp_writes,
+        });
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, groups.scene, &[]);
+        pass.set_bind_group(1, group, &[]);
+        pass.set_bind_group(2, groups.motion, &[]);
+        let (x, y) = view.workgroups();
+        pass.dispatch_workgroups(x, y, 1);
+    }
+}

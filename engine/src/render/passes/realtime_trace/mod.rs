@@ -1,0 +1,102 @@
+//! The real-time trace pass: one path per pixel from the G-buffer's first hit (`realtime_trace.wgsl`), with
+//! ReSTIR DI's direct light when it ran, into the frame's samples; and, at each gradient stratum's chosen
+//! pixel, the estimate the next frame's gradient pass compares against.
+
+use crate::gpu::GpuContext;
+use crate::gpu::bind::{Binding, CachedGroup, bind_group, compute_layout};
+use crate::render::realtime::{RealtimeTargets, SceneGroups};
+use crate::render::shaders::{ShaderModule, compose};
+use crate::render::view::ViewTargets;
+
+pub const KERNEL: ShaderModule = ShaderModule {
+    name: "realtime_trace",
+    source: include_str!("realtime_trace.wgsl"),
+    requires: &[
+        "constants",
+        "camera",
+        "sampler",
+        "realtime/frame",
+        "realtime/sample",
+        "integrator/realtime",
+    ],
+};
+
+pub struct RealtimeTracePass {
+    pipeline: wgpu::ComputePipeline,
+    layout: wgpu::BindGroupLayout,
+    group: CachedGroup<(u64, u64)>,
+}
+
+impl RealtimeTracePass {
+    pub fn new(
+        ctx: &GpuContext,
+        scene_layout: &wgpu::BindGroupLayout,
+        motion_layout: &wgpu::BindGroupLayout,
+    ) -> Self {
+        use Binding::*;
+        // frame, real-time frame, G-buffer, direct light, samples, gradient estimates, ray counter
+        let layout = compute_layout(
+            ctx,
+            "realtime trace",
+            &[
+                Uniform, Uniform, Read, Read, ReadWrite, ReadWrite, ReadWrite,
+            ],
+        );
+        let pipeline = crate::gpu::compute_pipeline(
+            &ctx.device,
+            "realtime trace",
+            compose(&KERNEL),
+            &[Some(scene_layout), Some(&layout), Some(motion_layout)],
+            "trace_realtime",
+        );
+        Self {
+            pipeline,
+            layout,
+            group: CachedGroup::default(),
+        }
+    }
+
+    pub fn encode(
+        &mut self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        groups: &SceneGroups,
+        view: &ViewTargets,
+        targets: &RealtimeTargets,
+        timestamp_writes: Option<wgpu::ComputePassTimestampWrites>,
+    ) {
+        let layout = &self.layout;
+        let group = self
+            .group
+            .get_or_make((view.generation, targets.generation), || {
+                let direct = targets
+                    .restir
+                    .as_ref()
+                    .map_or(&targets.stub, |r| &r.direct_light);
+                bind_group(
+                    ctx,
+                    "realtime trace",
+                    layout,
+                    &[
+                        &view.frame,
+                        &targets.uniform,
+                        &targets.gbuffer,
+                        direct,
+                        &targets.samples,
+                        &targets.gradient_estimates,
+                        &view.ray_counter,
+                    ],
+                )
+            });
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("realtime trace"),
+            timestamp_writes,
+        });
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, groups.scene, &[]);
+        pass.set_bind_group(1, group, &[]);
+        pass.set_bind_group(2, groups.motion, &[]);
+        let (x, y) = view.workgroups();
+        pass.dispatch_workgroups(x, y, 1);
+    }
+}

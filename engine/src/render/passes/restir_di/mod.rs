@@ -1,0 +1,109 @@
+//! ReSTIR DI over the real-time G-buffer (`restir_di.wgsl`): initial candidates with visibility reuse and
+//! temporal reuse in one dispatch, spatial reuse and shading in a second; the final reservoirs stay for the
+//! next frame. Which stages run, and whether reuse is unbiased, are flags of the real-time uniform.
+
+use crate::gpu::GpuContext;
+use crate::gpu::bind::{Binding, CachedGroup, bind_group, compute_layout};
+use crate::render::realtime::{RealtimeTargets, SceneGroups};
+use crate::render::shaders::{ShaderModule, compose};
+use crate::render::view::ViewTargets;
+
+pub const KERNEL: ShaderModule = ShaderModule {
+    name: "restir_di",
+    source: include_str!("restir_di.wgsl"),
+    requires: &[
+        "constants",
+        "camera",
+        "sampler",
+        "realtime/frame",
+        "restir/reservoir",
+        "integrator/realtime",
+    ],
+};
+
+pub struct RestirDiPass {
+    candidates: wgpu::ComputePipeline,
+    spatial: wgpu::ComputePipeline,
+    layout: wgpu::BindGroupLayout,
+    group: CachedGroup<(u64, u64)>,
+}
+
+impl RestirDiPass {
+    pub fn new(
+        ctx: &GpuContext,
+        scene_layout: &wgpu::BindGroupLayout,
+        motion_layout: &wgpu::BindGroupLayout,
+    ) -> Self {
+        use Binding::*;
+        // frame, real-time frame, G-buffer, previous G-buffer, reservoirs, temporal reservoirs, direct light,
+        // ray counter
+        let layout = compute_layout(
+            ctx,
+            "restir di",
+            &[
+                Uniform, Uniform, Read, Read, ReadWrite, ReadWrite, ReadWrite, ReadWrite,
+            ],
+        );
+        let [candidates, spatial] = crate::gpu::compute_pipelines(
+            &ctx.device,
+            "restir di",
+            compose(&KERNEL),
+            &[Some(scene_layout), Some(&layout), Some(motion_layout)],
+            ["candidates", "spatial"],
+        );
+        Self {
+            candidates,
+            spatial,
+            layout,
+            group: CachedGroup::default(),
+        }
+    }
+
+    /// Records both dispatches in one compute pass (after the G-buffer pass of this frame).
+    pub fn encode(
+        &mut self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        groups: &SceneGroups,
+        view: &ViewTargets,
+        targets: &RealtimeTargets,
+        timestamp_writes: Option<wgpu::ComputePassTimestampWrites>,
+    ) {
+        let layout = &self.layout;
+        let restir = targets
+            .restir
+            .as_ref()
+            .expect("ReSTIR buffers allocated before the pass runs");
+        let group = self
+            .group
+            .get_or_make((view.generation, targets.generation), || {
+                bind_group(
+                    ctx,
+                    "restir di",
+                    layout,
+                    &[
+                        &view.frame,
+                        &targets.uniform,
+                        &targets.gbuffer,
+                        &targets.gbuffer_prev,
+                        &restir.reservoirs,
+                        &restir.reservoirs_temporal,
+                        &restir.direct_light,
+                        &view.ray_counter,
+                    ],
+                )
+            });
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("restir di"),
+            timestamp_writes,
+        });
+        pass.set_bind_group(0, groups.scene, &[]);
+        pass.set_bind_group(1, group, &[]);
+        pass.set_bind_group(2, groups.motion, &[]);
+        let (x, y) = view.workgroups();
+        for pipeline in [&self.candidates, &self.spatial] {
+            pass.set_pipeline(pipeline);
+            pass.dispatch_workgroups(x, y, 1);
+        }
+    }
+}

@@ -1,0 +1,93 @@
+//! Keeps the scene's previous-frame data (`gpu_scene::motion::SceneMotion`) current while the real-time path
+//! runs: allocated when the mode says so (before this frame's deformation, so that the deform backends keep
+//! the previous positions from the first frame on), and each frame the instances' previous placements, their
+//! stable object ids and the light list's keys.
+
+use crate::gpu::GpuContext;
+use crate::render::gpu_scene::GpuScene;
+use crate::render::gpu_scene::InstanceMap;
+use crate::render::layout::GpuMotionInstance;
+use crate::render::settings::{RenderMode, RenderSettings};
+use crate::scene::SceneAssets;
+use bevy_ecs::prelude::*;
+use std::collections::HashMap;
+
+/// Stable ids of the entities behind GPU instances (dense, never reused), and where each was placed last frame.
+#[derive(Resource, Default)]
+pub struct MotionObjects {
+    ids: HashMap<Entity, u32>,
+    last_world: HashMap<Entity, [[f32; 4]; 3]>,
+}
+
+impl MotionObjects {
+    /// The entity behind a stable object id.
+    pub fn entity(&self, object: u32) -> Option<Entity> {
+        self.ids
+            .iter()
+            .find(|(_, id)| **id == object)
+            .map(|(e, _)| *e)
+    }
+
+    fn id(&mut self, entity: Entity) -> u32 {
+        let next = self.ids.len() as u32;
+        *self.ids.entry(entity).or_insert(next)
+    }
+}
+
+/// Allocates the previous-frame data while the mode is real-time, frees it otherwise.
+pub fn sync_scene_motion(
+    ctx: Res<GpuContext>,
+    assets: Res<SceneAssets>,
+    settings: Res<RenderSettings>,
+    mut scene: ResMut<GpuScene>,
+) {
+    match settings.mode {
+        RenderMode::Realtime => scene.enable_motion(&ctx, &assets.0),
+        RenderMode::Accumulate => {
+            if scene.motion.is_some() {
+                scene.disable_motion();
+            }
+        }
+    }
+}
+
+/// Uploads each instance's previous placement and object id (in this frame's instance order) and the light
+/// list's keys (after the top-level BVH and the instances were uploaded).
+pub fn update_scene_motion(
+    ctx: Res<GpuContext>,
+    map: Res<InstanceMap>,
+    mut objects: ResMut<MotionObjects>,
+    mut scene: ResMut<GpuScene>,
+) {
+    if scene.motion.is_none() {
+        return;
+    }
+    let mut instances = Vec::with_capacity(map.entities.len());
+    for (&entity, inst) in map.entities.iter().zip(scene.uploaded_instances()) {
+        let prev = objects.last_world.get(&entity).copied();
+        instances.push(GpuMotionInstance {
+            prev_world_from_object: prev.unwrap_or(inst.world_from_object),
+            object: objects.id(entity),
+            _pad: [0; 3],
+        });
+    }
+    objects.last_world = map
+        .entities
+        .iter()
+        .zip(scene.uploaded_instances())
+        .map(|(&e, inst)| (e, inst.world_from_object))
+        .collect();
+    let lights: Vec<(u32, u32)> = scene
+        .light_list()
+        .iter()
+        .map(|l| {
+            let object = instances
+                .get(l.instance as usize)
+                .map_or(u32::MAX, |i| i.object);
+            (object, l.triangle)
+        })
+        .collect();
+    let motion = scene.motion.as_mut().expect("checked above");
+    motion.write_instances(&ctx, &instances);
+    motion.write_lights(&ctx, lights);
+}
