@@ -436,8 +436,11 @@ fn enormous_geometry_builds_a_bvh() {
     assert!(blas.binary().is_some());
 }
 
+/// A primitive's positions and triangle indices.
+type Primitive = (Vec<[f32; 3]>, Vec<u32>);
+
 /// A square frame (outer half-size 1, inner 0.8) as 8 vertices and 8 triangles, scaled by `s` in x and y.
-fn frame(s: f32) -> (Vec<[f32; 3]>, Vec<u32>) {
+fn frame(s: f32) -> Primitive {
     let mut p = Vec::new();
     for r in [1.0f32, 0.8] {
         p.extend(
@@ -454,10 +457,7 @@ fn frame(s: f32) -> (Vec<[f32; 3]>, Vec<u32>) {
 }
 
 /// A glTF of one mesh per `primitives` entry, `nodes` as (mesh, scale); buffers in a data URI.
-fn scene_json(
-    meshes: &[Vec<(Vec<[f32; 3]>, Vec<u32>)>],
-    nodes: &[(usize, f32)],
-) -> serde_json::Value {
+fn scene_json(meshes: &[Vec<Primitive>], nodes: &[(usize, f32)]) -> serde_json::Value {
     use base64::Engine as _;
     let (mut bin, mut views, mut accessors, mut json_meshes) = (Vec::new(), vec![], vec![], vec![]);
     for prims in meshes {

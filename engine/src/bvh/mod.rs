@@ -350,10 +350,10 @@ impl Blas {
         deformable: bool,
     ) -> Result<Self, BvhTooDeep> {
         if !deformable && layout == StaticLayout::Wide {
-            match WideBvh::build(positions, triangles, quality) {
-                Ok(wide) => return Ok(Self::Wide(wide)),
-                // Traversal gives the same image through the BVH2, which is never too deep.
-                Err(_) => {}
+            // Where the wide build fails, traversal gives the same image through the BVH2, which is never
+            // too deep.
+            if let Ok(wide) = WideBvh::build(positions, triangles, quality) {
+                return Ok(Self::Wide(wide));
             }
         }
         Ok(Self::Binary(MeshBvh::build(positions, triangles, quality)?))

@@ -92,6 +92,7 @@ pub fn save_with_materials(
         .filter(|d| !d.as_os_str().is_empty())
         .unwrap_or(Path::new("."));
     std::fs::create_dir_all(out_dir).map_err(|e| write_err(out_dir, e.to_string()))?;
+    let external = access.external_files;
     let sources = Sources {
         dir: source_dir,
         blob: blob.as_deref(),
@@ -104,14 +105,49 @@ pub fn save_with_materials(
         root.to_vec_pretty()
             .map_err(|e| source_err(e.to_string()))?
     };
-    // gltf-json writes some values it cannot read back (non-finite numbers as null): never write a file the
-    // loader would refuse.
-    if let Err(e) = gltf::Gltf::from_slice_without_validation(&bytes) {
-        return Err(source_err(format!(
-            "the saved file would not load ({e}); nothing was written"
-        )));
+    // Never write a file that does not read back as the scene it came from: gltf-json writes values it cannot
+    // read (non-finite numbers as null, empty arrays left out), and repacking can break what an extension
+    // relies on (the loader fuzzer found both).
+    if let Err(reason) = check_reads_back(
+        &bytes,
+        out,
+        out_dir,
+        source_bytes,
+        source_dir,
+        source_name,
+        external,
+    ) {
+        return Err(source_err(format!("{reason}; nothing was written")));
     }
     crate::image_io::write_bytes_atomically(out, &bytes).map_err(|e| write_err(out, e.to_string()))
+}
+
+/// `Ok` when `saved` (to be written at `out`) loads with the triangle count of the source.
+fn check_reads_back(
+    saved: &[u8],
+    out: &Path,
+    out_dir: &Path,
+    source_bytes: &[u8],
+    source_dir: &Path,
+    source_name: &str,
+    external_files: bool,
+) -> Result<(), String> {
+    let options = super::LoadOptions {
+        skip_images: true,
+        allow_external_files: external_files,
+        ..Default::default()
+    };
+    let reloaded = super::load_gltf_slice(saved, out_dir, out, &options)
+        .map_err(|e| format!("the saved file would not load ({e})"))?;
+    let source = super::load_gltf_slice(source_bytes, source_dir, Path::new(source_name), &options);
+    match source {
+        Ok(source) if source.triangle_count() != reloaded.triangle_count() => Err(format!(
+            "the saved file would read back with {} triangles instead of {}",
+            reloaded.triangle_count(),
+            source.triangle_count()
+        )),
+        _ => Ok(()),
+    }
 }
 
 /// Writes the editable parameters of `m` over the JSON material; texture references the editor turned off are

@@ -206,6 +206,10 @@ fn component_name(c: ComponentType) -> &'static str {
 
 /// Whether accessor `i` can be read at all, and its format: every range is checked in u64 with overflow
 /// checks, as the readers compute `offset + stride * (count - 1) + size` unchecked.
+/// Most elements an accessor without a bufferView may have (zeros, or a Draco primitive's decoded values):
+/// 2^25, 384 MiB of float positions.
+const MAX_VIEWLESS_ELEMENTS: u64 = 1 << 25;
+
 fn accessor(root: &json::Root, i: usize) -> Result<Format, String> {
     let a = &root.accessors[i];
     let (Checked::Valid(component), Checked::Valid(ty)) = (a.component_type, a.type_) else {
@@ -231,6 +235,13 @@ fn accessor(root: &json::Root, i: usize) -> Result<Format, String> {
                     view.value()
                 )
             })?;
+    } else if count > MAX_VIEWLESS_ELEMENTS {
+        // Without a bufferView the reader makes `count` zeros (or Draco decodes them): bound what a few bytes
+        // of JSON can make it allocate.
+        return Err(format!(
+            "accessor {i}: {count} elements without a bufferView (over the {MAX_VIEWLESS_ELEMENTS} raykin \
+             fills with zeros or decodes)"
+        ));
     }
     if let Some(sparse) = &a.sparse {
         let n = sparse.count.0;
