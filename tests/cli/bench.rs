@@ -54,9 +54,12 @@ fn quick_suite_writes_sane_results_and_charts() {
     check_error_curves(&results, &out);
     check_bvh(&results);
     check_scaling(&results);
+    check_motion(&results);
 
     let charts = results["charts"].as_array().unwrap();
-    assert_eq!(charts.len(), 6, "charts: {charts:?}");
+    // Frame breakdown, two error curves, BVH presets, refit vs rebuild, scaling, and the motion part's two
+    // scenes (interior, crowd).
+    assert_eq!(charts.len(), 8, "charts: {charts:?}");
     for c in charts {
         check_chart(&out.join(c.as_str().unwrap()));
     }
@@ -70,6 +73,29 @@ fn quick_suite_writes_sane_results_and_charts() {
     let csv = std::fs::read_to_string(out.join("results.csv")).unwrap();
     assert_eq!(csv.lines().count(), 1 + 3, "results.csv:\n{csv}");
     let _ = std::fs::remove_dir_all(&out);
+}
+
+/// The motion part (issue 13): per scene, every method's evaluated frames have finite errors.
+fn check_motion(results: &Value) {
+    let scenes = results["motion"].as_array().expect("a motion part");
+    assert!(!scenes.is_empty(), "no motion scenes");
+    for scene in scenes {
+        let curves = scene["curves"].as_array().unwrap();
+        assert!(
+            curves.len() >= 2,
+            "{}: {} methods",
+            scene["scene"],
+            curves.len()
+        );
+        for curve in curves {
+            let points = curve["points"].as_array().unwrap();
+            assert!(!points.is_empty(), "{}: no frames", curve["method"]);
+            for p in points {
+                let e = f(&p["rel_mse"]);
+                assert!(e.is_finite() && e >= 0.0, "{}: relMSE {e}", curve["method"]);
+            }
+        }
+    }
 }
 
 fn check_frame_rows(results: &Value) {

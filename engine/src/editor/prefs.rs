@@ -32,7 +32,8 @@ pub struct ViewerPrefs {
     /// Fly/orbit movement speed in scene units per second (None: from the scene's size).
     pub camera_speed: Option<f32>,
     pub last_scene: Option<PathBuf>,
-    /// Real-time while anything moves (the viewer's default), or accumulation only.
+    /// Accumulation only (the default until the real-time path meets its error targets, docs/BENCHMARKS.md),
+    /// or real-time while anything moves (`--mode realtime`, the Render panel; the choice is saved).
     pub mode: RenderMode,
     pub realtime: RealtimeSettings,
 }
@@ -58,7 +59,7 @@ impl Default for ViewerPrefs {
             window_height: 800,
             camera_speed: None,
             last_scene: None,
-            mode: RenderMode::Realtime,
+            mode: RenderMode::Accumulate,
             realtime: render.realtime,
         }
     }
