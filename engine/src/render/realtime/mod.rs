@@ -38,6 +38,27 @@ pub struct SceneGroups<'a> {
     pub motion: &'a wgpu::BindGroup,
 }
 
+impl SceneGroups<'_> {
+    /// A compute pass of a real-time kernel over the scene: the scene as group 0, the pass's own `group` as
+    /// group 1, the scene's motion as group 2.
+    pub fn begin_pass<'e>(
+        &self,
+        encoder: &'e mut wgpu::CommandEncoder,
+        label: &str,
+        group: &wgpu::BindGroup,
+        timestamp_writes: Option<wgpu::ComputePassTimestampWrites<'_>>,
+    ) -> wgpu::ComputePass<'e> {
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some(label),
+            timestamp_writes,
+        });
+        pass.set_bind_group(0, self.scene, &[]);
+        pass.set_bind_group(1, group, &[]);
+        pass.set_bind_group(2, self.motion, &[]);
+        pass
+    }
+}
+
 /// A colour history in the accumulation's layout (sums over the history length; see `temporal.wgsl`).
 pub struct HistoryBuffers {
     pub accum: wgpu::Buffer,

@@ -88,14 +88,8 @@ impl RealtimeTracePass {
                     ],
                 )
             });
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("realtime trace"),
-            timestamp_writes,
-        });
+        let mut pass = groups.begin_pass(encoder, "realtime trace", group, timestamp_writes);
         pass.set_pipeline(&self.pipeline);
-        pass.set_bind_group(0, groups.scene, &[]);
-        pass.set_bind_group(1, group, &[]);
-        pass.set_bind_group(2, groups.motion, &[]);
         let (x, y) = view.workgroups();
         pass.dispatch_workgroups(x, y, 1);
     }

@@ -93,13 +93,7 @@ impl RestirDiPass {
                     ],
                 )
             });
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("restir di"),
-            timestamp_writes,
-        });
-        pass.set_bind_group(0, groups.scene, &[]);
-        pass.set_bind_group(1, group, &[]);
-        pass.set_bind_group(2, groups.motion, &[]);
+        let mut pass = groups.begin_pass(encoder, "restir di", group, timestamp_writes);
         let (x, y) = view.workgroups();
         for pipeline in [&self.candidates, &self.spatial] {
             pass.set_pipeline(pipeline);
