@@ -2,7 +2,7 @@
 
 use crate::camera::{CameraChoice, CameraView, resolve_camera};
 use crate::gpu::GpuContext;
-use crate::render::{Aovs, RenderPlugin, RenderSettings, Renderer};
+use crate::render::{Aovs, DenoiserKind, RenderPlugin, RenderSettings, Renderer};
 use crate::scene::{SceneAsset, ScenePlugin};
 use bevy_app::App;
 use std::sync::Arc;
@@ -45,6 +45,7 @@ impl HeadlessApp {
         app.insert_resource(ctx.clone())
             .insert_resource(settings.clone())
             .insert_resource(renderer)
+            .init_resource::<crate::oidn::HeadlessOidn>()
             .add_plugins(ScenePlugin {
                 scene: scene.clone(),
             })
@@ -262,11 +263,57 @@ impl HeadlessApp {
         self.renderer().tracer.denoised_radiance(&self.ctx, &params)
     }
 
-    /// The image an output file takes: [`Self::denoised_radiance`] when `RenderSettings::denoise` is on, else
-    /// [`Self::radiance`] (as the display pass follows the same setting).
+    /// The current accumulation through Open Image Denoise at the settings' `oidn_quality` (whether or not
+    /// `RenderSettings::denoise` is on), with its timings; blocks. Errors say why OIDN cannot run.
+    pub fn oidn_denoised(&self) -> Result<crate::oidn::OidnImage, crate::oidn::OidnError> {
+        let quality = self.app.world().resource::<RenderSettings>().oidn_quality;
+        self.app
+            .world()
+            .resource::<crate::oidn::HeadlessOidn>()
+            .denoise(&self.ctx, &self.renderer().tracer, quality)
+    }
+
+    /// Opens OIDN's device now (it is otherwise opened at the first OIDN denoise): its description, or why
+    /// OIDN cannot run (then the svgf denoiser stands in).
+    pub fn open_oidn(&self) -> Result<String, crate::oidn::OidnError> {
+        self.app
+            .world()
+            .resource::<crate::oidn::HeadlessOidn>()
+            .open(&self.ctx)
+    }
+
+    /// With `denoise` on and OIDN chosen, opens OIDN's device now: `Some(Ok(device))`; when OIDN cannot run,
+    /// switches this app's settings to svgf and returns `Some(Err(why))` for the caller to report. `None`
+    /// when the settings do not ask for OIDN.
+    pub fn resolve_denoiser(&mut self) -> Option<Result<String, crate::oidn::OidnError>> {
+        let s = self.app.world().resource::<RenderSettings>();
+        if !(s.denoise && s.denoiser == DenoiserKind::Oidn) {
+            return None;
+        }
+        let opened = self.open_oidn();
+        if opened.is_err() {
+            self.settings_mut().denoiser = DenoiserKind::Svgf;
+        }
+        Some(opened)
+    }
+
+    /// The denoised image the settings ask for: OIDN's, or svgf's when the settings pick svgf or OIDN fails
+    /// (with a warning).
+    fn chosen_denoised(&self) -> Vec<[f32; 3]> {
+        if self.app.world().resource::<RenderSettings>().denoiser == DenoiserKind::Oidn {
+            match self.oidn_denoised() {
+                Ok(image) => return image.color.to_vec(),
+                Err(e) => tracing::warn!("{e}; denoising with svgf instead"),
+            }
+        }
+        self.denoised_radiance()
+    }
+
+    /// The image an output file takes: denoised by the settings' denoiser when `RenderSettings::denoise` is
+    /// on, else [`Self::radiance`] (as the display pass follows the same settings).
     pub fn output_radiance(&self) -> Vec<[f32; 3]> {
         if self.app.world().resource::<RenderSettings>().denoise {
-            self.denoised_radiance()
+            self.chosen_denoised()
         } else {
             self.radiance()
         }
@@ -280,6 +327,12 @@ impl HeadlessApp {
     pub fn display_rgba8(&self) -> Vec<u8> {
         let settings = self.app.world().resource::<RenderSettings>().clone();
         let r = self.renderer();
+        if settings.denoise && settings.denoiser == DenoiserKind::Oidn {
+            // The tone mapper shows OIDN's image once the tracer has it, svgf's otherwise.
+            if let Ok(image) = self.oidn_denoised() {
+                r.tracer.show_denoised(&self.ctx, &image.color);
+            }
+        }
         r.tracer.tonemap(&self.ctx, &settings);
         r.tracer.read_rgba8(&self.ctx)
     }

@@ -7,7 +7,7 @@ use raykin::camera::CameraChoice;
 use raykin::gpu::GpuContext;
 use raykin::headless::HeadlessApp;
 use raykin::record::CameraSpec;
-use raykin::render::{Environment, RenderSettings};
+use raykin::render::{DenoiserKind, Environment, RenderSettings};
 use raykin::scene::{LoadOptions, SceneAsset};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -65,7 +65,12 @@ pub fn settings_from(args: &SceneArgs) -> RenderSettings {
         seed: args.seed,
         russian_roulette: !args.no_rr,
         nee: !args.no_nee,
-        denoise: args.denoise,
+        denoise: args.denoise.is_some(),
+        denoiser: args
+            .denoise
+            .unwrap_or(crate::cli::DenoiseArg::Default)
+            .into(),
+        oidn_quality: args.denoise_quality.into(),
         deform: args.deform.into(),
         static_bvh: args.static_bvh.into(),
         ..Default::default()
@@ -135,6 +140,11 @@ struct RenderReport {
     spp: u32,
     max_depth: u32,
     denoise: bool,
+    /// "oidn" or "svgf" when denoised (svgf also where OIDN was asked for but could not run).
+    denoiser: Option<String>,
+    /// OIDN: the device, and milliseconds from the GPU buffers to the denoised host image.
+    oidn_device: Option<String>,
+    oidn_ms: Option<f64>,
     triangles: usize,
     bvh_build_and_upload_s: f64,
     gpu_memory_geometry_bvh_bytes: u64,
@@ -155,10 +165,39 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         &args.scene,
         camera_from(&args.scene),
         pose,
-        &args.out,
-        args.aovs,
-        args.report.as_deref(),
-    )
+        Outputs {
+            image: &args.out,
+            aovs: args.aovs,
+            report: args.report.as_deref(),
+            noisy_beside: None,
+        },
+    )?;
+    Ok(())
+}
+
+/// What [`render_to_file`] writes.
+struct Outputs<'a> {
+    image: &'a Path,
+    /// First-hit AOVs as EXRs beside the image.
+    aovs: bool,
+    report: Option<&'a Path>,
+    /// With denoising on: the image before denoising, here as well.
+    noisy_beside: Option<&'a Path>,
+}
+
+/// With `--denoise`, opens the chosen denoiser before rendering: OIDN's device is named, or its failure
+/// reported and svgf used instead. Returns the denoiser that will run.
+pub fn announce_denoiser(app: &mut HeadlessApp) -> Option<&'static str> {
+    match app.resolve_denoiser() {
+        Some(Ok(device)) => eprintln!("raykin: denoiser: Open Image Denoise on {device}"),
+        Some(Err(e)) => eprintln!("raykin: warning: {e}; denoising with svgf instead"),
+        None => {}
+    }
+    let s = app.app.world().resource::<RenderSettings>();
+    s.denoise.then_some(match s.denoiser {
+        DenoiserKind::Oidn => "oidn",
+        DenoiserKind::Svgf => "svgf",
+    })
 }
 
 fn check_output(out: &Path) -> Result<()> {
@@ -179,17 +218,15 @@ fn check_output(out: &Path) -> Result<()> {
     Ok(())
 }
 
-#[allow(clippy::too_many_arguments)]
 fn render_to_file(
     ctx: GpuContext,
     scene: Arc<SceneAsset>,
     args: &SceneArgs,
     camera: CameraChoice,
     pose: Option<(usize, f32)>,
-    out: &Path,
-    aovs: bool,
-    report: Option<&Path>,
+    outputs: Outputs,
 ) -> Result<()> {
+    let out = outputs.image;
     let ext = out
         .extension()
         .and_then(|e| e.to_str())
@@ -204,6 +241,7 @@ fn render_to_file(
     if let Some((clip, time)) = pose {
         app.set_time(clip, time).map_err(anyhow::Error::msg)?;
     }
+    let denoiser = announce_denoiser(&mut app);
     let start = Instant::now();
     let bar = progress_bar(args.spp as u64, "rendering");
     app.accumulate(args.spp, args.spp_per_dispatch, |done| {
@@ -212,7 +250,9 @@ fn render_to_file(
     bar.finish_and_clear();
     let wall = start.elapsed().as_secs_f64();
     let (w, h) = (settings.width, settings.height);
+    let denoise_start = Instant::now();
     let radiance = app.output_radiance();
+    let denoise_s = denoise_start.elapsed().as_secs_f64();
     if let Some(bad) = radiance.iter().flatten().find(|v| !v.is_finite()) {
         anyhow::bail!("internal error: the render has a non-finite pixel value ({bad})");
     }
@@ -224,7 +264,14 @@ fn render_to_file(
         let rgba = app.display_rgba8();
         raykin::image_io::write_atomically(out, |p| raykin::image_io::write_png(p, w, h, &rgba))?;
     }
-    if aovs {
+    let noisy = outputs.noisy_beside.filter(|_| denoiser.is_some());
+    if let Some(noisy) = noisy {
+        app.settings_mut().denoise = false;
+        let rgba = app.display_rgba8();
+        raykin::image_io::write_atomically(noisy, |p| raykin::image_io::write_png(p, w, h, &rgba))?;
+        app.settings_mut().denoise = true;
+    }
+    if outputs.aovs {
         let a = app.aovs();
         let stem = out.with_extension("");
         let depth: Vec<[f32; 3]> = a.depth.iter().map(|d| [*d; 3]).collect();
@@ -239,16 +286,33 @@ fn render_to_file(
             })?;
         }
     }
+    let oidn = (denoiser == Some("oidn"))
+        .then(|| app.oidn_denoised().ok())
+        .flatten();
     let renderer = app.renderer();
+    let denoised = match (denoiser, &oidn) {
+        (Some("oidn"), Some(o)) => format!(
+            ", denoised by Open Image Denoise on {} in {:.2} s",
+            o.device, denoise_s
+        ),
+        (Some(d), _) => format!(", denoised by {d} in {denoise_s:.2} s"),
+        (None, _) => String::new(),
+    };
     eprintln!(
-        "raykin: wrote {} ({w}x{h}, {} spp{}, {:.2} s, {:.2} M samples/s)",
+        "raykin: wrote {} ({w}x{h}, {} spp{denoised}, {:.2} s, {:.2} M samples/s)",
         out.display(),
         args.spp,
-        if settings.denoise { ", denoised" } else { "" },
         wall,
         (w as f64 * h as f64 * args.spp as f64) / wall / 1e6
     );
-    if let Some(path) = report {
+    if let Some(noisy) = noisy {
+        eprintln!(
+            "raykin: wrote {} (the same {} spp before denoising)",
+            noisy.display(),
+            args.spp
+        );
+    }
+    if let Some(path) = outputs.report {
         let r = RenderReport {
             scene: scene.source.clone(),
             adapter: app.ctx.info.name.clone(),
@@ -258,6 +322,9 @@ fn render_to_file(
             spp: args.spp,
             max_depth: args.max_depth,
             denoise: settings.denoise,
+            denoiser: denoiser.map(str::to_string),
+            oidn_device: oidn.as_ref().map(|o| o.device.clone()),
+            oidn_ms: oidn.as_ref().map(|o| o.total_ms()),
             triangles: scene.triangle_count(),
             bvh_build_and_upload_s: renderer.scene.build_seconds,
             gpu_memory_geometry_bvh_bytes: renderer.scene.memory.geometry_and_bvh(),
@@ -300,12 +367,26 @@ pub fn run_default() -> Result<()> {
         time: None,
         animation: None,
         spp_per_dispatch: 16,
-        denoise: false,
+        // A newcomer's first picture: denoised (OIDN, else svgf), with the noisy one beside it.
+        denoise: Some(crate::cli::DenoiseArg::Default),
+        denoise_quality: crate::cli::DenoiseQuality::High,
         deform: crate::cli::DeformArg::Auto,
         static_bvh: crate::cli::StaticBvh::Wide,
     };
     let camera = embedded_camera();
     let out = Path::new("out/default.png");
     check_output(out)?;
-    render_to_file(ctx, Arc::new(scene), &args, camera, None, out, false, None)
+    render_to_file(
+        ctx,
+        Arc::new(scene),
+        &args,
+        camera,
+        None,
+        Outputs {
+            image: out,
+            aovs: false,
+            report: None,
+            noisy_beside: Some(Path::new("out/default-noisy.png")),
+        },
+    )
 }

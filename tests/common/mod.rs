@@ -1,6 +1,8 @@
 //! Shared by the integration tests: one GPU context per test binary, asset paths, image statistics.
 #![allow(dead_code)]
 
+pub mod denoising;
+
 use raykin::camera::CameraChoice;
 use raykin::gpu::GpuContext;
 use raykin::headless::HeadlessApp;

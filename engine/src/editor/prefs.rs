@@ -3,7 +3,7 @@
 
 use super::EditorState;
 use crate::camera::CameraRig;
-use crate::render::{AovView, Environment, RenderSettings, Tonemapper};
+use crate::render::{AovView, DenoiserKind, Environment, RenderSettings, Tonemapper};
 use bevy_ecs::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -20,6 +20,8 @@ pub struct ViewerPrefs {
     pub nee: bool,
     pub russian_roulette: bool,
     pub denoise: bool,
+    pub denoiser: DenoiserKind,
+    pub oidn_quality: crate::oidn::Quality,
     pub render_scale: f32,
     /// 0: keep accumulating.
     pub sample_limit: u32,
@@ -45,6 +47,8 @@ impl Default for ViewerPrefs {
             nee: render.nee,
             russian_roulette: render.russian_roulette,
             denoise: render.denoise,
+            denoiser: render.denoiser,
+            oidn_quality: render.oidn_quality,
             render_scale: 1.0,
             sample_limit: 0,
             vsync: true,
@@ -127,6 +131,8 @@ impl ViewerPrefs {
             s.nee = self.nee;
             s.russian_roulette = self.russian_roulette;
             s.denoise = self.denoise;
+            s.denoiser = self.denoiser;
+            s.oidn_quality = self.oidn_quality;
         }
         if let Some(mut e) = world.get_resource_mut::<EditorState>() {
             e.render_scale = self.render_scale.clamp(0.05, 1.0);
@@ -155,6 +161,8 @@ impl ViewerPrefs {
             self.nee = s.nee;
             self.russian_roulette = s.russian_roulette;
             self.denoise = s.denoise;
+            self.denoiser = s.denoiser;
+            self.oidn_quality = s.oidn_quality;
         }
         if let Some(e) = world.get_resource::<EditorState>() {
             self.render_scale = e.render_scale;

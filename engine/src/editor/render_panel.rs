@@ -1,7 +1,7 @@
 //! Render settings: sampling, environment, display transform, AOV view, resolution and frame pacing.
 
 use super::EditorState;
-use crate::render::{AovView, Environment, RenderSettings, Tonemapper};
+use crate::render::{AovView, DenoiserKind, Environment, RenderSettings, Tonemapper};
 use bevy_ecs::prelude::*;
 
 pub fn show(ui: &mut egui::Ui, world: &mut World, state: &mut EditorState) {
@@ -91,9 +91,33 @@ pub fn show(ui: &mut egui::Ui, world: &mut World, state: &mut EditorState) {
             }
             // Display-side: toggling it keeps the accumulated samples.
             ui.label("denoise");
-            ui.checkbox(&mut s.denoise, "");
+            ui.horizontal(|ui| {
+                ui.checkbox(&mut s.denoise, "");
+                if s.denoise {
+                    ui.selectable_value(&mut s.denoiser, DenoiserKind::Oidn, "OIDN")
+                        .on_hover_text(
+                            "Intel Open Image Denoise, once the image is still (svgf while it moves)",
+                        );
+                    ui.selectable_value(&mut s.denoiser, DenoiserKind::Svgf, "svgf")
+                        .on_hover_text("the GPU a-trous filter, every frame");
+                }
+            });
             ui.end_row();
-            if s.denoise {
+            if s.denoise && s.denoiser == DenoiserKind::Oidn {
+                ui.label("  quality");
+                ui.horizontal(|ui| {
+                    for q in crate::oidn::Quality::ALL {
+                        ui.selectable_value(&mut s.oidn_quality, q, q.name());
+                    }
+                });
+                ui.end_row();
+                if let Some(v) = world.get_resource::<crate::oidn::ViewerOidn>() {
+                    ui.label("");
+                    ui.label(oidn_status(&v.status));
+                    ui.end_row();
+                }
+            }
+            if s.denoise && s.denoiser == DenoiserKind::Svgf {
                 let p = &mut s.denoise_params;
                 ui.label("  iterations");
                 ui.add(egui::DragValue::new(&mut p.iterations).range(1..=8));
@@ -133,5 +157,26 @@ pub fn show(ui: &mut egui::Ui, world: &mut World, state: &mut EditorState) {
         });
     if s != before {
         world.insert_resource(s);
+    }
+}
+
+/// One line on OIDN's state for the panel.
+fn oidn_status(status: &crate::oidn::OidnStatus) -> String {
+    use crate::oidn::OidnStatus;
+    match status {
+        OidnStatus::Idle => format!(
+            "runs once the image is still ({} spp)",
+            crate::oidn::viewer::SETTLE_SPP
+        ),
+        OidnStatus::Denoising(spp) => format!("denoising {spp} spp..."),
+        OidnStatus::Shown {
+            samples,
+            device,
+            timings,
+        } => format!(
+            "{samples} spp denoised on {device} in {:.0} ms",
+            timings.total_ms()
+        ),
+        OidnStatus::Unavailable(why) => format!("unavailable, showing svgf: {why}"),
     }
 }

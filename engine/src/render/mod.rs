@@ -12,7 +12,7 @@ pub mod shaders;
 pub use denoise::{DenoiseParams, Denoiser};
 pub use path_tracer::{Aovs, GpuFrameStats, PassTimes, PathTracer, PrimaryHit, RayCastTiming};
 pub use scene_buffers::{GpuMemory, GpuScene, InstanceInput, UploadError};
-pub use settings::{AovView, Environment, RenderSettings, Tonemapper};
+pub use settings::{AovView, DenoiserKind, Environment, RenderSettings, Tonemapper};
 
 use crate::FrameSet;
 use crate::animation::{DeformedElsewhere, DeformedMeshes, MeshPoses};

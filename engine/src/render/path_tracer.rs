@@ -4,7 +4,7 @@
 use super::denoise::{DenoiseInputs, DenoiseParams, Denoiser};
 use super::layout::*;
 use super::scene_buffers::GpuScene;
-use super::settings::{AovView, Environment, RenderSettings};
+use super::settings::{AovView, DenoiserKind, Environment, RenderSettings};
 use crate::camera::CameraView;
 use crate::gpu::GpuContext;
 use bytemuck::{Pod, Zeroable};
@@ -115,6 +115,14 @@ pub struct PathTracer {
     denoised_last_dispatch: bool,
     /// Identifies the per-view buffers (unique across tracers; changes on resize), so displays rebind them.
     pub view_generation: u64,
+    /// Counts accumulation restarts, so an image denoised off the GPU (OIDN) is shown only with the
+    /// accumulation it came from.
+    pub accumulation: u64,
+    /// An image denoised off the GPU, in the accumulation's layout, and the tone mapper's bindings over it
+    /// (made when first shown at this view size).
+    external_denoised: OnceLock<(wgpu::Buffer, wgpu::BindGroup)>,
+    /// `accumulation + 1` of the image in `external_denoised`; 0: none.
+    external_for: std::sync::atomic::AtomicU64,
     dispatches: u64,
     async_stats: Option<crate::gpu::readback::AsyncReadback>,
 }
@@ -321,6 +329,9 @@ impl PathTracer {
             picker: OnceLock::new(),
             denoised_last_dispatch: false,
             view_generation: next_view_id(),
+            accumulation: 0,
+            external_denoised: OnceLock::new(),
+            external_for: Default::default(),
             dispatches: 0,
             async_stats: None,
         };
@@ -368,6 +379,7 @@ impl PathTracer {
         self.view_generation = next_view_id();
         self.denoiser.release();
         self.denoised_tonemap_group = OnceLock::new();
+        self.external_denoised = OnceLock::new();
         self.reset(ctx);
     }
 
@@ -406,6 +418,7 @@ impl PathTracer {
         }
         ctx.queue.submit([encoder.finish()]);
         self.samples = 0;
+        self.accumulation += 1;
     }
 
     fn scene_bind_group(&mut self, ctx: &GpuContext, scene: &GpuScene) -> wgpu::BindGroup {
@@ -542,7 +555,8 @@ impl PathTracer {
             pass.dispatch_workgroups(self.width.div_ceil(8), self.height.div_ceil(8), 1);
         }
         self.samples += spp;
-        let denoise = tonemap && Self::shows_denoised(settings);
+        let denoise =
+            tonemap && Self::shows_denoised(settings) && self.external_shown(settings).is_none();
         if tonemap {
             self.encode_display(ctx, &mut encoder, settings);
         }
@@ -655,6 +669,11 @@ impl PathTracer {
             self.encode_tonemap(ctx, encoder, settings, &self.tonemap_bind_group);
             return;
         }
+        // OIDN's image once it has arrived for this accumulation; the svgf image until then.
+        if let Some(group) = self.external_shown(settings) {
+            self.encode_tonemap(ctx, encoder, settings, group);
+            return;
+        }
         let denoised = self.encode_denoise(ctx, encoder, &settings.denoise_params);
         let group = self.denoised_tonemap_group.get_or_init(|| {
             bind_group(
@@ -670,6 +689,48 @@ impl PathTracer {
             )
         });
         self.encode_tonemap(ctx, encoder, settings, group);
+    }
+
+    /// Shows `image` (linear RGB per pixel, row-major from the top-left, denoised off the GPU) in place of the
+    /// svgf image while the current accumulation lasts and the settings ask for OIDN.
+    pub fn show_denoised(&self, ctx: &GpuContext, image: &[[f32; 3]]) {
+        let (buffer, _) = self.external_denoised.get_or_init(|| {
+            let buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("externally denoised"),
+                size: self.accum.size(),
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            let group = bind_group(
+                ctx,
+                &self.tonemap_layout,
+                &[
+                    &buffer,
+                    &self.aov_albedo_depth,
+                    &self.aov_normal,
+                    &self.output_rgba8,
+                    &self.tonemap_uniform,
+                ],
+            );
+            (buffer, group)
+        });
+        // Sample count 1: the tone mapper divides by it.
+        let pixels: Vec<[f32; 4]> = image.iter().map(|p| [p[0], p[1], p[2], 1.0]).collect();
+        if pixels.len() as u64 * 16 == buffer.size() {
+            ctx.queue
+                .write_buffer(buffer, 0, bytemuck::cast_slice(&pixels));
+            self.external_for
+                .store(self.accumulation + 1, std::sync::atomic::Ordering::Release);
+        }
+    }
+
+    /// The tone mapper's bindings over the OIDN image when the display should show it.
+    fn external_shown(&self, settings: &RenderSettings) -> Option<&wgpu::BindGroup> {
+        let current =
+            self.external_for.load(std::sync::atomic::Ordering::Acquire) == self.accumulation + 1;
+        (settings.denoiser == DenoiserKind::Oidn && current)
+            .then(|| self.external_denoised.get().map(|(_, g)| g))
+            .flatten()
     }
 
     /// Denoises the current accumulation (whatever `RenderSettings::denoise` says) and reads it back: linear

@@ -29,6 +29,17 @@ pub enum AovView {
     Depth = 3,
 }
 
+/// Which denoiser `RenderSettings::denoise` turns on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum DenoiserKind {
+    /// Intel Open Image Denoise on the host ([`crate::oidn`]); where it cannot run, svgf is used instead.
+    #[default]
+    Oidn,
+    /// The GPU a-trous filter ([`super::denoise`]).
+    Svgf,
+}
+
 #[derive(Resource, Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct RenderSettings {
     pub width: u32,
@@ -56,6 +67,10 @@ pub struct RenderSettings {
     pub denoise: bool,
     #[serde(default)]
     pub denoise_params: super::denoise::DenoiseParams,
+    #[serde(default)]
+    pub denoiser: DenoiserKind,
+    #[serde(default)]
+    pub oidn_quality: crate::oidn::Quality,
     /// BVH layout of static meshes (deformable meshes always refit a BVH2).
     pub static_bvh: crate::bvh::StaticLayout,
     /// Where deformable meshes are skinned, morphed and refit (`Auto`: GPU on real GPUs).
@@ -81,6 +96,8 @@ impl Default for RenderSettings {
             bvh_quality: crate::bvh::BvhQuality::Medium,
             denoise: false,
             denoise_params: Default::default(),
+            denoiser: DenoiserKind::default(),
+            oidn_quality: Default::default(),
             static_bvh: crate::bvh::StaticLayout::Wide,
             deform: crate::gpu_deform::DeformBackend::Auto,
         }
@@ -98,6 +115,8 @@ impl RenderSettings {
             spp_per_frame: 1,
             denoise: false,
             denoise_params: Default::default(),
+            denoiser: DenoiserKind::default(),
+            oidn_quality: Default::default(),
             ..s.clone()
         };
         image_part(self) != image_part(other)

@@ -43,6 +43,11 @@ pub struct Suite {
     pub scaling_size: (u32, u32),
     pub scaling_resolutions: Vec<(u32, u32)>,
     pub scaling_frames: usize,
+    /// OIDN: frame sizes its cost is measured at, and runs per measurement; the image size of its error
+    /// gains at 1, 4, 16 and 64 spp (the reference is the error curves' when the sizes agree).
+    pub oidn_sizes: Vec<(u32, u32)>,
+    pub oidn_repeats: usize,
+    pub gain_size: (u32, u32),
 }
 
 fn named(list: &[&str]) -> Vec<String> {
@@ -75,6 +80,9 @@ impl Suite {
                 scaling_size: (32, 18),
                 scaling_resolutions: vec![(16, 9), (32, 18), (64, 36)],
                 scaling_frames: 3,
+                oidn_sizes: vec![(64, 36)],
+                oidn_repeats: 1,
+                gain_size: (24, 16),
             }),
             ("full", false) => Ok(Self {
                 name: "full".into(),
@@ -104,6 +112,9 @@ impl Suite {
                     (3840, 2160),
                 ],
                 scaling_frames: 50,
+                oidn_sizes: vec![(1920, 1080), (2560, 1440)],
+                oidn_repeats: 10,
+                gain_size: (960, 540),
             }),
             ("full", true) => {
                 let s = CPU_LINEAR_SCALE;
@@ -135,6 +146,11 @@ impl Suite {
                         .map(|&(w, h)| scaled(w, h))
                         .collect(),
                     scaling_frames: 6,
+                    // OIDN's CPU device is what is measured here, at full size; a 1-spp input traces in
+                    // seconds even on lavapipe.
+                    oidn_sizes: vec![(1920, 1080), (2560, 1440)],
+                    oidn_repeats: 3,
+                    gain_size: (128, 72),
                 })
             }
             (other, _) => anyhow::bail!("unknown suite `{other}`: quick or full"),

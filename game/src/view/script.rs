@@ -7,7 +7,7 @@ use anyhow::{Context, Result, bail};
 use raykin::animation::AnimationPlayer;
 use raykin::camera::{CameraInput, CameraMode, CameraRig};
 use raykin::editor::EditorState;
-use raykin::render::{AovView, Environment, RenderSettings, Renderer, Tonemapper};
+use raykin::render::{AovView, DenoiserKind, Environment, RenderSettings, Renderer, Tonemapper};
 use raykin::scene::{AlphaMode, Materials};
 use std::path::{Path, PathBuf};
 
@@ -37,7 +37,9 @@ pub enum Setting {
     Env([f32; 3]),
     SampleLimit(u32),
     Seed(u32),
-    Denoise(bool),
+    /// Off, or on with this denoiser (`on`: the default one).
+    Denoise(Option<DenoiserKind>),
+    DenoiseQuality(raykin::oidn::Quality),
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -172,9 +174,15 @@ fn parse_line(line: &str) -> Result<Option<Command>> {
                 "seed" => Setting::Seed(uint(values)? as u32),
                 "sky" => Setting::Sky,
                 "denoise" => Setting::Denoise(match values {
-                    ["on"] => true,
-                    ["off"] => false,
-                    _ => bail!("denoise: on or off"),
+                    ["on"] => Some(DenoiserKind::default()),
+                    ["oidn"] => Some(DenoiserKind::Oidn),
+                    ["svgf"] => Some(DenoiserKind::Svgf),
+                    ["off"] => None,
+                    _ => bail!("denoise: on, off, oidn or svgf"),
+                }),
+                "denoise_quality" => Setting::DenoiseQuality(match values {
+                    [q] => q.parse().map_err(anyhow::Error::msg)?,
+                    _ => bail!("denoise_quality: high, balanced or fast"),
                 }),
                 "env" => Setting::Env(floats::<3>(values)?),
                 "tonemapper" => Setting::Tonemapper(match values {
@@ -191,7 +199,7 @@ fn parse_line(line: &str) -> Result<Option<Command>> {
                     _ => bail!("view: color, albedo, normal or depth"),
                 }),
                 other => bail!(
-                    "unknown setting `{other}` (spp, max_depth, exposure, sample_limit, seed, sky, env, tonemapper, view, denoise)"
+                    "unknown setting `{other}` (spp, max_depth, exposure, sample_limit, seed, sky, env, tonemapper, view, denoise, denoise_quality)"
                 ),
             })
         }
@@ -467,7 +475,13 @@ fn apply_setting(session: &mut Session, setting: &Setting) {
         Setting::Sky => s.environment = Environment::Sky,
         Setting::Env(c) => s.environment = Environment::Constant(c),
         Setting::Seed(n) => s.seed = n,
-        Setting::Denoise(on) => s.denoise = on,
+        Setting::Denoise(choice) => {
+            s.denoise = choice.is_some();
+            if let Some(kind) = choice {
+                s.denoiser = kind;
+            }
+        }
+        Setting::DenoiseQuality(q) => s.oidn_quality = q,
         Setting::SampleLimit(_) => {}
     }
 }
