@@ -263,14 +263,14 @@ impl HeadlessApp {
         self.renderer().tracer.denoised_radiance(&self.ctx, &params)
     }
 
-    /// The current accumulation through Open Image Denoise at the settings' `oidn_quality` (whether or not
+    /// The current accumulation through Open Image Denoise with the settings' `oidn` options (whether or not
     /// `RenderSettings::denoise` is on), with its timings; blocks. Errors say why OIDN cannot run.
     pub fn oidn_denoised(&self) -> Result<crate::oidn::OidnImage, crate::oidn::OidnError> {
-        let quality = self.app.world().resource::<RenderSettings>().oidn_quality;
+        let options = self.app.world().resource::<RenderSettings>().oidn;
         self.app
             .world()
             .resource::<crate::oidn::HeadlessOidn>()
-            .denoise(&self.ctx, &self.renderer().tracer, quality)
+            .denoise(&self.ctx, &self.renderer().tracer, options)
     }
 
     /// Opens OIDN's device now (it is otherwise opened at the first OIDN denoise): its description, or why

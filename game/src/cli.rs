@@ -216,6 +216,10 @@ pub struct SceneArgs {
     /// OIDN's quality: high (final frames), balanced or fast (previews).
     #[arg(long, value_enum, default_value_t = DenoiseQuality::High, value_name = "QUALITY")]
     pub denoise_quality: DenoiseQuality,
+    /// How OIDN uses the albedo and normal AOVs: prefilter (denoise them first; OIDN's final-frame
+    /// recommendation), noisy (as they are, possibly noisy) or clean (as they are, trusted as converged).
+    #[arg(long, value_enum, default_value_t = DenoiseAovs::Prefilter, value_name = "MODE")]
+    pub denoise_aovs: DenoiseAovs,
     /// Where skinning, morphing and BVH refit run: GPU compute passes or the CPU (the reference); auto
     /// picks the GPU on real GPUs and the CPU on a software adapter (lavapipe). The image is the same
     /// up to float rounding.
@@ -260,6 +264,24 @@ impl From<DenoiseQuality> for raykin::oidn::Quality {
             DenoiseQuality::High => Self::High,
             DenoiseQuality::Balanced => Self::Balanced,
             DenoiseQuality::Fast => Self::Fast,
+        }
+    }
+}
+
+/// `--denoise-aovs`.
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DenoiseAovs {
+    Prefilter,
+    Noisy,
+    Clean,
+}
+
+impl From<DenoiseAovs> for raykin::oidn::AuxMode {
+    fn from(a: DenoiseAovs) -> Self {
+        match a {
+            DenoiseAovs::Prefilter => Self::Prefilter,
+            DenoiseAovs::Noisy => Self::Noisy,
+            DenoiseAovs::Clean => Self::Clean,
         }
     }
 }

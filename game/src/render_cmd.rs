@@ -70,7 +70,11 @@ pub fn settings_from(args: &SceneArgs) -> RenderSettings {
             .denoise
             .unwrap_or(crate::cli::DenoiseArg::Default)
             .into(),
-        oidn_quality: args.denoise_quality.into(),
+        oidn: raykin::oidn::DenoiseOptions {
+            quality: args.denoise_quality.into(),
+            aux: args.denoise_aovs.into(),
+            ..Default::default()
+        },
         deform: args.deform.into(),
         static_bvh: args.static_bvh.into(),
         ..Default::default()
@@ -370,6 +374,7 @@ pub fn run_default() -> Result<()> {
         // A newcomer's first picture: denoised (OIDN, else svgf), with the noisy one beside it.
         denoise: Some(crate::cli::DenoiseArg::Default),
         denoise_quality: crate::cli::DenoiseQuality::High,
+        denoise_aovs: crate::cli::DenoiseAovs::Prefilter,
         deform: crate::cli::DeformArg::Auto,
         static_bvh: crate::cli::StaticBvh::Wide,
     };

@@ -21,7 +21,7 @@ pub struct ViewerPrefs {
     pub russian_roulette: bool,
     pub denoise: bool,
     pub denoiser: DenoiserKind,
-    pub oidn_quality: crate::oidn::Quality,
+    pub oidn: crate::oidn::DenoiseOptions,
     pub render_scale: f32,
     /// 0: keep accumulating.
     pub sample_limit: u32,
@@ -48,7 +48,7 @@ impl Default for ViewerPrefs {
             russian_roulette: render.russian_roulette,
             denoise: render.denoise,
             denoiser: render.denoiser,
-            oidn_quality: render.oidn_quality,
+            oidn: render.oidn,
             render_scale: 1.0,
             sample_limit: 0,
             vsync: true,
@@ -132,7 +132,7 @@ impl ViewerPrefs {
             s.russian_roulette = self.russian_roulette;
             s.denoise = self.denoise;
             s.denoiser = self.denoiser;
-            s.oidn_quality = self.oidn_quality;
+            s.oidn = self.oidn;
         }
         if let Some(mut e) = world.get_resource_mut::<EditorState>() {
             e.render_scale = self.render_scale.clamp(0.05, 1.0);
@@ -162,7 +162,7 @@ impl ViewerPrefs {
             self.russian_roulette = s.russian_roulette;
             self.denoise = s.denoise;
             self.denoiser = s.denoiser;
-            self.oidn_quality = s.oidn_quality;
+            self.oidn = s.oidn;
         }
         if let Some(e) = world.get_resource::<EditorState>() {
             self.render_scale = e.render_scale;

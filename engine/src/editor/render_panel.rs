@@ -107,9 +107,21 @@ pub fn show(ui: &mut egui::Ui, world: &mut World, state: &mut EditorState) {
                 ui.label("  quality");
                 ui.horizontal(|ui| {
                     for q in crate::oidn::Quality::ALL {
-                        ui.selectable_value(&mut s.oidn_quality, q, q.name());
+                        ui.selectable_value(&mut s.oidn.quality, q, q.name());
                     }
                 });
+                ui.end_row();
+                ui.label("  AOVs");
+                ui.horizontal(|ui| {
+                    for a in crate::oidn::AuxMode::ALL {
+                        ui.selectable_value(&mut s.oidn.aux, a, a.name());
+                    }
+                })
+                .response
+                .on_hover_text(
+                    "prefilter: denoise albedo and normal first (OIDN's final-frame default); \
+                     noisy: use them as they are; clean: trust them as converged",
+                );
                 ui.end_row();
                 if let Some(v) = world.get_resource::<crate::oidn::ViewerOidn>() {
                     ui.label("");

@@ -15,7 +15,7 @@ pub struct Timings {
     pub setup_ms: f64,
     /// Host to OIDN buffers (a memcpy on the CPU device, a host-to-device copy on a GPU).
     pub upload_ms: f64,
-    /// Denoising the albedo and normal images (with `prefilter_aux`).
+    /// Denoising the albedo and normal images (with [`super::AuxMode::Prefilter`]).
     pub prefilter_ms: f64,
     /// The main filter.
     pub filter_ms: f64,
@@ -42,7 +42,7 @@ pub struct Denoised {
 struct Filters {
     key: (u32, u32, DenoiseOptions, bool, bool),
     beauty: library::Filter,
-    /// In-place denoisers of the albedo and normal buffers (with `prefilter_aux`).
+    /// In-place denoisers of the albedo and normal buffers (with [`super::AuxMode::Prefilter`]).
     prefilters: Vec<library::Filter>,
     color: library::Buffer,
     albedo: Option<library::Buffer>,
@@ -128,7 +128,7 @@ impl Oidn {
     }
 
     /// The albedo and normal images after OIDN's prefilters (what [`Self::denoise`] guides the main filter
-    /// with when `prefilter_aux` is on), for inspection and tests.
+    /// with in [`super::AuxMode::Prefilter`]), for inspection and tests.
     pub fn prefiltered_aovs(
         &mut self,
         images: &Images,
@@ -139,7 +139,7 @@ impl Oidn {
                 "prefiltering needs both the albedo and the normal image".into(),
             ));
         };
-        let options = DenoiseOptions::final_frame(quality);
+        let options = DenoiseOptions::at(quality);
         let (color, _) = self.upload_and_prefilter(images, &options)?;
         let filters = self.filters.as_ref().expect("made by the upload");
         let (albedo, normal) = (
@@ -255,7 +255,7 @@ impl Oidn {
         let set_quality = |f| unsafe {
             (lib.set_filter_int)(f, library::name(c"quality"), options.quality.raw())
         };
-        let prefilter = options.prefilter_aux;
+        let prefilter = options.aux == super::AuxMode::Prefilter;
         // Each prefilter denoises its AOV in place (OIDN's documented prefiltering setup).
         for (aov, name) in [(filters.albedo, c"albedo"), (filters.normal, c"normal")] {
             if let (true, Some(buffer)) = (prefilter, aov) {
@@ -283,7 +283,7 @@ impl Oidn {
             (lib.set_filter_bool)(
                 beauty,
                 library::name(c"cleanAux"),
-                prefilter && (has_albedo || has_normal),
+                options.aux != super::AuxMode::Noisy && (has_albedo || has_normal),
             );
             (lib.set_filter_float)(beauty, library::name(c"inputScale"), f32::NAN);
         }

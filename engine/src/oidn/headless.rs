@@ -3,7 +3,7 @@
 //! PNG of the same image denoises once.
 
 use super::device::{AdapterIdentity, DeviceRequest};
-use super::{DenoiseOptions, Oidn, OidnError, Quality, Timings, read_inputs};
+use super::{DenoiseOptions, Oidn, OidnError, Timings, read_inputs};
 use crate::gpu::GpuContext;
 use crate::render::PathTracer;
 use bevy_ecs::prelude::Resource;
@@ -33,8 +33,8 @@ impl OidnImage {
     }
 }
 
-/// (view generation, accumulation, samples, quality): what an image was denoised from.
-type Key = (u64, u64, u32, Quality);
+/// (view generation, accumulation, samples, options): what an image was denoised from.
+type Key = (u64, u64, u32, DenoiseOptions);
 
 #[derive(Default)]
 struct State {
@@ -51,6 +51,14 @@ pub struct HeadlessOidn {
 }
 
 impl HeadlessOidn {
+    /// OIDN on the requested device instead of the one matching the adapter.
+    pub fn on(request: DeviceRequest) -> Self {
+        Self {
+            request: Some(request),
+            ..Default::default()
+        }
+    }
+
     /// Opens the device if not yet done: its description, with notes (a GPU that failed over to the CPU), or
     /// why OIDN cannot run.
     pub fn open(&self, ctx: &GpuContext) -> Result<String, OidnError> {
@@ -71,20 +79,19 @@ impl HeadlessOidn {
         }
     }
 
-    /// The tracer's current accumulation through OIDN at `quality` (final-frame options: HDR, prefiltered
-    /// AOVs). Blocks for the readback and the filter.
+    /// The tracer's current accumulation through OIDN with `options`. Blocks for the readback and the filter.
     pub fn denoise(
         &self,
         ctx: &GpuContext,
         tracer: &PathTracer,
-        quality: Quality,
+        options: DenoiseOptions,
     ) -> Result<OidnImage, OidnError> {
         self.open(ctx)?;
         let key = (
             tracer.view_generation,
             tracer.accumulation,
             tracer.samples,
-            quality,
+            options,
         );
         let mut state = self.state.lock().unwrap_or_else(|p| p.into_inner());
         if let Some((k, image)) = &state.last
@@ -96,7 +103,7 @@ impl HeadlessOidn {
         let Some(Ok(oidn)) = state.oidn.as_mut() else {
             unreachable!("opened above")
         };
-        let denoised = oidn.denoise(&inputs.images(), &DenoiseOptions::final_frame(quality))?;
+        let denoised = oidn.denoise(&inputs.images(), &options)?;
         if denoised.repaired > 0 {
             tracing::warn!(
                 "Open Image Denoise returned {} non-finite pixels; they keep their noisy value",

@@ -86,25 +86,60 @@ impl std::str::FromStr for Quality {
     }
 }
 
-/// How one image is denoised.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+/// How an image is denoised (`RenderSettings::oidn`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(default)]
 pub struct DenoiseOptions {
     pub quality: Quality,
     /// The colour is HDR scene-referred radiance (before exposure and tone mapping); OIDN then picks its own
     /// input scale from the image (`inputScale` = NaN), which is what it was trained with.
     pub hdr: bool,
-    /// Denoise the albedo and normal images first and tell the main filter they are clean (`cleanAux`):
-    /// OIDN's recommendation for final frames, at the cost of two more filter runs.
-    pub prefilter_aux: bool,
+    pub aux: AuxMode,
+}
+
+/// How the albedo and normal images are treated.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum AuxMode {
+    /// As they are, with the main filter told they may be noisy (`cleanAux` off).
+    Noisy,
+    /// Denoised first by OIDN's own prefilters, then trusted (`cleanAux` on): OIDN's recommendation for noisy
+    /// AOVs in final frames (and Blender's default), at the cost of two more filter runs.
+    #[default]
+    Prefilter,
+    /// As they are, trusted (`cleanAux` on): for AOVs that have converged.
+    Clean,
+}
+
+impl Default for DenoiseOptions {
+    /// High quality, HDR input, prefiltered AOVs.
+    fn default() -> Self {
+        Self {
+            quality: Quality::High,
+            hdr: true,
+            aux: AuxMode::Prefilter,
+        }
+    }
 }
 
 impl DenoiseOptions {
-    /// Final-frame settings at `quality`: HDR input, prefiltered AOVs.
-    pub fn final_frame(quality: Quality) -> Self {
+    /// The defaults at `quality`.
+    pub fn at(quality: Quality) -> Self {
         Self {
             quality,
-            hdr: true,
-            prefilter_aux: true,
+            ..Default::default()
+        }
+    }
+}
+
+impl AuxMode {
+    pub const ALL: [AuxMode; 3] = [AuxMode::Prefilter, AuxMode::Noisy, AuxMode::Clean];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            AuxMode::Prefilter => "prefilter",
+            AuxMode::Noisy => "noisy",
+            AuxMode::Clean => "clean",
         }
     }
 }

@@ -6,7 +6,7 @@
 
 use super::device::{AdapterIdentity, DeviceRequest};
 use super::worker::{Job, OidnWorker};
-use super::{DenoiseOptions, OidnInputs, Timings};
+use super::{OidnInputs, Timings};
 use crate::FrameSet;
 use crate::gpu::GpuContext;
 use crate::gpu::readback::AsyncReadback;
@@ -142,7 +142,7 @@ pub fn denoise_still_image(
                 let job = Job {
                     tag: key,
                     inputs: inputs_from_bytes(tracer.width, tracer.height, &bytes),
-                    options: DenoiseOptions::final_frame(settings.oidn_quality),
+                    options: settings.oidn,
                 };
                 if !worker.submit(job) {
                     oidn.status =

@@ -69,8 +69,9 @@ pub struct RenderSettings {
     pub denoise_params: super::denoise::DenoiseParams,
     #[serde(default)]
     pub denoiser: DenoiserKind,
+    /// OIDN's quality and AOV treatment.
     #[serde(default)]
-    pub oidn_quality: crate::oidn::Quality,
+    pub oidn: crate::oidn::DenoiseOptions,
     /// BVH layout of static meshes (deformable meshes always refit a BVH2).
     pub static_bvh: crate::bvh::StaticLayout,
     /// Where deformable meshes are skinned, morphed and refit (`Auto`: GPU on real GPUs).
@@ -97,7 +98,7 @@ impl Default for RenderSettings {
             denoise: false,
             denoise_params: Default::default(),
             denoiser: DenoiserKind::default(),
-            oidn_quality: Default::default(),
+            oidn: Default::default(),
             static_bvh: crate::bvh::StaticLayout::Wide,
             deform: crate::gpu_deform::DeformBackend::Auto,
         }
@@ -116,7 +117,7 @@ impl RenderSettings {
             denoise: false,
             denoise_params: Default::default(),
             denoiser: DenoiserKind::default(),
-            oidn_quality: Default::default(),
+            oidn: Default::default(),
             ..s.clone()
         };
         image_part(self) != image_part(other)

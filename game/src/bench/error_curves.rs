@@ -45,12 +45,12 @@ pub const CURVES: &[Curve] = &[
     curve("OIDN (high quality)", |s| {
         s.denoise = true;
         s.denoiser = DenoiserKind::Oidn;
-        s.oidn_quality = Quality::High;
+        s.oidn.quality = Quality::High;
     }),
     curve("OIDN fast", |s| {
         s.denoise = true;
         s.denoiser = DenoiserKind::Oidn;
-        s.oidn_quality = Quality::Fast;
+        s.oidn.quality = Quality::Fast;
     }),
 ];
 

@@ -95,7 +95,7 @@ pub fn timings(
             let mut app = super::open_app(ctx, scene, settings)?;
             app.accumulate(1, 1, |_| {});
             for quality in Quality::ALL {
-                let options = DenoiseOptions::final_frame(quality);
+                let options = DenoiseOptions::at(quality);
                 let mut steps: [Vec<f64>; 6] = Default::default();
                 let mut setup_ms = 0.0;
                 for run in 0..=repeats.max(1) {
@@ -198,7 +198,7 @@ pub fn gains(
         ];
         let (inputs, _) = read_inputs(&app.ctx, &app.renderer().tracer);
         for quality in Quality::ALL {
-            let d = oidn.denoise(&inputs.images(), &DenoiseOptions::final_frame(quality))?;
+            let d = oidn.denoise(&inputs.images(), &DenoiseOptions::at(quality))?;
             images.push((format!("oidn {}", quality.name()), d.color));
         }
         let luminance = |img: &[[f32; 3]]| -> f64 {

@@ -40,6 +40,7 @@ pub enum Setting {
     /// Off, or on with this denoiser (`on`: the default one).
     Denoise(Option<DenoiserKind>),
     DenoiseQuality(raykin::oidn::Quality),
+    DenoiseAovs(raykin::oidn::AuxMode),
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -184,6 +185,15 @@ fn parse_line(line: &str) -> Result<Option<Command>> {
                     [q] => q.parse().map_err(anyhow::Error::msg)?,
                     _ => bail!("denoise_quality: high, balanced or fast"),
                 }),
+                "denoise_aovs" => Setting::DenoiseAovs(
+                    match values {
+                        [a] => raykin::oidn::AuxMode::ALL
+                            .into_iter()
+                            .find(|m| m.name() == *a),
+                        _ => None,
+                    }
+                    .context("denoise_aovs: prefilter, noisy or clean")?,
+                ),
                 "env" => Setting::Env(floats::<3>(values)?),
                 "tonemapper" => Setting::Tonemapper(match values {
                     ["aces"] => Tonemapper::AcesFitted,
@@ -199,7 +209,7 @@ fn parse_line(line: &str) -> Result<Option<Command>> {
                     _ => bail!("view: color, albedo, normal or depth"),
                 }),
                 other => bail!(
-                    "unknown setting `{other}` (spp, max_depth, exposure, sample_limit, seed, sky, env, tonemapper, view, denoise, denoise_quality)"
+                    "unknown setting `{other}` (spp, max_depth, exposure, sample_limit, seed, sky, env, tonemapper, view, denoise, denoise_quality, denoise_aovs)"
                 ),
             })
         }
@@ -481,7 +491,8 @@ fn apply_setting(session: &mut Session, setting: &Setting) {
                 s.denoiser = kind;
             }
         }
-        Setting::DenoiseQuality(q) => s.oidn_quality = q,
+        Setting::DenoiseQuality(q) => s.oidn.quality = q,
+        Setting::DenoiseAovs(a) => s.oidn.aux = a,
         Setting::SampleLimit(_) => {}
     }
 }
