@@ -3,7 +3,8 @@
 use crate::camera::{CameraChoice, CameraView, resolve_camera};
 use crate::gpu::GpuContext;
 use crate::render::{
-    Accumulation, Aovs, FrameStats, GpuScene, RenderPlugin, RenderSettings, ViewTargets,
+    Accumulation, Aovs, DenoiserKind, FrameStats, GpuScene, HostDenoised, RenderPlugin,
+    RenderSettings, ViewTargets,
 };
 use crate::scene::{SceneAsset, ScenePlugin};
 use bevy_app::App;
@@ -51,6 +52,7 @@ impl HeadlessApp {
         crate::configure_frame_schedule(&mut app);
         app.insert_resource(ctx.clone())
             .insert_resource(settings.clone())
+            .init_resource::<crate::oidn::HeadlessOidn>()
             .add_plugins(ScenePlugin {
                 scene: scene.clone(),
             })
@@ -291,11 +293,62 @@ impl HeadlessApp {
         crate::render::queries::denoised_radiance(self.app.world())
     }
 
-    /// The image an output file takes: [`Self::denoised_radiance`] when `RenderSettings::denoise` is on, else
-    /// [`Self::radiance`] (as the display pass follows the same setting).
+    /// The current accumulation through Open Image Denoise with the settings' `oidn` options (whether or not
+    /// `RenderSettings::denoise` is on), with its timings; blocks. Errors say why OIDN cannot run.
+    pub fn oidn_denoised(&self) -> Result<crate::oidn::OidnImage, crate::oidn::OidnError> {
+        let options = self.app.world().resource::<RenderSettings>().oidn;
+        self.app
+            .world()
+            .resource::<crate::oidn::HeadlessOidn>()
+            .denoise(
+                &self.ctx,
+                self.view(),
+                self.app.world().resource::<Accumulation>(),
+                options,
+            )
+    }
+
+    /// Opens OIDN's device now (it is otherwise opened at the first OIDN denoise): its description, or why
+    /// OIDN cannot run (then the svgf denoiser stands in).
+    pub fn open_oidn(&self) -> Result<String, crate::oidn::OidnError> {
+        self.app
+            .world()
+            .resource::<crate::oidn::HeadlessOidn>()
+            .open(&self.ctx)
+    }
+
+    /// With `denoise` on and OIDN chosen, opens OIDN's device now: `Some(Ok(device))`; when OIDN cannot run,
+    /// switches this app's settings to svgf and returns `Some(Err(why))` for the caller to report. `None`
+    /// when the settings do not ask for OIDN.
+    pub fn resolve_denoiser(&mut self) -> Option<Result<String, crate::oidn::OidnError>> {
+        let s = self.app.world().resource::<RenderSettings>();
+        if !(s.denoise && s.denoiser == DenoiserKind::Oidn) {
+            return None;
+        }
+        let opened = self.open_oidn();
+        if opened.is_err() {
+            self.settings_mut().denoiser = DenoiserKind::Svgf;
+        }
+        Some(opened)
+    }
+
+    /// The denoised image the settings ask for: OIDN's, or svgf's when the settings pick svgf or OIDN fails
+    /// (with a warning).
+    fn chosen_denoised(&self) -> Vec<[f32; 3]> {
+        if self.app.world().resource::<RenderSettings>().denoiser == DenoiserKind::Oidn {
+            match self.oidn_denoised() {
+                Ok(image) => return image.color.to_vec(),
+                Err(e) => tracing::warn!("{e}; denoising with svgf instead"),
+            }
+        }
+        self.denoised_radiance()
+    }
+
+    /// The image an output file takes: denoised by the settings' denoiser when `RenderSettings::denoise` is
+    /// on, else [`Self::radiance`] (as the display pass follows the same settings).
     pub fn output_radiance(&self) -> Vec<[f32; 3]> {
         if self.app.world().resource::<RenderSettings>().denoise {
-            self.denoised_radiance()
+            self.chosen_denoised()
         } else {
             self.radiance()
         }
@@ -354,6 +407,19 @@ impl HeadlessApp {
 
     /// Tone-mapped sRGB RGBA8 of the current accumulation (denoised when `RenderSettings::denoise` is on).
     pub fn display_rgba8(&self) -> Vec<u8> {
+        let settings = self.app.world().resource::<RenderSettings>();
+        if settings.denoise && settings.denoiser == DenoiserKind::Oidn {
+            // The display shows OIDN's image once it holds it for this accumulation, svgf's otherwise.
+            if let Ok(image) = self.oidn_denoised() {
+                let world = self.app.world();
+                world.resource::<HostDenoised>().show(
+                    &self.ctx,
+                    world.resource::<ViewTargets>(),
+                    world.resource::<Accumulation>(),
+                    &image.color,
+                );
+            }
+        }
         crate::render::queries::display_rgba8(self.app.world())
     }
 }

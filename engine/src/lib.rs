@@ -13,6 +13,7 @@ pub mod gpu_deform;
 pub mod headless;
 pub mod image_io;
 pub mod motion;
+pub mod oidn;
 pub mod panic_guard;
 pub mod record;
 pub mod render;

@@ -208,7 +208,7 @@ pub struct BenchArgs {
     /// and kernel source).
     #[arg(long, default_value = "bench-cache")]
     pub cache: PathBuf,
-    /// Run only these parts: frames, errors, bvh, refit, scaling (repeatable; default all).
+    /// Run only these parts: frames, errors, bvh, refit, scaling, oidn (repeatable; default all).
     #[arg(long)]
     pub parts: Vec<String>,
     /// Override the suite's measured frame count (frame loop).
@@ -304,9 +304,18 @@ pub struct SceneArgs {
     /// Samples per pixel per GPU submission.
     #[arg(long, default_value_t = 16, value_parser = at_least_one(), allow_negative_numbers = true)]
     pub spp_per_dispatch: u32,
-    /// Denoise the image (edge-avoiding a-trous filter guided by normal, depth and albedo).
-    #[arg(long)]
-    pub denoise: bool,
+    /// Denoise the image: `oidn` (Intel Open Image Denoise on the albedo and normal AOVs; the default when
+    /// the flag has no value) or `svgf` (the GPU a-trous filter guided by normal, depth and albedo). Where
+    /// OIDN cannot run, svgf stands in with a warning.
+    #[arg(long, value_enum, num_args = 0..=1, default_missing_value = "default", value_name = "DENOISER")]
+    pub denoise: Option<DenoiseArg>,
+    /// OIDN's quality: high (final frames), balanced or fast (previews).
+    #[arg(long, value_enum, default_value_t = DenoiseQuality::High, value_name = "QUALITY")]
+    pub denoise_quality: DenoiseQuality,
+    /// How OIDN uses the albedo and normal AOVs: prefilter (denoise them first; OIDN's final-frame
+    /// recommendation), noisy (as they are, possibly noisy) or clean (as they are, trusted as converged).
+    #[arg(long, value_enum, default_value_t = DenoiseAovs::Prefilter, value_name = "MODE")]
+    pub denoise_aovs: DenoiseAovs,
     /// Where skinning, morphing and BVH refit run: GPU compute passes or the CPU (the reference); auto
     /// picks the GPU on real GPUs and the CPU on a software adapter (lavapipe). The image is the same
     /// up to float rounding.
@@ -315,6 +324,62 @@ pub struct SceneArgs {
     /// BVH layout of static meshes: compressed 8-wide nodes, or the refittable BVH2 deformable meshes use.
     #[arg(long, value_enum, default_value_t = StaticBvh::Wide)]
     pub static_bvh: StaticBvh,
+}
+
+/// `--denoise [DENOISER]`.
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DenoiseArg {
+    /// The flag alone: the default denoiser.
+    #[value(hide = true)]
+    Default,
+    Oidn,
+    Svgf,
+}
+
+impl From<DenoiseArg> for raykin::render::DenoiserKind {
+    fn from(a: DenoiseArg) -> Self {
+        match a {
+            DenoiseArg::Default => Self::default(),
+            DenoiseArg::Oidn => Self::Oidn,
+            DenoiseArg::Svgf => Self::Svgf,
+        }
+    }
+}
+
+/// `--denoise-quality`.
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DenoiseQuality {
+    High,
+    Balanced,
+    Fast,
+}
+
+impl From<DenoiseQuality> for raykin::oidn::Quality {
+    fn from(q: DenoiseQuality) -> Self {
+        match q {
+            DenoiseQuality::High => Self::High,
+            DenoiseQuality::Balanced => Self::Balanced,
+            DenoiseQuality::Fast => Self::Fast,
+        }
+    }
+}
+
+/// `--denoise-aovs`.
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DenoiseAovs {
+    Prefilter,
+    Noisy,
+    Clean,
+}
+
+impl From<DenoiseAovs> for raykin::oidn::AuxMode {
+    fn from(a: DenoiseAovs) -> Self {
+        match a {
+            DenoiseAovs::Prefilter => Self::Prefilter,
+            DenoiseAovs::Noisy => Self::Noisy,
+            DenoiseAovs::Clean => Self::Clean,
+        }
+    }
 }
 
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]

@@ -10,7 +10,7 @@ use raykin::camera::CameraChoice;
 use raykin::gpu::GpuContext;
 use raykin::headless::HeadlessApp;
 use raykin::record::CameraSpec;
-use raykin::render::{Environment, RenderSettings};
+use raykin::render::{DenoiserKind, Environment, RenderSettings};
 use raykin::scene::SceneAsset;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -42,7 +42,16 @@ pub fn settings_from(args: &SceneArgs) -> RenderSettings {
         seed: args.seed,
         russian_roulette: !args.no_rr,
         nee: !args.no_nee,
-        denoise: args.denoise,
+        denoise: args.denoise.is_some(),
+        denoiser: args
+            .denoise
+            .unwrap_or(crate::cli::DenoiseArg::Default)
+            .into(),
+        oidn: raykin::oidn::DenoiseOptions {
+            quality: args.denoise_quality.into(),
+            aux: args.denoise_aovs.into(),
+            ..Default::default()
+        },
         deform: args.deform.into(),
         static_bvh: args.static_bvh.into(),
         ..Default::default()
@@ -108,6 +117,11 @@ struct RenderReport {
     spp: u32,
     max_depth: u32,
     denoise: bool,
+    /// "oidn" or "svgf" when denoised (svgf also where OIDN was asked for but could not run).
+    denoiser: Option<String>,
+    /// OIDN: the device, and milliseconds from the GPU buffers to the denoised host image.
+    oidn_device: Option<String>,
+    oidn_ms: Option<f64>,
     triangles: usize,
     bvh_build_and_upload_s: f64,
     gpu_memory_geometry_bvh_bytes: u64,
@@ -118,23 +132,46 @@ struct RenderReport {
 
 pub fn run(args: &RenderArgs) -> Result<()> {
     let scene = load_scene(&args.scene.scene, &args.load.options())?;
-    check_outputs(&scene, &args.out, args.aovs, args.report.as_deref())?;
+    let outputs = Outputs {
+        image: &args.out,
+        aovs: args.aovs,
+        report: args.report.as_deref(),
+        noisy_beside: None,
+    };
+    check_outputs(&scene, &outputs)?;
     // Pose and camera arguments are checked before the GPU opens: a typo fails at once.
     let pose = pose_from(&scene, &args.scene)?;
     let camera = camera_from(&args.scene);
     check_scene(&scene, &camera)?;
     let ctx = open_gpu()?;
     check_size(&ctx, args.scene.width, args.scene.height)?;
-    render_to_file(
-        ctx,
-        scene,
-        &args.scene,
-        camera,
-        pose,
-        &args.out,
-        args.aovs,
-        args.report.as_deref(),
-    )
+    render_to_file(ctx, scene, &args.scene, camera, pose, outputs)?;
+    Ok(())
+}
+
+/// What [`render_to_file`] writes.
+struct Outputs<'a> {
+    image: &'a Path,
+    /// First-hit AOVs as EXRs beside the image.
+    aovs: bool,
+    report: Option<&'a Path>,
+    /// With denoising on: the image before denoising, here as well.
+    noisy_beside: Option<&'a Path>,
+}
+
+/// With `--denoise`, opens the chosen denoiser before rendering: OIDN's device is named, or its failure
+/// reported and svgf used instead. Returns the denoiser that will run.
+pub fn announce_denoiser(app: &mut HeadlessApp) -> Option<&'static str> {
+    match app.resolve_denoiser() {
+        Some(Ok(device)) => eprintln!("raykin: denoiser: Open Image Denoise on {device}"),
+        Some(Err(e)) => eprintln!("raykin: warning: {e}; denoising with svgf instead"),
+        None => {}
+    }
+    let s = app.app.world().resource::<RenderSettings>();
+    s.denoise.then_some(match s.denoiser {
+        DenoiserKind::Oidn => "oidn",
+        DenoiserKind::Svgf => "svgf",
+    })
 }
 
 /// `NAME.albedo.exr`, `NAME.normal.exr`, `NAME.depth.exr` beside the image.
@@ -150,7 +187,8 @@ fn aov_paths(out: &Path) -> [(&'static str, PathBuf); 3] {
 
 /// Every file the render writes: a known format, never one of the scene's files or another output, in
 /// writable folders; all before any rendering.
-fn check_outputs(scene: &SceneAsset, out: &Path, aovs: bool, report: Option<&Path>) -> Result<()> {
+fn check_outputs(scene: &SceneAsset, outputs: &Outputs) -> Result<()> {
+    let out = outputs.image;
     let ext = out
         .extension()
         .and_then(|e| e.to_str())
@@ -161,40 +199,44 @@ fn check_outputs(scene: &SceneAsset, out: &Path, aovs: bool, report: Option<&Pat
             out.display()
         );
     }
-    let mut outputs = vec![Output {
+    let mut files = vec![Output {
         what: "--out",
         path: out.to_path_buf(),
     }];
-    if aovs {
-        outputs.extend(aov_paths(out).map(|(_, path)| Output {
+    if outputs.aovs {
+        files.extend(aov_paths(out).map(|(_, path)| Output {
             what: "--aovs output",
             path,
         }));
     }
-    if let Some(report) = report {
-        outputs.push(Output {
+    if let Some(report) = outputs.report {
+        files.push(Output {
             what: "--report",
             path: report.to_path_buf(),
         });
     }
-    crate::outputs::refuse_overwrites(&outputs, &scene.files)?;
-    for o in &outputs {
+    if let Some(noisy) = outputs.noisy_beside {
+        files.push(Output {
+            what: "the noisy image",
+            path: noisy.to_path_buf(),
+        });
+    }
+    crate::outputs::refuse_overwrites(&files, &scene.files)?;
+    for o in &files {
         crate::outputs::check_writable(o.what, &o.path)?;
     }
     Ok(())
 }
 
-#[allow(clippy::too_many_arguments)]
 fn render_to_file(
     ctx: GpuContext,
     scene: Arc<SceneAsset>,
     args: &SceneArgs,
     camera: CameraChoice,
     pose: Option<(usize, f32)>,
-    out: &Path,
-    aovs: bool,
-    report: Option<&Path>,
+    outputs: Outputs,
 ) -> Result<()> {
+    let out = outputs.image;
     let ext = out
         .extension()
         .and_then(|e| e.to_str())
@@ -209,6 +251,7 @@ fn render_to_file(
     if let Some((clip, time)) = pose {
         app.set_time(clip, time).map_err(anyhow::Error::msg)?;
     }
+    let denoiser = announce_denoiser(&mut app);
     let start = Instant::now();
     let bar = progress_bar(args.spp as u64, "rendering");
     app.accumulate(args.spp, args.spp_per_dispatch, |done| {
@@ -217,7 +260,9 @@ fn render_to_file(
     bar.finish_and_clear();
     let wall = start.elapsed().as_secs_f64();
     let (w, h) = (settings.width, settings.height);
+    let denoise_start = Instant::now();
     let radiance = app.output_radiance();
+    let denoise_s = denoise_start.elapsed().as_secs_f64();
     if let Some(bad) = radiance.iter().flatten().find(|v| !v.is_finite()) {
         anyhow::bail!("internal error: the render has a non-finite pixel value ({bad})");
     }
@@ -229,7 +274,14 @@ fn render_to_file(
         let rgba = app.display_rgba8();
         raykin::image_io::write_atomically(out, |p| raykin::image_io::write_png(p, w, h, &rgba))?;
     }
-    if aovs {
+    let noisy = outputs.noisy_beside.filter(|_| denoiser.is_some());
+    if let Some(noisy) = noisy {
+        app.settings_mut().denoise = false;
+        let rgba = app.display_rgba8();
+        raykin::image_io::write_atomically(noisy, |p| raykin::image_io::write_png(p, w, h, &rgba))?;
+        app.settings_mut().denoise = true;
+    }
+    if outputs.aovs {
         let a = app.aovs();
         let depth: Vec<[f32; 3]> = a.depth.iter().map(|d| [*d; 3]).collect();
         for ((_, path), data) in aov_paths(out)
@@ -241,16 +293,33 @@ fn render_to_file(
             })?;
         }
     }
+    let oidn = (denoiser == Some("oidn"))
+        .then(|| app.oidn_denoised().ok())
+        .flatten();
     let gpu_scene = app.gpu_scene();
+    let denoised = match (denoiser, &oidn) {
+        (Some("oidn"), Some(o)) => format!(
+            ", denoised by Open Image Denoise on {} in {:.2} s",
+            o.device, denoise_s
+        ),
+        (Some(d), _) => format!(", denoised by {d} in {denoise_s:.2} s"),
+        (None, _) => String::new(),
+    };
     eprintln!(
-        "raykin: wrote {} ({w}x{h}, {} spp{}, {:.2} s, {:.2} M samples/s)",
+        "raykin: wrote {} ({w}x{h}, {} spp{denoised}, {:.2} s, {:.2} M samples/s)",
         out.display(),
         args.spp,
-        if settings.denoise { ", denoised" } else { "" },
         wall,
         (w as f64 * h as f64 * args.spp as f64) / wall / 1e6
     );
-    if let Some(path) = report {
+    if let Some(noisy) = noisy {
+        eprintln!(
+            "raykin: wrote {} (the same {} spp before denoising)",
+            noisy.display(),
+            args.spp
+        );
+    }
+    if let Some(path) = outputs.report {
         let r = RenderReport {
             scene: scene.source.clone(),
             adapter: app.ctx.info.name.clone(),
@@ -260,6 +329,9 @@ fn render_to_file(
             spp: args.spp,
             max_depth: args.max_depth,
             denoise: settings.denoise,
+            denoiser: denoiser.map(str::to_string),
+            oidn_device: oidn.as_ref().map(|o| o.device.clone()),
+            oidn_ms: oidn.as_ref().map(|o| o.total_ms()),
             triangles: scene.triangle_count(),
             bvh_build_and_upload_s: gpu_scene.build_seconds,
             gpu_memory_geometry_bvh_bytes: gpu_scene.memory.geometry_and_bvh(),
@@ -305,12 +377,21 @@ pub fn run_default() -> Result<()> {
         time: None,
         animation: None,
         spp_per_dispatch: 16,
-        denoise: false,
+        // A newcomer's first picture: denoised (OIDN, else svgf), with the noisy one beside it.
+        denoise: Some(crate::cli::DenoiseArg::Default),
+        denoise_quality: crate::cli::DenoiseQuality::High,
+        denoise_aovs: crate::cli::DenoiseAovs::Prefilter,
         deform: crate::cli::DeformArg::Auto,
         static_bvh: crate::cli::StaticBvh::Wide,
     };
     let camera = embedded_camera();
     let out = Path::new("out/default.png");
-    check_outputs(&scene, out, false, None)?;
-    render_to_file(ctx, Arc::new(scene), &args, camera, None, out, false, None)
+    let outputs = Outputs {
+        image: out,
+        aovs: false,
+        report: None,
+        noisy_beside: Some(Path::new("out/default-noisy.png")),
+    };
+    check_outputs(&scene, &outputs)?;
+    render_to_file(ctx, Arc::new(scene), &args, camera, None, outputs)
 }

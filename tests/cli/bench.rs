@@ -55,6 +55,7 @@ fn quick_suite_writes_sane_results_and_charts() {
     check_bvh(&results);
     check_scaling(&results);
     check_motion(&results);
+    check_oidn(&results);
 
     let charts = results["charts"].as_array().unwrap();
     // Frame breakdown, two error curves, BVH presets, refit vs rebuild, scaling, and the motion part's two
@@ -148,7 +149,8 @@ fn check_error_curves(results: &Value, out: &Path) {
         let cached = out.join("cache").join(format!("{scene}-{key}"));
         assert!(cached.join("half_a.exr").exists() && cached.join("half_b.exr").exists());
         let curves = s["curves"].as_array().unwrap();
-        assert_eq!(curves.len(), 8);
+        // The estimator's curves, svgf, and OIDN at high and fast quality.
+        assert_eq!(curves.len(), 10);
         for c in curves {
             let name = c["name"].as_str().unwrap();
             let points = c["points"].as_array().unwrap();
@@ -309,4 +311,40 @@ fn bad_arguments_fail_with_clear_messages() {
         "no results from a failed run"
     );
     let _ = std::fs::remove_dir_all(&out);
+}
+
+/// OIDN's cost rows (each step timed, the total their sum) and its error gains: at every spp each OIDN quality
+/// lowers the noisy image's tone-mapped relMSE, and the "none" rows are the noisy image itself.
+fn check_oidn(results: &Value) {
+    let timings = results["oidn_timings"].as_array().unwrap();
+    assert_eq!(timings.len(), 3, "one row per quality on the CPU device");
+    for t in timings {
+        let total = finite_positive(&t["total_ms"], "OIDN total ms");
+        finite_positive(&t["filter_ms"], "OIDN filter ms");
+        let parts: f64 = [
+            "readback_ms",
+            "upload_ms",
+            "prefilter_ms",
+            "filter_ms",
+            "download_ms",
+        ]
+        .iter()
+        .map(|k| f(&t[*k]))
+        .sum();
+        assert!(
+            (parts - total).abs() <= 0.05 * total + 0.5,
+            "OIDN steps {parts} vs total {total}"
+        );
+    }
+    let gains = results["oidn_gains"].as_array().unwrap();
+    assert_eq!(gains.len(), 3 * 4 * 5, "3 scenes x 4 spp x 5 methods");
+    for g in gains {
+        let method = g["method"].as_str().unwrap();
+        let gain = finite_positive(&g["rel_mse_gain"], "relMSE gain");
+        if method == "none" {
+            assert_eq!(gain, 1.0);
+        } else if method.starts_with("oidn") {
+            assert!(gain > 1.0, "{}: OIDN raised the error: {g}", g["scene"]);
+        }
+    }
 }

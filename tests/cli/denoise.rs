@@ -3,7 +3,7 @@
 use crate::common::cornell::{self, EPS};
 use crate::common::{gpu, rel_mse, shared_assets};
 
-/// `raykin render --denoise` writes the denoised image: the EXR equals `HeadlessApp::denoised_radiance` for the
+/// `raykin render --denoise svgf` writes the svgf-denoised image: the EXR equals `HeadlessApp::denoised_radiance` for the
 /// same settings, and differs from the render without `--denoise`.
 #[test]
 fn render_command_writes_the_denoised_image() {
@@ -21,7 +21,7 @@ fn render_command_writes_the_denoised_image() {
             .arg("--out")
             .arg(out);
         if denoise {
-            cmd.arg("--denoise");
+            cmd.args(["--denoise", "svgf"]);
         }
         let status = cmd.status().expect("raykin runs");
         assert!(

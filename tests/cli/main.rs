@@ -9,5 +9,6 @@ mod bad_input;
 mod bench;
 mod cli_args;
 mod denoise;
+mod oidn;
 mod record;
 mod viewer;

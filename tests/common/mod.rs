@@ -3,6 +3,7 @@
 #![allow(dead_code)]
 
 pub mod cornell;
+pub mod denoising;
 
 use raykin::camera::CameraChoice;
 use raykin::gpu::GpuContext;

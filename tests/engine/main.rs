@@ -17,6 +17,7 @@ mod editor;
 mod furnace;
 mod gltf_conformance;
 mod gpu_deform;
+mod oidn;
 mod realtime;
 mod record;
 mod refit_stability;

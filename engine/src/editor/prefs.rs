@@ -4,8 +4,9 @@
 use super::EditorState;
 use crate::camera::CameraRig;
 use crate::render::{
-    AovView, Environment, RealtimeSettings, RenderMode, RenderSettings, Tonemapper,
+    AovView, DenoiserKind, Environment, RealtimeSettings, RenderMode, RenderSettings, Tonemapper,
 };
+
 use bevy_ecs::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -22,6 +23,8 @@ pub struct ViewerPrefs {
     pub nee: bool,
     pub russian_roulette: bool,
     pub denoise: bool,
+    pub denoiser: DenoiserKind,
+    pub oidn: crate::oidn::DenoiseOptions,
     pub render_scale: f32,
     /// 0: keep accumulating.
     pub sample_limit: u32,
@@ -51,6 +54,8 @@ impl Default for ViewerPrefs {
             nee: render.nee,
             russian_roulette: render.russian_roulette,
             denoise: render.denoise,
+            denoiser: render.denoiser,
+            oidn: render.oidn,
             render_scale: 1.0,
             sample_limit: 0,
             vsync: true,
@@ -137,6 +142,8 @@ impl ViewerPrefs {
             s.denoise = self.denoise;
             s.mode = self.mode;
             s.realtime = self.realtime;
+            s.denoiser = self.denoiser;
+            s.oidn = self.oidn;
         }
         if let Some(mut e) = world.get_resource_mut::<EditorState>() {
             e.render_scale = self.render_scale.clamp(0.05, 1.0);
@@ -167,6 +174,8 @@ impl ViewerPrefs {
             self.denoise = s.denoise;
             self.mode = s.mode;
             self.realtime = s.realtime;
+            self.denoiser = s.denoiser;
+            self.oidn = s.oidn;
         }
         if let Some(e) = world.get_resource::<EditorState>() {
             self.render_scale = e.render_scale;

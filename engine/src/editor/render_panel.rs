@@ -1,7 +1,7 @@
 //! Render settings: sampling, environment, display transform, AOV view, resolution and frame pacing.
 
 use super::EditorState;
-use crate::render::{AovView, Environment, RenderMode, RenderSettings, Tonemapper};
+use crate::render::{AovView, DenoiserKind, Environment, RenderMode, RenderSettings, Tonemapper};
 use bevy_ecs::prelude::*;
 
 pub fn show(ui: &mut egui::Ui, world: &mut World, state: &mut EditorState) {
@@ -105,8 +105,44 @@ pub fn show(ui: &mut egui::Ui, world: &mut World, state: &mut EditorState) {
             }
             // Display-side: toggling it keeps the accumulated samples.
             ui.label("denoise");
-            ui.checkbox(&mut s.denoise, "");
+            ui.horizontal(|ui| {
+                ui.checkbox(&mut s.denoise, "");
+                if s.denoise {
+                    ui.selectable_value(&mut s.denoiser, DenoiserKind::Oidn, "OIDN")
+                        .on_hover_text(
+                            "Intel Open Image Denoise, once the image is still (svgf while it moves)",
+                        );
+                    ui.selectable_value(&mut s.denoiser, DenoiserKind::Svgf, "svgf")
+                        .on_hover_text("the GPU a-trous filter, every frame");
+                }
+            });
             ui.end_row();
+            if s.denoise && s.denoiser == DenoiserKind::Oidn {
+                ui.label("  quality");
+                ui.horizontal(|ui| {
+                    for q in crate::oidn::Quality::ALL {
+                        ui.selectable_value(&mut s.oidn.quality, q, q.name());
+                    }
+                });
+                ui.end_row();
+                ui.label("  AOVs");
+                ui.horizontal(|ui| {
+                    for a in crate::oidn::AuxMode::ALL {
+                        ui.selectable_value(&mut s.oidn.aux, a, a.name());
+                    }
+                })
+                .response
+                .on_hover_text(
+                    "prefilter: denoise albedo and normal first (OIDN's final-frame default); \
+                     noisy: use them as they are; clean: trust them as converged",
+                );
+                ui.end_row();
+                if let Some(v) = world.get_resource::<crate::oidn::ViewerOidn>() {
+                    ui.label("");
+                    ui.label(oidn_status(&v.status));
+                    ui.end_row();
+                }
+            }
             if s.denoise {
                 let p = &mut s.denoise_params;
                 ui.label("  iterations");
@@ -196,4 +232,25 @@ fn realtime_rows(ui: &mut egui::Ui, s: &mut RenderSettings) {
         );
     });
     ui.end_row();
+}
+
+/// One line on OIDN's state for the panel.
+fn oidn_status(status: &crate::oidn::OidnStatus) -> String {
+    use crate::oidn::OidnStatus;
+    match status {
+        OidnStatus::Idle => format!(
+            "runs once the image is still ({} spp)",
+            crate::oidn::viewer::SETTLE_SPP
+        ),
+        OidnStatus::Denoising(spp) => format!("denoising {spp} spp..."),
+        OidnStatus::Shown {
+            samples,
+            device,
+            timings,
+        } => format!(
+            "{samples} spp denoised on {device} in {:.0} ms",
+            timings.total_ms()
+        ),
+        OidnStatus::Unavailable(why) => format!("unavailable, showing svgf: {why}"),
+    }
 }

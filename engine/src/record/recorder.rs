@@ -243,6 +243,11 @@ impl Recorder {
         // `--denoise` holds for the whole recording: the denoiser's inputs accumulate only when it runs.
         app.set_keep_denoiser_inputs(false);
         summary.notes.append(&mut app.notes);
+        if let Some(Err(e)) = app.resolve_denoiser() {
+            let note = format!("{e}; frames are denoised with svgf instead");
+            tracing::warn!("{note}");
+            summary.notes.push(note);
+        }
         app.set_rebuild_policy(RebuildPolicy::PoseDetermined);
         let motion = settings.frame.aovs.contains(&Aov::Motion);
         app.set_hit_aov(motion);

@@ -10,6 +10,9 @@ use bevy_ecs::prelude::Resource;
 pub struct Accumulation {
     /// Samples per pixel accumulated since the last restart.
     pub samples: u32,
+    /// Counts restarts: identifies this accumulation, so that an image denoised from it off the GPU is shown
+    /// only while it lasts.
+    pub epoch: u64,
     restart: bool,
     last_settings: Option<RenderSettings>,
     last_camera: Option<CameraView>,
@@ -28,6 +31,7 @@ impl Default for Accumulation {
     fn default() -> Self {
         Self {
             samples: 0,
+            epoch: 0,
             restart: true,
             last_settings: None,
             last_camera: None,
@@ -59,6 +63,7 @@ impl Accumulation {
         self.restart = false;
         if restart {
             self.samples = 0;
+            self.epoch += 1;
         }
         restart
     }

@@ -23,6 +23,7 @@
 
 use super::accumulation::Accumulation;
 use super::gpu_scene::GpuScene;
+use super::host_denoised::HostDenoised;
 use super::layout::{FRAME_HIT_AOV, FRAME_MOMENTS, FRAME_NEE, GpuFrame};
 use super::passes::denoise::{DenoiseInputs, Denoiser};
 use super::passes::gradient::FILTERED;
@@ -63,6 +64,7 @@ pub fn render_frame(
     mut stats: ResMut<FrameStats>,
     mut deform: ResMut<DeformCommands>,
     mut realtime: ResMut<Realtime>,
+    host_denoised: Res<HostDenoised>,
 ) {
     if view.resize(&ctx, settings.width, settings.height) {
         denoiser.release();
@@ -102,6 +104,8 @@ pub fn render_frame(
         view.clear(&ctx);
     }
     let handover = realtime_runs(&settings).then(|| handover_weight(&settings, &accumulation));
+    // OIDN's image of this accumulation, once one was handed over, replaces svgf's on the display.
+    let host = host_denoised.current(&settings, &view, &accumulation);
     if accumulation.converged() && deform.is_empty() {
         if accumulation.display_each_frame {
             let mut encoder = ctx.device.create_command_encoder(&Default::default());
@@ -115,6 +119,7 @@ pub fn render_frame(
                 &stats,
                 &mut realtime,
                 handover,
+                host.as_ref(),
             );
             ctx.queue.submit([encoder.finish()]);
         }
@@ -160,6 +165,7 @@ pub fn render_frame(
             &stats,
             &mut realtime,
             handover,
+            host.as_ref(),
         );
     if let Some(t) = &stats.timestamps {
         t.resolve(&mut encoder, if display { 2 } else { 1 });
@@ -186,7 +192,8 @@ fn handover_weight(settings: &RenderSettings, accumulation: &Accumulation) -> f3
 }
 
 /// The accumulation's display transform; during a still's hand-over (`handover` < 1 after a real-time
-/// frame), mixed with the last real-time image first. True when it denoised.
+/// frame), mixed with the last real-time image first. `host`: an image denoised off the GPU to show instead
+/// of svgf's. True when svgf ran.
 #[allow(clippy::too_many_arguments)]
 fn encode_accumulation_display(
     ctx: &GpuContext,
@@ -198,6 +205,7 @@ fn encode_accumulation_display(
     stats: &FrameStats,
     realtime: &mut Realtime,
     handover: Option<f32>,
+    host: Option<&wgpu::Buffer>,
 ) -> bool {
     let mixing = handover.is_some_and(|w| w < 1.0)
         && realtime.targets.is_some()
@@ -206,19 +214,19 @@ fn encode_accumulation_display(
         if handover.is_some() {
             realtime.state.shown = Shown::Accumulation;
         }
-        return encode_display(ctx, encoder, view, settings, tonemap, denoiser, stats);
+        return encode_display(ctx, encoder, view, settings, tonemap, denoiser, stats, host);
     }
     let weight = handover.unwrap_or(1.0);
     realtime.state.shown = Shown::Handover;
-    let denoise = shows_denoised(settings);
-    let accumulated = if denoise {
-        encode_denoise(ctx, encoder, view, settings, denoiser, stats)
-    } else {
-        &view.accum
+    let denoise = shows_denoised(settings) && host.is_none();
+    let accumulated = match host {
+        Some(image) if shows_denoised(settings) => image,
+        _ if denoise => encode_denoise(ctx, encoder, view, settings, denoiser, stats),
+        _ => &view.accum,
     };
     let (Some(passes), Some(targets)) = (realtime.passes.as_ref(), realtime.targets.as_ref())
     else {
-        return encode_display(ctx, encoder, view, settings, tonemap, denoiser, stats);
+        return encode_display(ctx, encoder, view, settings, tonemap, denoiser, stats, host);
     };
     passes.handover.encode(
         ctx,
@@ -439,8 +447,9 @@ pub fn encode_denoise<'d>(
     output
 }
 
-/// The display transform into the view's `rgba8`, denoising first when the settings ask for it; true when it
-/// denoised.
+/// The display transform into the view's `rgba8`, denoising first when the settings ask for it (`host`, an
+/// image denoised off the GPU for this accumulation, stands in for svgf's); true when svgf ran.
+#[allow(clippy::too_many_arguments)]
 pub fn encode_display(
     ctx: &GpuContext,
     encoder: &mut wgpu::CommandEncoder,
@@ -449,14 +458,17 @@ pub fn encode_display(
     tonemap: &TonemapPass,
     denoiser: &Denoiser,
     stats: &FrameStats,
+    host: Option<&wgpu::Buffer>,
 ) -> bool {
-    let denoise = shows_denoised(settings);
-    let input = if denoise {
-        TonemapInput::Denoised(encode_denoise(
-            ctx, encoder, view, settings, denoiser, stats,
-        ))
-    } else {
-        TonemapInput::Accumulation
+    let (input, denoise) = match host {
+        Some(image) if shows_denoised(settings) => (TonemapInput::Denoised(image), false),
+        _ if shows_denoised(settings) => (
+            TonemapInput::Denoised(encode_denoise(
+                ctx, encoder, view, settings, denoiser, stats,
+            )),
+            true,
+        ),
+        _ => (TonemapInput::Accumulation, false),
     };
     tonemap.encode(
         ctx,

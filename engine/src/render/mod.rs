@@ -3,7 +3,8 @@
 //! - [`gpu_scene`]: the scene packed into storage buffers (meshes, BLASes, materials, textures, instances,
 //!   emitters); [`scene_bindings`]: group 0 over them.
 //! - [`view`]: the view's targets (accumulation, AOVs, display image); [`accumulation`]: its sample count and
-//!   restart flag; [`realtime`]: the real-time path's targets and state (G-buffers, histories, reservoirs).
+//!   restart flag; [`host_denoised`]: an image denoised on the host (OIDN) for the display to show;
+//!   [`realtime`]: the real-time path's targets and state (G-buffers, histories, reservoirs).
 //! - [`passes`]: one struct per GPU pass beside its WGSL kernel; [`shaders`]: the WGSL library they compose.
 //! - [`frame`]: the frame's passes in order, in one submission; [`systems`]: what runs before it (refit on the
 //!   CPU backend, the top-level BVH, material edits); [`queries`]: GPU work run on demand; [`picking`].
@@ -12,6 +13,7 @@
 pub mod accumulation;
 pub mod frame;
 pub mod gpu_scene;
+pub mod host_denoised;
 pub mod layout;
 pub mod passes;
 pub mod picking;
@@ -26,9 +28,11 @@ pub mod view;
 
 pub use accumulation::Accumulation;
 pub use gpu_scene::{GpuMemory, GpuScene, InstanceInput, UploadError};
+pub use host_denoised::HostDenoised;
 pub use passes::denoise::{DenoiseParams, Denoiser};
 pub use settings::{
-    AovView, Environment, RealtimeSettings, RenderMode, RenderSettings, RestirSettings, Tonemapper,
+    AovView, DenoiserKind, Environment, RealtimeSettings, RenderMode, RenderSettings,
+    RestirSettings, Tonemapper,
 };
 pub use stats::{FrameStats, GpuFrameStats, PassTimes, RayCastTiming};
 pub use view::{Aovs, PrimaryHit, ViewTargets};
@@ -91,6 +95,7 @@ impl Plugin for RenderPlugin {
             .init_resource::<MeshPoses>()
             .init_resource::<DeformedElsewhere>()
             .init_resource::<Accumulation>()
+            .init_resource::<HostDenoised>()
             .init_resource::<GeometryChanged>()
             .init_resource::<InstanceMap>()
             .init_resource::<frame::DeformCommands>()

@@ -4,6 +4,7 @@
 use super::accumulation::Accumulation;
 use super::frame::{FrameConstants, encode_denoise, encode_display, write_frame_constants};
 use super::gpu_scene::GpuScene;
+use super::host_denoised::HostDenoised;
 use super::passes::OnFirstUse;
 use super::passes::denoise::Denoiser;
 use super::passes::raycast::RaycastPass;
@@ -34,10 +35,21 @@ pub fn denoised_radiance(world: &World) -> Vec<[f32; 3]> {
     mean_rgb(&ctx.read_buffer(output, output.size()))
 }
 
-/// Tone-maps the current accumulation (denoised if the settings say so) and reads the sRGB RGBA8 image back.
+/// The image denoised on the host that the display shows for the current accumulation, if any.
+fn host_denoised(world: &World) -> Option<wgpu::Buffer> {
+    world.resource::<HostDenoised>().current(
+        world.resource::<RenderSettings>(),
+        world.resource::<ViewTargets>(),
+        world.resource::<Accumulation>(),
+    )
+}
+
+/// Tone-maps the current accumulation (denoised if the settings say so: OIDN's image when one was handed
+/// over for it, else svgf's) and reads the sRGB RGBA8 image back.
 pub fn display_rgba8(world: &World) -> Vec<u8> {
     let ctx = world.resource::<GpuContext>();
     let view = world.resource::<ViewTargets>();
+    let host = host_denoised(world);
     let mut encoder = ctx.device.create_command_encoder(&Default::default());
     encode_display(
         ctx,
@@ -47,6 +59,7 @@ pub fn display_rgba8(world: &World) -> Vec<u8> {
         world.resource::<TonemapPass>(),
         world.resource::<Denoiser>(),
         world.resource::<FrameStats>(),
+        host.as_ref(),
     );
     ctx.queue.submit([encoder.finish()]);
     view.read_rgba8(ctx)
@@ -98,7 +111,7 @@ pub fn cast_rays(world: &World, diffuse_bounce: bool) -> Option<RayCastTiming> {
 }
 
 /// The linear radiance the display shows: the last real-time image, the hand-over's mix, or the accumulation
-/// (denoised when the settings say so). Row-major from the top-left.
+/// (denoised when the settings say so, by OIDN when its image was handed over). Row-major from the top-left.
 pub fn displayed_radiance(world: &World) -> Vec<[f32; 3]> {
     use super::realtime::{Realtime, Shown, runs};
     let ctx = world.resource::<GpuContext>();
@@ -108,6 +121,9 @@ pub fn displayed_radiance(world: &World) -> Vec<[f32; 3]> {
         (Some(t), Shown::Realtime, true) => super::frame::realtime_image(t, settings),
         (Some(t), Shown::Handover, true) => &t.handover,
         _ => {
+            if let Some(image) = host_denoised(world) {
+                return mean_rgb(&ctx.read_buffer(&image, image.size()));
+            }
             return if settings.denoise {
                 denoised_radiance(world)
             } else {

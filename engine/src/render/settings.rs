@@ -122,6 +122,116 @@ impl Default for RealtimeSettings {
     }
 }
 
+/// Which denoiser `RenderSettings::denoise` turns on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum DenoiserKind {
+    /// Intel Open Image Denoise on the host (the `oidn` module); where it cannot run, svgf is used instead.
+    #[default]
+    Oidn,
+    /// The GPU a-trous filter ([`super::passes::denoise`]).
+    Svgf,
+}
+
+/// OIDN's filter quality (`OIDN_QUALITY_*`): high for final frames, balanced and fast for interactive use.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Quality {
+    #[default]
+    High,
+    Balanced,
+    Fast,
+}
+
+impl Quality {
+    pub const ALL: [Quality; 3] = [Quality::High, Quality::Balanced, Quality::Fast];
+
+    /// The `OIDNQuality` value.
+    pub(crate) fn raw(self) -> i32 {
+        match self {
+            Quality::Fast => 4,
+            Quality::Balanced => 5,
+            Quality::High => 6,
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Quality::High => "high",
+            Quality::Balanced => "balanced",
+            Quality::Fast => "fast",
+        }
+    }
+}
+
+impl std::str::FromStr for Quality {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        Quality::ALL
+            .into_iter()
+            .find(|q| q.name() == s)
+            .ok_or_else(|| format!("`{s}`: expected high, balanced or fast"))
+    }
+}
+
+/// How an image is denoised (`RenderSettings::oidn`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(default)]
+pub struct DenoiseOptions {
+    pub quality: Quality,
+    /// The colour is HDR scene-referred radiance (before exposure and tone mapping); OIDN then picks its own
+    /// input scale from the image (`inputScale` = NaN), which is what it was trained with.
+    pub hdr: bool,
+    pub aux: AuxMode,
+}
+
+/// How the albedo and normal images are treated.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum AuxMode {
+    /// As they are, with the main filter told they may be noisy (`cleanAux` off).
+    Noisy,
+    /// Denoised first by OIDN's own prefilters, then trusted (`cleanAux` on): OIDN's recommendation for noisy
+    /// AOVs in final frames (and Blender's default), at the cost of two more filter runs.
+    #[default]
+    Prefilter,
+    /// As they are, trusted (`cleanAux` on): for AOVs that have converged.
+    Clean,
+}
+
+impl Default for DenoiseOptions {
+    /// High quality, HDR input, prefiltered AOVs.
+    fn default() -> Self {
+        Self {
+            quality: Quality::High,
+            hdr: true,
+            aux: AuxMode::Prefilter,
+        }
+    }
+}
+
+impl DenoiseOptions {
+    /// The defaults at `quality`.
+    pub fn at(quality: Quality) -> Self {
+        Self {
+            quality,
+            ..Default::default()
+        }
+    }
+}
+
+impl AuxMode {
+    pub const ALL: [AuxMode; 3] = [AuxMode::Prefilter, AuxMode::Noisy, AuxMode::Clean];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            AuxMode::Prefilter => "prefilter",
+            AuxMode::Noisy => "noisy",
+            AuxMode::Clean => "clean",
+        }
+    }
+}
+
 #[derive(Resource, Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct RenderSettings {
     pub width: u32,
@@ -149,6 +259,12 @@ pub struct RenderSettings {
     pub denoise: bool,
     #[serde(default)]
     pub denoise_params: super::passes::denoise::DenoiseParams,
+
+    #[serde(default)]
+    pub denoiser: DenoiserKind,
+    /// OIDN's quality and AOV treatment.
+    #[serde(default)]
+    pub oidn: DenoiseOptions,
     /// BVH layout of static meshes (deformable meshes always refit a BVH2).
     pub static_bvh: crate::bvh::StaticLayout,
     /// Where deformable meshes are skinned, morphed and refit (`Auto`: GPU on real GPUs).
@@ -179,6 +295,8 @@ impl Default for RenderSettings {
             bvh_quality: crate::bvh::BvhQuality::Medium,
             denoise: false,
             denoise_params: Default::default(),
+            denoiser: DenoiserKind::default(),
+            oidn: Default::default(),
             static_bvh: crate::bvh::StaticLayout::Wide,
             deform: DeformBackend::Auto,
             mode: RenderMode::Accumulate,
@@ -200,6 +318,8 @@ impl RenderSettings {
             denoise_params: Default::default(),
             mode: RenderMode::Accumulate,
             realtime: RealtimeSettings::default(),
+            denoiser: DenoiserKind::default(),
+            oidn: Default::default(),
             ..s.clone()
         };
         image_part(self) != image_part(other)

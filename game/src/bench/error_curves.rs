@@ -11,7 +11,8 @@ use super::scenes::BenchScene;
 use crate::stats::{log_log_fit, time_to_reach};
 use anyhow::{Context, Result};
 use raykin::gpu::GpuContext;
-use raykin::render::RenderSettings;
+use raykin::oidn::Quality;
+use raykin::render::{DenoiserKind, RenderSettings};
 use sha2::Digest;
 use std::path::Path;
 
@@ -35,8 +36,22 @@ pub const CURVES: &[Curve] = &[
     curve("max depth 3", |s| s.max_depth = s.max_depth.min(3)),
     curve("Russian roulette off", |s| s.russian_roulette = false),
     curve("NEE/MIS off (BRDF sampling only)", |s| s.nee = false),
-    // The image at each point is denoised once; its time includes that pass.
-    curve("denoised (a-trous, SVGF-style)", |s| s.denoise = true),
+    // The image at each point is denoised once; its time includes that pass (for OIDN: the copy of the
+    // accumulation and AOVs to the host, OIDN's own copies, prefilters and filter).
+    curve("svgf (a-trous)", |s| {
+        s.denoise = true;
+        s.denoiser = DenoiserKind::Svgf;
+    }),
+    curve("OIDN (high quality)", |s| {
+        s.denoise = true;
+        s.denoiser = DenoiserKind::Oidn;
+        s.oidn.quality = Quality::High;
+    }),
+    curve("OIDN fast", |s| {
+        s.denoise = true;
+        s.denoiser = DenoiserKind::Oidn;
+        s.oidn.quality = Quality::Fast;
+    }),
 ];
 
 /// Seeds of the reference halves; curves use seeds far from these.
@@ -117,9 +132,17 @@ pub fn measure(
             .collect();
         // runs[r][k] = (time, relMSE, FLIP, linear relMSE) at checkpoint k of repeat r.
         let mut runs: Vec<Vec<[f64; 4]>> = Vec::new();
+        let oidn = settings.denoise && settings.denoiser == DenoiserKind::Oidn;
         for repeat in 0..suite.error_repeats {
             settings.seed = 1000 + 100 * index as u32 + repeat as u32;
             let mut app = super::open_app(ctx, scene, settings.clone())?;
+            if oidn && let Err(e) = app.open_oidn() {
+                eprintln!(
+                    "raykin bench: {}: curve `{}` left out: {e}",
+                    scene.name, c.name
+                );
+                break;
+            }
             // The first dispatch also compiles the kernel on some drivers (lavapipe): trace one untimed frame
             // and start the curve from a cleared accumulation.
             app.step();
@@ -139,7 +162,10 @@ pub fn measure(
                         }
                     }
                 }
-                let (image, denoise_ms) = if settings.denoise {
+                let (image, denoise_ms) = if oidn {
+                    let o = app.oidn_denoised()?;
+                    (o.color.to_vec(), o.steady_ms())
+                } else if settings.denoise {
                     let start = std::time::Instant::now();
                     let image = app.denoised_radiance();
                     let wall = start.elapsed().as_secs_f64() * 1e3;
@@ -159,6 +185,9 @@ pub fn measure(
             let denoise_ms = median(&denoise_times);
             run.iter_mut().for_each(|p| p[0] += denoise_ms);
             runs.push(run);
+        }
+        if runs.is_empty() {
+            continue;
         }
         let points = checkpoints
             .iter()
@@ -295,7 +324,7 @@ pub(super) struct Reference {
 }
 
 /// The reference for `scene` at `base`: from the cache, or rendered and cached.
-fn reference(
+pub(super) fn reference(
     ctx: &GpuContext,
     scene: &BenchScene,
     base: &RenderSettings,

@@ -5,7 +5,8 @@
 //! - frame loop ([`frame_loop`]): ms per frame, per-pass breakdown, rays/s, memory, per scene and size;
 //! - error vs time ([`error_curves`]): relMSE and FLIP against a cached high-spp reference, per setting;
 //! - BVH quality ([`bvh_quality`]): obvhs presets, and refit vs rebuild along an animation;
-//! - scaling ([`scaling`]): trace time vs instanced triangle count and vs resolution.
+//! - scaling ([`scaling`]): trace time vs instanced triangle count and vs resolution;
+//! - Open Image Denoise ([`oidn`]): its cost per frame size, quality and device, and its error gains.
 
 mod bvh_quality;
 mod charts;
@@ -13,6 +14,7 @@ mod error_curves;
 mod frame_loop;
 mod metrics;
 pub mod motion;
+mod oidn;
 mod scaling;
 mod scenes;
 mod suite;
@@ -28,7 +30,9 @@ use scenes::BenchScene;
 use std::path::Path;
 
 /// The parts `--parts` can pick (all by default).
-pub const PARTS: &[&str] = &["frames", "errors", "bvh", "refit", "scaling", "motion"];
+pub const PARTS: &[&str] = &[
+    "frames", "errors", "bvh", "refit", "scaling", "motion", "oidn",
+];
 
 /// The per-scene table of docs/BENCHMARKS.md.
 #[derive(serde::Serialize)]
@@ -73,6 +77,8 @@ struct Results {
     scaling_triangles: Vec<scaling::TriangleScalingRow>,
     scaling_resolution: Vec<scaling::ResolutionScalingRow>,
     motion: Vec<motion::MotionScene>,
+    oidn_timings: Vec<oidn::TimingRow>,
+    oidn_gains: Vec<oidn::GainRow>,
     charts: Vec<String>,
     wall_seconds: f64,
     /// /proc/loadavg at the start and the end (Linux): on a CPU adapter other processes slow every figure.
@@ -394,6 +400,30 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         }
     }
 
+    let (mut oidn_timings, mut oidn_gains) = (Vec::new(), Vec::new());
+    if wants(args, "oidn") {
+        match raykin::oidn::library::Library::shared() {
+            Err(e) => eprintln!("raykin bench: the OIDN part is left out: {e}"),
+            Ok(_) => {
+                let cornell = match loaded.iter().find(|s| s.name == "cornell") {
+                    Some(s) => s,
+                    None => {
+                        loaded.push(scenes::resolve("cornell", &args.assets)?);
+                        loaded.last().expect("just pushed")
+                    }
+                };
+                eprintln!("raykin bench: OIDN cost per frame");
+                oidn_timings =
+                    oidn::timings(&ctx, cornell, &base, &suite.oidn_sizes, suite.oidn_repeats)?;
+                let settings = at_size(&base, suite.gain_size);
+                for scene in &loaded {
+                    eprintln!("raykin bench: {}: OIDN and svgf error gains", scene.name);
+                    oidn_gains.extend(oidn::gains(&ctx, scene, &settings, &suite, &args.cache)?);
+                }
+            }
+        }
+    }
+
     let table = table(&loaded, &rows, &errors);
     let results = Results {
         adapter: ctx.info.name.clone(),
@@ -414,6 +444,8 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         scaling_triangles: tri_scaling,
         scaling_resolution: res_scaling,
         motion: motion_scenes,
+        oidn_timings,
+        oidn_gains,
         charts,
         wall_seconds: started.elapsed().as_secs_f64(),
         load_average_start,
@@ -639,6 +671,56 @@ per hit), per size.\n";
 relMSE and FLIP), settled = mean over the evaluated frames from K/4 (before the lamp switch); GPU ms: every pass of \
 the frame (deform, G-buffer, ReSTIR, gradients, trace, temporal, spatial filter, tone map); disoccluded = pixels \
 whose history (reprojection without gradients) is at most 8 frames long.\n";
+    }
+    s += &oidn_markdown(r);
+    s
+}
+
+/// OIDN's tables for docs/BENCHMARKS.md: cost per frame, and error gains.
+fn oidn_markdown(r: &Results) -> String {
+    let mut s = String::new();
+    if !r.oidn_timings.is_empty() {
+        s += "\n| OIDN device | quality | size | ms per frame | GPU->host readback | host->OIDN | prefilter (albedo, normal) | filter | OIDN->host | filter set-up (once) |\n";
+        s += "|---|---|---|---|---|---|---|---|---|---|\n";
+        for t in &r.oidn_timings {
+            s += &format!(
+                "| {} | {} | {}x{} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {:.0} |\n",
+                t.device,
+                t.quality.name(),
+                t.width,
+                t.height,
+                t.total_ms,
+                t.readback_ms,
+                t.upload_ms,
+                t.prefilter_ms,
+                t.filter_ms,
+                t.download_ms,
+                t.setup_ms
+            );
+        }
+    }
+    if !r.oidn_gains.is_empty() {
+        s += "\n| scene | size | spp | method | relMSE (tone-mapped) | gain | relMSE (linear) | gain | FLIP | gain | mean / noisy mean |\n";
+        s += "|---|---|---|---|---|---|---|---|---|---|---|\n";
+        for g in &r.oidn_gains {
+            s += &format!(
+                "| {} | {}x{} | {} | {} | {:.3e} | {:.1}x | {:.3e} | {:.1}x | {:.4} | {:.1}x | {:.4} |\n",
+                g.scene,
+                g.width,
+                g.height,
+                g.spp,
+                g.method,
+                g.rel_mse,
+                g.rel_mse_gain,
+                g.rel_mse_linear,
+                g.rel_mse_linear_gain,
+                g.flip,
+                g.flip_gain,
+                g.mean_ratio
+            );
+        }
+        s += "\nGains: the noisy image's error over the denoised one's, against the cached reference (its own noise \
+not subtracted); animated scenes in their rest pose.\n";
     }
     s
 }

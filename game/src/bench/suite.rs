@@ -51,6 +51,11 @@ pub struct Suite {
     pub motion_eval_every: usize,
     pub motion_reference_spp: u32,
     pub motion_lag_window: usize,
+    /// OIDN: frame sizes its cost is measured at, and runs per measurement; the image size of its error
+    /// gains at 1, 4, 16 and 64 spp (the reference is the error curves' when the sizes agree).
+    pub oidn_sizes: Vec<(u32, u32)>,
+    pub oidn_repeats: usize,
+    pub gain_size: (u32, u32),
 }
 
 fn named(list: &[&str]) -> Vec<String> {
@@ -89,6 +94,9 @@ impl Suite {
                 motion_eval_every: 8,
                 motion_reference_spp: 256,
                 motion_lag_window: 8,
+                oidn_sizes: vec![(64, 36)],
+                oidn_repeats: 1,
+                gain_size: (24, 16),
             }),
             ("full", false) => Ok(Self {
                 name: "full".into(),
@@ -124,6 +132,9 @@ impl Suite {
                 motion_eval_every: 15,
                 motion_reference_spp: 1024,
                 motion_lag_window: 12,
+                oidn_sizes: vec![(1920, 1080), (2560, 1440)],
+                oidn_repeats: 10,
+                gain_size: (960, 540),
             }),
             ("full", true) => {
                 let s = CPU_LINEAR_SCALE;
@@ -161,6 +172,11 @@ impl Suite {
                     motion_eval_every: 12,
                     motion_reference_spp: 256,
                     motion_lag_window: 12,
+                    // OIDN's CPU device is what is measured here, at full size; a 1-spp input traces in
+                    // seconds even on lavapipe.
+                    oidn_sizes: vec![(1920, 1080), (2560, 1440)],
+                    oidn_repeats: 3,
+                    gain_size: (128, 72),
                 })
             }
             (other, _) => anyhow::bail!("unknown suite `{other}`: quick or full"),

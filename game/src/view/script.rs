@@ -7,7 +7,9 @@ use anyhow::{Context, Result, bail};
 use raykin::animation::AnimationPlayer;
 use raykin::camera::{CameraInput, CameraMode, CameraRig};
 use raykin::editor::EditorState;
-use raykin::render::{Accumulation, AovView, Environment, RenderMode, RenderSettings, Tonemapper};
+use raykin::render::{
+    Accumulation, AovView, DenoiserKind, Environment, RenderMode, RenderSettings, Tonemapper,
+};
 use raykin::scene::{AlphaMode, Materials};
 use std::path::{Path, PathBuf};
 
@@ -37,12 +39,15 @@ pub enum Setting {
     Env([f32; 3]),
     SampleLimit(u32),
     Seed(u32),
-    Denoise(bool),
     Mode(RenderMode),
     /// A real-time stage on or off: temporal, gradients, spatial, restir, restir_temporal, restir_spatial,
     /// restir_unbiased.
     Stage(String, bool),
     HistoryCap(u32),
+    /// Off, or on with this denoiser (`on`: the default one).
+    Denoise(Option<DenoiserKind>),
+    DenoiseQuality(raykin::oidn::Quality),
+    DenoiseAovs(raykin::oidn::AuxMode),
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -177,10 +182,25 @@ fn parse_line(line: &str) -> Result<Option<Command>> {
                 "seed" => Setting::Seed(uint(values)? as u32),
                 "sky" => Setting::Sky,
                 "denoise" => Setting::Denoise(match values {
-                    ["on"] => true,
-                    ["off"] => false,
-                    _ => bail!("denoise: on or off"),
+                    ["on"] => Some(DenoiserKind::default()),
+                    ["oidn"] => Some(DenoiserKind::Oidn),
+                    ["svgf"] => Some(DenoiserKind::Svgf),
+                    ["off"] => None,
+                    _ => bail!("denoise: on, off, oidn or svgf"),
                 }),
+                "denoise_quality" => Setting::DenoiseQuality(match values {
+                    [q] => q.parse().map_err(anyhow::Error::msg)?,
+                    _ => bail!("denoise_quality: high, balanced or fast"),
+                }),
+                "denoise_aovs" => Setting::DenoiseAovs(
+                    match values {
+                        [a] => raykin::oidn::AuxMode::ALL
+                            .into_iter()
+                            .find(|m| m.name() == *a),
+                        _ => None,
+                    }
+                    .context("denoise_aovs: prefilter, noisy or clean")?,
+                ),
                 "env" => Setting::Env(floats::<3>(values)?),
                 "mode" => Setting::Mode(match values {
                     ["realtime"] => RenderMode::Realtime,
@@ -210,7 +230,7 @@ fn parse_line(line: &str) -> Result<Option<Command>> {
                     _ => bail!("view: color, albedo, normal or depth"),
                 }),
                 other => bail!(
-                    "unknown setting `{other}` (spp, max_depth, exposure, sample_limit, seed, sky, env, tonemapper, view, denoise, mode, history_cap, {})",
+                    "unknown setting `{other}` (spp, max_depth, exposure, sample_limit, seed, sky, env, tonemapper, view, denoise, denoise_quality, denoise_aovs, mode, history_cap, {})",
                     REALTIME_STAGES.join(", ")
                 ),
             })
@@ -513,7 +533,6 @@ fn apply_setting(session: &mut Session, setting: &Setting) {
         Setting::Sky => s.environment = Environment::Sky,
         Setting::Env(c) => s.environment = Environment::Constant(c),
         Setting::Seed(n) => s.seed = n,
-        Setting::Denoise(on) => s.denoise = on,
         Setting::Mode(mode) => s.mode = mode,
         Setting::HistoryCap(n) => s.realtime.history_cap = n,
         Setting::Stage(ref stage, on) => {
@@ -521,6 +540,14 @@ fn apply_setting(session: &mut Session, setting: &Setting) {
                 *flag = on;
             }
         }
+        Setting::Denoise(choice) => {
+            s.denoise = choice.is_some();
+            if let Some(kind) = choice {
+                s.denoiser = kind;
+            }
+        }
+        Setting::DenoiseQuality(q) => s.oidn.quality = q,
+        Setting::DenoiseAovs(a) => s.oidn.aux = a,
         Setting::SampleLimit(_) => {}
     }
 }

@@ -422,7 +422,11 @@ impl Session {
             .query::<&AnimationPlayer>()
             .iter(world)
             .any(|p| p.playing);
-        converged && !playing && self.recording.is_none()
+        // An OIDN denoise under way must reach the display.
+        let denoising = world
+            .get_resource::<raykin::oidn::ViewerOidn>()
+            .is_some_and(|o| o.busy());
+        converged && !playing && self.recording.is_none() && !denoising
     }
 }
 
@@ -461,6 +465,7 @@ fn build_engine(
         }
     }
     engine.app.add_plugins(EditorPlugin);
+    engine.app.add_plugins(raykin::oidn::OidnViewerPlugin);
     let world = engine.app.world_mut();
     prefs.apply(world);
     {

@@ -44,8 +44,9 @@ pub struct TonemapPass {
 /// A bind group's view generation and radiance input (`None`: the view's accumulation).
 type GroupKey = (u64, Option<wgpu::Buffer>);
 
-/// Bind groups kept: the accumulation, the denoiser's output, the real-time image and the hand-over's.
-const CACHED_GROUPS: usize = 4;
+/// Bind groups kept: the accumulation, the denoiser's output, the real-time image, the hand-over's and the
+/// host-denoised image.
+const CACHED_GROUPS: usize = 5;
 
 /// Which radiance the transform reads.
 #[derive(Clone, Copy)]

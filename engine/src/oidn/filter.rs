@@ -1,0 +1,380 @@
+//! [`Oidn`]: OIDN's `RT` filter over host images, through OIDN buffers (written from and read back to host
+//! memory, which every device type supports; the copies are timed). Filters and buffers are made once per
+//! image size and options and reused, as OIDN recommends: committing a filter is its expensive step.
+
+use super::device::{self, DeviceKind, DeviceRequest};
+use super::library::{self, Library};
+use super::{DenoiseOptions, Images, OidnError};
+use std::ffi::CStr;
+use std::time::Instant;
+
+/// Milliseconds spent in each step of one [`Oidn::denoise`].
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct Timings {
+    /// Creating and committing filters and buffers (only when the size or options changed).
+    pub setup_ms: f64,
+    /// Host to OIDN buffers (a memcpy on the CPU device, a host-to-device copy on a GPU).
+    pub upload_ms: f64,
+    /// Denoising the albedo and normal images (with [`super::AuxMode::Prefilter`]).
+    pub prefilter_ms: f64,
+    /// The main filter.
+    pub filter_ms: f64,
+    /// OIDN buffer back to the host.
+    pub download_ms: f64,
+}
+
+impl Timings {
+    pub fn total_ms(&self) -> f64 {
+        self.setup_ms + self.upload_ms + self.prefilter_ms + self.filter_ms + self.download_ms
+    }
+}
+
+/// Prefiltered albedo and normal images.
+pub type AuxImages = (Vec<[f32; 3]>, Vec<[f32; 3]>);
+
+/// A denoised image and what it cost.
+#[derive(Clone, Debug)]
+pub struct Denoised {
+    pub color: Vec<[f32; 3]>,
+    pub timings: Timings,
+    /// Output pixels that came back non-finite and were replaced by their (sanitised) input.
+    pub repaired: usize,
+}
+
+/// Filters and buffers for one image size and set of options.
+struct Filters {
+    key: (u32, u32, DenoiseOptions, bool, bool),
+    beauty: library::Filter,
+    /// In-place denoisers of the albedo and normal buffers (with [`super::AuxMode::Prefilter`]).
+    prefilters: Vec<library::Filter>,
+    color: library::Buffer,
+    albedo: Option<library::Buffer>,
+    normal: Option<library::Buffer>,
+    output: library::Buffer,
+}
+
+/// An OIDN device and the filters made on it. Use it from one thread at a time (it is `Send`).
+pub struct Oidn {
+    lib: &'static Library,
+    device: device::Device,
+    filters: Option<Filters>,
+    /// Notes from opening the device (a GPU that failed and the CPU used instead).
+    pub notes: Vec<String>,
+}
+
+// SAFETY: OIDN's API is thread-safe; `Oidn` owns its handles and `&mut self` serialises their use.
+unsafe impl Send for Oidn {}
+
+impl Oidn {
+    /// Loads the library ([`Library::shared`]) and opens the requested device.
+    pub fn new(request: &DeviceRequest) -> Result<Self, OidnError> {
+        Self::with_library(Library::shared()?, request)
+    }
+
+    pub fn with_library(lib: &'static Library, request: &DeviceRequest) -> Result<Self, OidnError> {
+        let (device, notes) = device::open(lib, request)?;
+        Ok(Self {
+            lib,
+            device,
+            filters: None,
+            notes,
+        })
+    }
+
+    pub fn device_kind(&self) -> DeviceKind {
+        self.device.kind
+    }
+
+    /// E.g. "CUDA NVIDIA H200" or "CPU Intel(R) Xeon(R) ...".
+    pub fn device_description(&self) -> String {
+        format!("{} {}", self.device.kind.name(), self.device.name)
+    }
+
+    /// The loaded library file.
+    pub fn library_path(&self) -> &std::path::Path {
+        &self.lib.path
+    }
+
+    /// Denoises `images.color`, guided by the albedo and normal images when given.
+    pub fn denoise(
+        &mut self,
+        images: &Images,
+        options: &DenoiseOptions,
+    ) -> Result<Denoised, OidnError> {
+        let (color, mut timings) = self.upload_and_prefilter(images, options)?;
+        let lib = self.lib;
+        let filters = self.filters.as_ref().expect("made by the upload");
+        let start = Instant::now();
+        // SAFETY: a committed filter over live buffers.
+        unsafe { (lib.execute_filter)(filters.beauty) };
+        self.check("denoising")?;
+        timings.filter_ms = ms_since(start);
+
+        let start = Instant::now();
+        let mut out = self.read(filters.output, color.len())?;
+        timings.download_ms = ms_since(start);
+
+        let mut repaired = 0;
+        for (o, i) in out.iter_mut().zip(&color) {
+            if !o.iter().all(|v| v.is_finite()) {
+                *o = *i;
+                repaired += 1;
+            } else {
+                *o = o.map(|v| v.max(0.0));
+            }
+        }
+        Ok(Denoised {
+            color: out,
+            timings,
+            repaired,
+        })
+    }
+
+    /// The albedo and normal images after OIDN's prefilters (what [`Self::denoise`] guides the main filter
+    /// with in [`super::AuxMode::Prefilter`]), for inspection and tests.
+    pub fn prefiltered_aovs(
+        &mut self,
+        images: &Images,
+        quality: super::Quality,
+    ) -> Result<AuxImages, OidnError> {
+        let (Some(_), Some(_)) = (images.albedo, images.normal) else {
+            return Err(OidnError::Input(
+                "prefiltering needs both the albedo and the normal image".into(),
+            ));
+        };
+        let options = DenoiseOptions::at(quality);
+        let (color, _) = self.upload_and_prefilter(images, &options)?;
+        let filters = self.filters.as_ref().expect("made by the upload");
+        let (albedo, normal) = (
+            filters.albedo.expect("an albedo image"),
+            filters.normal.expect("a normal image"),
+        );
+        Ok((
+            self.read(albedo, color.len())?,
+            self.read(normal, color.len())?,
+        ))
+    }
+
+    /// Copies `pixels` FLOAT3 pixels of an OIDN buffer to the host.
+    fn read(&self, buffer: library::Buffer, pixels: usize) -> Result<Vec<[f32; 3]>, OidnError> {
+        let mut out = vec![[0.0f32; 3]; pixels];
+        let bytes: &mut [u8] = bytemuck::cast_slice_mut(&mut out);
+        // SAFETY: the buffer holds exactly `bytes.len()` bytes; the call blocks until copied.
+        unsafe { (self.lib.read_buffer)(buffer, 0, bytes.len(), bytes.as_mut_ptr().cast()) };
+        self.check("reading a result")?;
+        Ok(out)
+    }
+
+    /// Makes the filters for this size and options if needed, uploads the (sanitised) images and runs the
+    /// prefilters; returns the sanitised colour and the timings so far.
+    fn upload_and_prefilter(
+        &mut self,
+        images: &Images,
+        options: &DenoiseOptions,
+    ) -> Result<(Vec<[f32; 3]>, Timings), OidnError> {
+        images.validate()?;
+        let mut timings = Timings::default();
+        let start = Instant::now();
+        let key = (
+            images.width,
+            images.height,
+            *options,
+            images.albedo.is_some(),
+            images.normal.is_some(),
+        );
+        if self.filters.as_ref().is_none_or(|f| f.key != key) {
+            self.release_filters();
+            self.filters = Some(self.make_filters(key)?);
+        }
+        timings.setup_ms = ms_since(start);
+
+        let color = sanitized(images.color, 0.0, MAX_RADIANCE);
+        let albedo = images.albedo.map(|a| sanitized(a, 0.0, 1.0));
+        let normal = images.normal.map(|n| sanitized(n, -1.0, 1.0));
+        let lib = self.lib;
+        let filters = self.filters.as_ref().expect("made above");
+        let start = Instant::now();
+        for (buffer, data) in [
+            (Some(filters.color), Some(&color)),
+            (filters.albedo, albedo.as_ref()),
+            (filters.normal, normal.as_ref()),
+        ] {
+            if let (Some(buffer), Some(data)) = (buffer, data) {
+                let bytes: &[u8] = bytemuck::cast_slice(data);
+                // SAFETY: the buffer was made with exactly width x height x 12 bytes, as `data` holds.
+                unsafe { (lib.write_buffer)(buffer, 0, bytes.len(), bytes.as_ptr().cast()) };
+            }
+        }
+        self.check("uploading the images")?;
+        timings.upload_ms = ms_since(start);
+
+        let start = Instant::now();
+        for &f in &filters.prefilters {
+            // SAFETY: a committed filter over live buffers.
+            unsafe { (lib.execute_filter)(f) };
+        }
+        self.check("prefiltering the albedo and normal")?;
+        timings.prefilter_ms = ms_since(start);
+        Ok((color, timings))
+    }
+
+    fn make_filters(
+        &self,
+        key: (u32, u32, DenoiseOptions, bool, bool),
+    ) -> Result<Filters, OidnError> {
+        let (width, height, options, has_albedo, has_normal) = key;
+        let lib = self.lib;
+        let dev = self.device.raw;
+        let bytes = width as usize * height as usize * 12;
+        // SAFETY: `dev` is a committed device; every handle made here is released in `release_filters`.
+        let new_buffer = || unsafe { (lib.new_buffer)(dev, bytes) };
+        let mut filters = Filters {
+            key,
+            beauty: std::ptr::null_mut(),
+            prefilters: Vec::new(),
+            color: new_buffer(),
+            albedo: has_albedo.then(new_buffer),
+            normal: has_normal.then(new_buffer),
+            output: new_buffer(),
+        };
+        let image = |filter, name: &'static CStr, buffer| {
+            // SAFETY: a live filter and a buffer of width x height FLOAT3 pixels, tightly packed.
+            unsafe {
+                (lib.set_filter_image)(
+                    filter,
+                    library::name(name),
+                    buffer,
+                    library::FORMAT_FLOAT3,
+                    width as usize,
+                    height as usize,
+                    0,
+                    0,
+                    0,
+                )
+            }
+        };
+        // SAFETY: a committed device; "RT" is a built-in filter type.
+        let new_filter = || unsafe { (lib.new_filter)(dev, library::name(c"RT")) };
+        let set_quality = |f| unsafe {
+            (lib.set_filter_int)(f, library::name(c"quality"), options.quality.raw())
+        };
+        let prefilter = options.aux == super::AuxMode::Prefilter;
+        // Each prefilter denoises its AOV in place (OIDN's documented prefiltering setup).
+        for (aov, name) in [(filters.albedo, c"albedo"), (filters.normal, c"normal")] {
+            if let (true, Some(buffer)) = (prefilter, aov) {
+                let f = new_filter();
+                image(f, name, buffer);
+                image(f, c"output", buffer);
+                set_quality(f);
+                // SAFETY: a live filter with its images set.
+                unsafe { (lib.commit_filter)(f) };
+                filters.prefilters.push(f);
+            }
+        }
+        let beauty = new_filter();
+        image(beauty, c"color", filters.color);
+        if let Some(albedo) = filters.albedo {
+            image(beauty, c"albedo", albedo);
+        }
+        if let Some(normal) = filters.normal {
+            image(beauty, c"normal", normal);
+        }
+        image(beauty, c"output", filters.output);
+        // SAFETY: a live filter; parameter names from OIDN's RT filter documentation.
+        unsafe {
+            (lib.set_filter_bool)(beauty, library::name(c"hdr"), options.hdr);
+            (lib.set_filter_bool)(
+                beauty,
+                library::name(c"cleanAux"),
+                options.aux != super::AuxMode::Noisy && (has_albedo || has_normal),
+            );
+            (lib.set_filter_float)(beauty, library::name(c"inputScale"), f32::NAN);
+        }
+        set_quality(beauty);
+        // SAFETY: as above.
+        unsafe { (lib.commit_filter)(beauty) };
+        filters.beauty = beauty;
+        let made = filters;
+        if let Err(e) = self.check(&format!("setting up a {width}x{height} filter")) {
+            release(lib, &made);
+            return Err(e);
+        }
+        Ok(made)
+    }
+
+    /// The device's pending error, as an [`OidnError`] naming `what` was being done.
+    fn check(&self, what: &str) -> Result<(), OidnError> {
+        match self.lib.take_error(self.device.raw) {
+            None => Ok(()),
+            Some(message) => Err(OidnError::Device {
+                device: self.device_description(),
+                message: format!("{what}: {message}"),
+            }),
+        }
+    }
+
+    fn release_filters(&mut self) {
+        if let Some(f) = self.filters.take() {
+            release(self.lib, &f);
+        }
+    }
+}
+
+impl Drop for Oidn {
+    fn drop(&mut self) {
+        self.release_filters();
+        // SAFETY: every filter and buffer on the device is released; the device is not used again.
+        unsafe {
+            (self.lib.sync_device)(self.device.raw);
+            (self.lib.release_device)(self.device.raw);
+        }
+    }
+}
+
+fn release(lib: &Library, f: &Filters) {
+    // SAFETY: handles made by `make_filters` and not used after this (null ones are skipped).
+    unsafe {
+        for &p in f.prefilters.iter().chain([&f.beauty]) {
+            if !p.is_null() {
+                (lib.release_filter)(p);
+            }
+        }
+        for b in [Some(f.color), f.albedo, f.normal, Some(f.output)]
+            .into_iter()
+            .flatten()
+        {
+            if !b.is_null() {
+                (lib.release_buffer)(b);
+            }
+        }
+    }
+}
+
+/// Radiance above this is clamped before denoising: OIDN's HDR transfer must not overflow to infinity.
+const MAX_RADIANCE: f32 = 1e30;
+
+/// Each channel clamped to [lo, hi]; NaN becomes 0.
+fn sanitized(image: &[[f32; 3]], lo: f32, hi: f32) -> Vec<[f32; 3]> {
+    image
+        .iter()
+        .map(|p| p.map(|v| if v.is_nan() { 0.0 } else { v.clamp(lo, hi) }))
+        .collect()
+}
+
+fn ms_since(start: Instant) -> f64 {
+    start.elapsed().as_secs_f64() * 1e3
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sanitizing_clamps_and_drops_nan() {
+        let img = [[f32::NAN, -1.0, f32::INFINITY], [0.5, 2.0, -0.0]];
+        assert_eq!(
+            sanitized(&img, 0.0, 1.0),
+            vec![[0.0, 0.0, 1.0], [0.5, 1.0, 0.0]]
+        );
+    }
+}
