@@ -58,11 +58,13 @@ fn pick(image: &[[f32; 3]], pixels: &[usize]) -> Vec<[f32; 3]> {
 }
 
 /// OIDN brings the Cornell box (the shipped double-sided light, whose fireflies have infinite variance) much
-/// closer to Mitsuba's converged image. At 4 spp, away from the light, relMSE falls by at least 12x (measured
-/// 16.6x at this seed, 16-267x over seeds 11-18; svgf 3-55x); over the whole image by at least 3x (3.9-83x),
-/// the light's edge being out of any denoiser's reach. At 16 spp the mean away from the light is within 2% of
-/// the reference (measured 1.1-1.6% below it over seeds 11-18: OIDN takes the fireflies of the light gap for
-/// noise; docs/ACCURACY.md).
+/// closer to Mitsuba's converged image. At 4 spp, away from the light, relMSE falls by at least 15x (measured
+/// 21.7x at this seed, 20-291x over seeds 11-18; svgf's whole-image factor there is 2.9-31x); over the whole
+/// image by at least 8x (13.2x here, 11-88x over seeds 11-18), the light's edge being out of any denoiser's
+/// reach. At 16 spp the mean away from the light stays within 3% of the reference per channel: OIDN takes part
+/// of the light gap's fireflies for noise and keeps the image 0.4-2.5% darker there (seeds 11-18; the noisy
+/// image is within 2% of the reference); [`oidn_keeps_the_energy_of_a_finite_variance_scene`] bounds the loss
+/// where the fireflies have finite variance (docs/ACCURACY.md).
 #[test]
 fn oidn_cuts_the_error_against_mitsuba() {
     let (ctx, _gpu) = gpu();
@@ -90,12 +92,12 @@ fn oidn_cuts_the_error_against_mitsuba() {
     };
     let (away_factor, whole_factor) = (factor(Some(&away)), factor(None));
     assert!(
-        away_factor > 12.0,
-        "away from the light OIDN lowered relMSE only {away_factor:.1}x, expected > 12x"
+        away_factor > 15.0,
+        "away from the light OIDN lowered relMSE only {away_factor:.1}x, expected > 15x"
     );
     assert!(
-        whole_factor > 3.0,
-        "OIDN lowered the image's relMSE only {whole_factor:.1}x, expected > 3x"
+        whole_factor > 8.0,
+        "OIDN lowered the image's relMSE only {whole_factor:.1}x, expected > 8x"
     );
     app.accumulate(12, 64, |_| {});
     let denoised = pick(&denoise(&mut oidn, &inputs(&app)), &away);
@@ -103,7 +105,7 @@ fn oidn_cuts_the_error_against_mitsuba() {
     eprintln!("16 spp, away from the light: mean {mean:?} vs reference {expected:?}");
     for c in 0..3 {
         assert!(
-            (mean[c] / expected[c] - 1.0).abs() < 0.02,
+            (mean[c] / expected[c] - 1.0).abs() < 0.03,
             "channel {c}: mean {} vs reference {}",
             mean[c],
             expected[c]
@@ -111,10 +113,36 @@ fn oidn_cuts_the_error_against_mitsuba() {
     }
 }
 
+/// With a single-sided light (finite variance: no fireflies from the gap above it) OIDN keeps the energy of
+/// the 16-spp image away from the light within 1% of the unbiased noisy image's (measured 0.2-0.65% below
+/// over seeds 11-18). At the light's own outline, radiance 100 beside 0.5, OIDN's HDR filtering removes 2-3%
+/// of the whole image's luminance, which no AOV can guide (the light and the ceiling share albedo and normal).
+#[test]
+fn oidn_keeps_the_energy_of_a_finite_variance_scene() {
+    let (ctx, _gpu) = gpu();
+    let away = away_from_the_light(&cornell::reference());
+    let mut oidn = cpu_oidn();
+    let mut app = cornell::app(ctx, false, cornell::SIZE, 11);
+    app.accumulate(16, 64, |_| {});
+    let noisy = pick(&app.radiance(), &away);
+    let denoised = pick(&denoise(&mut oidn, &inputs(&app)), &away);
+    let total = |img: &[[f32; 3]]| img.iter().map(|p| luminance(*p)).sum::<f64>();
+    let kept = total(&denoised) / total(&noisy);
+    eprintln!(
+        "single-sided light, 16 spp, away from the light: denoised/noisy luminance {kept:.4}"
+    );
+    assert!(
+        (kept - 1.0).abs() < 0.01,
+        "OIDN changed the energy away from the light by {:+.2}%",
+        (kept - 1.0) * 100.0
+    );
+}
+
 /// Checker edges on a textured plane keep the contrast of a 128-spp reference, by the measure and bound of the
 /// svgf test (within 10%, while a blind 5x5 blur loses at least 20%): with the default prefiltered AOVs at
-/// 16 spp (measured 0.957), and with the AOVs used as they are at 4 spp (0.971). At 4 spp the prefilters
-/// soften the albedo's edges: 0.88 here, 0.84-0.90 at 64-256 pixels (docs/ACCURACY.md).
+/// 16 spp (measured 0.971), and with the AOVs used as they are at 4 spp (0.976). At 4 spp the prefilters
+/// soften the albedo's edges (0.84-0.90 of the contrast at 64-256 pixels, measured with the earlier sampler;
+/// docs/ACCURACY.md).
 #[test]
 fn oidn_keeps_checker_edges() {
     let (ctx, _gpu) = gpu();
@@ -199,7 +227,9 @@ fn converged_input_stays_converged() {
 
 /// OIDN's prefilters clean the AOVs the main filter is guided by: on the checker plane at 1 spp, the
 /// prefiltered albedo and normal are closer to their 256-spp versions than the raw 1-spp ones (edge pixels
-/// see one sub-pixel position per sample, so the raw AOVs are aliased).
+/// see one sub-pixel position per sample, so the raw AOVs are aliased). Pooled over 8 seeds, as a 32x32
+/// image has few edge pixels: one seed's normal can come out worse (per-seed MSE ratios 0.20-2.1 for the
+/// normal, 0.43-0.96 for the albedo, seeds 1-8).
 #[test]
 fn aov_prefiltering_brings_1_spp_aovs_closer_to_converged() {
     let (ctx, _gpu) = gpu();
@@ -214,31 +244,44 @@ fn aov_prefiltering_brings_1_spp_aovs_closer_to_converged() {
     .expect("uploads");
     converged.accumulate(256, 64, |_| {});
     let clean = inputs(&converged);
-    let mut app =
-        HeadlessApp::new(ctx, scene, checker_settings(1), &checker_camera()).expect("uploads");
-    app.accumulate(1, 1, |_| {});
-    let raw = inputs(&app);
-    let (albedo, normal) = oidn
-        .prefiltered_aovs(&raw.images(), Quality::High)
-        .expect("prefilters run");
-    let mse = |a: &[[f32; 3]], b: &[[f32; 3]]| -> f64 {
+    let squared_error = |a: &[[f32; 3]], b: &[[f32; 3]]| -> f64 {
         a.iter()
             .zip(b)
             .flat_map(|(p, q)| (0..3).map(move |c| (p[c] as f64 - q[c] as f64).powi(2)))
             .sum::<f64>()
-            / (3 * a.len()) as f64
     };
-    let (albedo_raw, albedo_pre) = (mse(&raw.albedo, &clean.albedo), mse(&albedo, &clean.albedo));
-    let (normal_raw, normal_pre) = (mse(&raw.normal, &clean.normal), mse(&normal, &clean.normal));
+    let (mut albedo_raw, mut albedo_pre, mut normal_raw, mut normal_pre) = (0.0, 0.0, 0.0, 0.0);
+    for seed in 1..=8 {
+        let mut app = HeadlessApp::new(
+            ctx.clone(),
+            scene.clone(),
+            checker_settings(seed),
+            &checker_camera(),
+        )
+        .expect("uploads");
+        app.accumulate(1, 1, |_| {});
+        let raw = inputs(&app);
+        let (albedo, normal) = oidn
+            .prefiltered_aovs(&raw.images(), Quality::High)
+            .expect("prefilters run");
+        assert_all_finite(&albedo, "prefiltered albedo");
+        assert_all_finite(&normal, "prefiltered normal");
+        albedo_raw += squared_error(&raw.albedo, &clean.albedo);
+        albedo_pre += squared_error(&albedo, &clean.albedo);
+        normal_raw += squared_error(&raw.normal, &clean.normal);
+        normal_pre += squared_error(&normal, &clean.normal);
+    }
     eprintln!(
-        "1-spp AOVs vs 256 spp: albedo MSE raw {albedo_raw:.2e}, prefiltered {albedo_pre:.2e}; normal raw {normal_raw:.2e}, prefiltered {normal_pre:.2e}"
+        "1-spp AOVs vs 256 spp, 8 seeds: albedo error prefiltered/raw {:.3}, normal {:.3}",
+        albedo_pre / albedo_raw,
+        normal_pre / normal_raw
     );
     assert!(
-        albedo_pre < 0.7 * albedo_raw,
+        albedo_pre < 0.85 * albedo_raw,
         "albedo prefilter: {albedo_raw:.2e} -> {albedo_pre:.2e}"
     );
     assert!(
-        normal_pre < 0.7 * normal_raw,
+        normal_pre < 0.85 * normal_raw,
         "normal prefilter: {normal_raw:.2e} -> {normal_pre:.2e}"
     );
 }

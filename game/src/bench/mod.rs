@@ -416,7 +416,8 @@ pub fn run(args: &BenchArgs) -> Result<()> {
                 oidn_timings =
                     oidn::timings(&ctx, cornell, &base, &suite.oidn_sizes, suite.oidn_repeats)?;
                 let settings = at_size(&base, suite.gain_size);
-                for scene in &loaded {
+                // The error curves' scenes (the motion part may have loaded others).
+                for scene in loaded.iter().filter(|s| scene_names.contains(&s.name)) {
                     eprintln!("raykin bench: {}: OIDN and svgf error gains", scene.name);
                     oidn_gains.extend(oidn::gains(&ctx, scene, &settings, &suite, &args.cache)?);
                 }
