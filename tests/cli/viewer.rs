@@ -349,9 +349,9 @@ quit
 fn offscreen_loop_reports_per_pass_times() {
     let dir = temp_dir("offscreen");
     let report = dir.join("report.json");
-    // The denoiser on (display-side, timed as its own pass); the script ends after the 12 frames.
+    // The svgf denoiser on (display-side, timed as its own pass); the script ends after the 12 frames.
     let script = dir.join("denoise.script");
-    std::fs::write(&script, "set denoise on\nwait 100\n").expect("script");
+    std::fs::write(&script, "set denoise svgf\nwait 100\n").expect("script");
     let command = offscreen(
         "48x30",
         12,

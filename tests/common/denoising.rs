@@ -2,6 +2,8 @@
 //! with its blind-blur control, and the checker-textured scene.
 
 use raykin::camera::CameraChoice;
+use raykin::gpu::GpuContext;
+use raykin::headless::HeadlessApp;
 use raykin::render::{Environment, RenderSettings};
 use raykin::scene::{Image, Material, NodeTransform, SceneAsset, Texture, TextureRef, procedural};
 use std::sync::Arc;
@@ -162,4 +164,15 @@ pub fn checker_camera() -> CameraChoice {
         target: glam::Vec3::new(0.2, 0.3, 0.0),
         yfov: 40f32.to_radians(),
     }
+}
+
+/// `scene` (the checker scene) seen from [`checker_camera`] at [`checker_settings`]`(seed)`.
+pub fn checker_app(ctx: GpuContext, scene: &Arc<SceneAsset>, seed: u32) -> HeadlessApp {
+    HeadlessApp::new(
+        ctx,
+        scene.clone(),
+        checker_settings(seed),
+        &checker_camera(),
+    )
+    .expect("uploads")
 }

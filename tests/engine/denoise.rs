@@ -142,18 +142,11 @@ fn scene_energy_is_kept() {
 fn texture_edges_stay_sharp() {
     let (ctx, _gpu) = gpu();
     let scene = checker_scene();
-    let mut converged = HeadlessApp::new(
-        ctx.clone(),
-        scene.clone(),
-        checker_settings(100),
-        &checker_camera(),
-    )
-    .expect("uploads");
+    let mut converged = checker_app(ctx.clone(), &scene, 100);
     converged.accumulate(128, 64, |_| {});
     // Pixels are classified on the converged AOVs: a 4-spp albedo can call a mixed pixel pure.
     let (reference, aovs) = (converged.radiance(), converged.aovs());
-    let mut app =
-        HeadlessApp::new(ctx, scene, checker_settings(1), &checker_camera()).expect("uploads");
+    let mut app = checker_app(ctx, &scene, 1);
     app.accumulate(4, 64, |_| {});
     let (noisy, denoised) = (app.radiance(), app.denoised_radiance());
     // Both pixels on the plane (normal up), one on a light and one on a dark check (albedo 0.72 vs 0.10).

@@ -148,13 +148,7 @@ fn oidn_keeps_checker_edges() {
     let (ctx, _gpu) = gpu();
     let mut oidn = cpu_oidn();
     let scene = checker_scene();
-    let mut converged = HeadlessApp::new(
-        ctx.clone(),
-        scene.clone(),
-        checker_settings(100),
-        &checker_camera(),
-    )
-    .expect("uploads");
+    let mut converged = checker_app(ctx.clone(), &scene, 100);
     converged.accumulate(128, 64, |_| {});
     let (reference, aovs) = (converged.radiance(), converged.aovs());
     let on_plane = |i: usize| aovs.normal[i][1] > 0.999;
@@ -163,8 +157,7 @@ fn oidn_keeps_checker_edges() {
         on_plane(a) && on_plane(b) && la.max(lb) > 0.6 && la.min(lb) < 0.15
     });
     assert!(pairs.len() >= 40, "only {} checker-edge pairs", pairs.len());
-    let mut app =
-        HeadlessApp::new(ctx, scene, checker_settings(1), &checker_camera()).expect("uploads");
+    let mut app = checker_app(ctx, &scene, 1);
     for (spp, aux) in [(4, AuxMode::Noisy), (16, AuxMode::Prefilter)] {
         app.accumulate(spp - app.samples(), 64, |_| {});
         let noisy = app.radiance();
@@ -235,13 +228,7 @@ fn aov_prefiltering_brings_1_spp_aovs_closer_to_converged() {
     let (ctx, _gpu) = gpu();
     let mut oidn = cpu_oidn();
     let scene = checker_scene();
-    let mut converged = HeadlessApp::new(
-        ctx.clone(),
-        scene.clone(),
-        checker_settings(100),
-        &checker_camera(),
-    )
-    .expect("uploads");
+    let mut converged = checker_app(ctx.clone(), &scene, 100);
     converged.accumulate(256, 64, |_| {});
     let clean = inputs(&converged);
     let squared_error = |a: &[[f32; 3]], b: &[[f32; 3]]| -> f64 {
@@ -252,13 +239,7 @@ fn aov_prefiltering_brings_1_spp_aovs_closer_to_converged() {
     };
     let (mut albedo_raw, mut albedo_pre, mut normal_raw, mut normal_pre) = (0.0, 0.0, 0.0, 0.0);
     for seed in 1..=8 {
-        let mut app = HeadlessApp::new(
-            ctx.clone(),
-            scene.clone(),
-            checker_settings(seed),
-            &checker_camera(),
-        )
-        .expect("uploads");
+        let mut app = checker_app(ctx.clone(), &scene, seed);
         app.accumulate(1, 1, |_| {});
         let raw = inputs(&app);
         let (albedo, normal) = oidn

@@ -189,6 +189,8 @@ pub fn gains(
         ..base.clone()
     };
     let mut app = super::open_app(ctx, &still, settings)?;
+    // svgf's row filters these samples too: its moments must accumulate although the settings do not denoise.
+    app.set_keep_denoiser_inputs(true);
     let mut rows = Vec::new();
     for spp in GAIN_SPP {
         app.accumulate(spp - app.samples(), 16, |_| {});
