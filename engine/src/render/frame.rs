@@ -34,7 +34,7 @@ use super::realtime::{
     Realtime, RealtimePasses, RealtimeTargets, SceneGroups, Shown, runs as realtime_runs,
 };
 use super::scene_bindings::SceneBindings;
-use super::settings::{AovView, Environment, RenderSettings};
+use super::settings::{Environment, RenderSettings};
 use super::stats::*;
 use super::view::ViewTargets;
 use crate::camera::CameraView;
@@ -218,9 +218,9 @@ fn encode_accumulation_display(
     }
     let weight = handover.unwrap_or(1.0);
     realtime.state.shown = Shown::Handover;
-    let denoise = shows_denoised(settings) && host.is_none();
+    let denoise = settings.shows_denoised() && host.is_none();
     let accumulated = match host {
-        Some(image) if shows_denoised(settings) => image,
+        Some(image) if settings.shows_denoised() => image,
         _ if denoise => encode_denoise(ctx, encoder, view, settings, denoiser, stats),
         _ => &view.accum,
     };
@@ -420,11 +420,6 @@ pub fn encode_realtime_frame(
     state.end_frame(camera, &plan);
 }
 
-/// Whether the display shows the denoised image (colour view with the denoiser on).
-pub fn shows_denoised(settings: &RenderSettings) -> bool {
-    settings.denoise && settings.view == AovView::Color
-}
-
 /// The denoiser pass over the view, timed by the frame's denoise pair; returns its output.
 pub fn encode_denoise<'d>(
     ctx: &GpuContext,
@@ -461,8 +456,8 @@ pub fn encode_display(
     host: Option<&wgpu::Buffer>,
 ) -> bool {
     let (input, denoise) = match host {
-        Some(image) if shows_denoised(settings) => (TonemapInput::Denoised(image), false),
-        _ if shows_denoised(settings) => (
+        Some(image) if settings.shows_denoised() => (TonemapInput::Denoised(image), false),
+        _ if settings.shows_denoised() => (
             TonemapInput::Denoised(encode_denoise(
                 ctx, encoder, view, settings, denoiser, stats,
             )),

@@ -69,7 +69,7 @@ impl HostDenoised {
         view: &ViewTargets,
         accumulation: &Accumulation,
     ) -> Option<wgpu::Buffer> {
-        if !(super::frame::shows_denoised(settings) && settings.denoiser == DenoiserKind::Oidn) {
+        if !(settings.shows_denoised() && settings.denoiser == DenoiserKind::Oidn) {
             return None;
         }
         let shown = self.shown.lock().unwrap_or_else(|e| e.into_inner());

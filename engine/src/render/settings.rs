@@ -306,6 +306,11 @@ impl Default for RenderSettings {
 }
 
 impl RenderSettings {
+    /// Whether the display shows the denoised image (colour view with the denoiser on).
+    pub fn shows_denoised(&self) -> bool {
+        self.denoise && self.view == AovView::Color
+    }
+
     /// True when changing from `self` to `other` invalidates accumulated samples (display-only settings do not).
     pub fn changes_image(&self, other: &Self) -> bool {
         let image_part = |s: &Self| Self {
