@@ -10,7 +10,8 @@ use std::collections::HashSet;
 use std::path::Path;
 
 /// glTF extensions raykin honours when a file lists them as required.
-const SUPPORTED_REQUIRED_EXTENSIONS: &[&str] = &["KHR_materials_emissive_strength"];
+const SUPPORTED_REQUIRED_EXTENSIONS: &[&str] =
+    &["KHR_materials_emissive_strength", "KHR_lights_punctual"];
 
 #[derive(Clone, Debug, Default)]
 pub struct LoadOptions {
@@ -167,6 +168,7 @@ impl<'a> Loader<'a> {
         let (nodes, roots) = self.load_nodes()?;
         let skins = self.load_skins();
         let animations = self.load_animations();
+        let lights = super::lights::read_lights(&self.document, |w| self.warn(w));
         let mut scene = SceneAsset {
             source: self.path.display().to_string(),
             meshes,
@@ -181,6 +183,7 @@ impl<'a> Loader<'a> {
             animations,
             nodes,
             roots,
+            lights,
             warnings: self.warnings.take(),
         };
         super::compose::unshare_deformable_meshes(&mut scene);
@@ -598,6 +601,7 @@ impl<'a> Loader<'a> {
                     mesh: n.mesh().map(|m| m.index()),
                     camera: n.camera().map(|c| c.index()),
                     skin: n.skin().map(|s| s.index()),
+                    light: n.light().map(|l| l.index()),
                     morph_weights: n.weights().map(<[f32]>::to_vec),
                 }
             })

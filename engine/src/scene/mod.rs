@@ -4,6 +4,7 @@
 pub mod compose;
 mod gltf_loader;
 pub mod gltf_writer;
+pub mod lights;
 mod materials;
 pub mod procedural;
 mod spawn;
@@ -12,7 +13,8 @@ mod tangents;
 pub use compose::{CrowdScene, compose, crowd_scene, unshare_deformable_meshes};
 pub(crate) use gltf_loader::percent_decode;
 pub use gltf_loader::{LoadOptions, load_gltf, load_gltf_slice};
-pub use gltf_writer::{SaveError, save_with_materials};
+pub use gltf_writer::{SaveError, save_edited, save_with_materials};
+pub use lights::{LightSource, PunctualKind, PunctualLight};
 pub use materials::Materials;
 pub use spawn::{
     CameraComponent, GlobalTransform, MeshInstance, MorphWeights, SceneNode, SceneNodes,
@@ -258,6 +260,8 @@ pub struct NodeData {
     pub mesh: Option<usize>,
     pub camera: Option<usize>,
     pub skin: Option<usize>,
+    /// KHR_lights_punctual light index ([`SceneAsset::lights`]).
+    pub light: Option<usize>,
     /// node.weights: overrides the mesh's default morph weights.
     pub morph_weights: Option<Vec<f32>>,
 }
@@ -314,6 +318,8 @@ pub struct SceneAsset {
     pub nodes: Vec<NodeData>,
     /// Root nodes of the displayed glTF scene.
     pub roots: Vec<usize>,
+    /// KHR_lights_punctual lights, referenced by [`NodeData::light`].
+    pub lights: Vec<PunctualLight>,
     /// Problems that were worked around (skipped primitives, missing textures...), one line each.
     pub warnings: Vec<String>,
 }

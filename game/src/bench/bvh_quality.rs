@@ -140,7 +140,7 @@ pub fn refit_vs_rebuild(
         name: "CesiumMan".into(),
         scene: asset.clone(),
         camera,
-        environment: base.environment,
+        environment: base.environment.clone(),
         players: Vec::new(),
         source_files: Vec::new(),
     };

@@ -44,7 +44,7 @@ pub fn triangles(
             name: format!("{n} x {}", asset.source),
             scene: Arc::new(scene),
             camera,
-            environment: base.environment,
+            environment: base.environment.clone(),
             players: Vec::new(),
             source_files: Vec::new(),
         };

@@ -15,7 +15,26 @@ enum Source {
     File(&'static str),
     /// `raykin::scene::crowd_scene`: 64 CesiumMan + 32 Fox, animated.
     Crowd,
+    /// A file in this repository (the light tests' scenes).
+    Repo(&'static str),
+    /// `raykin::scene::procedural::light_field(n)`: n x n small emissive squares over a floor.
+    LightField(usize),
 }
+
+/// A file of this repository (the light scenes and their maps live in tests/reference/lights): relative to
+/// the working directory (a binary carried to another machine runs from the repository root), else to the
+/// repository it was built from.
+fn repo_path(rel: &str) -> PathBuf {
+    let here = PathBuf::from(rel);
+    if here.exists() {
+        return here;
+    }
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..").join(rel)
+}
+
+/// The environment-lit bench scene's map: a 64x33 sky whose sun is one texel of radiance ~900 (the Mitsuba
+/// reference's), turned 30 degrees.
+const SUNNY_MAP: &str = "tests/reference/lights/sunny_64x33.exr";
 
 struct Named {
     name: &'static str,
@@ -57,6 +76,25 @@ const NAMED: &[Named] = &[
         target: [0.002776, 0.002742, -0.0015],
         yfov_deg: 45.0,
         environment: SKY,
+    },
+    // Importance sampling of an environment map with a small, very bright sun (issue 15's >= 5x target): the
+    // Mitsuba reference scene of tests/lights_reference.rs.
+    Named {
+        name: "env-lit",
+        source: Source::Repo("tests/reference/lights/envmap.gltf"),
+        eye: [0.0, 2.2, 5.0],
+        target: [0.0, 0.6, 0.0],
+        yfov_deg: 40.0,
+        environment: Environment::Constant([0.0; 3]),
+    },
+    // 400 emitters (800 triangles) of which a few light each point: power vs tree light sampling.
+    Named {
+        name: "many-lights",
+        source: Source::LightField(20),
+        eye: [0.0, 9.0, 20.0],
+        target: [0.0, 0.0, 2.0],
+        yfov_deg: 45.0,
+        environment: Environment::Constant([0.0; 3]),
     },
     Named {
         name: "crowd",
@@ -152,12 +190,34 @@ pub fn resolve(spec: &str, assets: &Path) -> Result<BenchScene> {
             .collect();
             (Arc::new(crowd.scene), crowd.players, files)
         }
+        Source::Repo(rel) => {
+            let path = repo_path(rel);
+            let scene = crate::render_cmd::load_scene(&path)
+                .with_context(|| format!("bench scene `{}`", named.name))?;
+            let mut files = gltf_files(&path);
+            files.push(repo_path(SUNNY_MAP));
+            (scene, Vec::new(), files)
+        }
+        // The generator's source stands in for a file: editing it invalidates cached references.
+        Source::LightField(n) => (
+            Arc::new(raykin::scene::procedural::light_field(n)),
+            Vec::new(),
+            vec![repo_path("engine/src/scene/procedural.rs")],
+        ),
+    };
+    let environment = match named.source {
+        Source::Repo(_) => Environment::Map(raykin::environment::MapSettings {
+            path: repo_path(SUNNY_MAP),
+            rotation_degrees: 30.0,
+            strength: 1.0,
+        }),
+        _ => named.environment.clone(),
     };
     Ok(BenchScene {
         name: named.name.to_string(),
         scene,
         camera,
-        environment: named.environment,
+        environment,
         players,
         source_files,
     })
