@@ -49,7 +49,7 @@ pub enum EditorAction {
     /// Write the displayed image (PNG) and the linear radiance (EXR) beside it.
     Screenshot(PathBuf),
     /// Start a recording with the panel's settings (see [`RecordStart`]).
-    Record(RecordStart),
+    Record(Box<RecordStart>),
     /// Stop the recording in progress (frames already written stay; re-running resumes).
     StopRecording,
     Quit,
@@ -516,7 +516,7 @@ fn record_section(
         .wrap(),
     );
     if ui.button("Record").clicked() {
-        actions.push(EditorAction::Record(record_start(world, r)));
+        actions.push(EditorAction::Record(Box::new(record_start(world, r))));
     }
 }
 

@@ -249,7 +249,7 @@ impl Session {
                     Err(e) => state.report(Severity::Error, e.to_string()),
                 }
             }
-            EditorAction::Record(request) => self.start_recording(request),
+            EditorAction::Record(request) => self.start_recording(*request),
             EditorAction::StopRecording => {
                 if let Some(r) = &self.recording {
                     r.stop();

@@ -142,9 +142,12 @@ fn union_cones(wa: Vec3, cos_a: f32, wb: Vec3, cos_b: f32) -> (Vec3, f32) {
     (w.normalize(), theta_o.cos())
 }
 
+/// A built tree: its nodes, and each light's (index, bit trail to its leaf).
+pub type BuiltTree = (Vec<GpuLightTreeNode>, Vec<(u32, u32)>);
+
 /// The tree over `lights` (light index, bounds); `trails[k]` is the bit path to light `lights[k].0`'s leaf
 /// (bit d set: the second child at depth d). `None` for no lights or a tree deeper than the trails address.
-pub fn build(lights: &[(u32, LightBounds)]) -> Option<(Vec<GpuLightTreeNode>, Vec<(u32, u32)>)> {
+pub fn build(lights: &[(u32, LightBounds)]) -> Option<BuiltTree> {
     let mut items: Vec<(u32, LightBounds)> =
         lights.iter().filter(|l| l.1.phi > 0.0).copied().collect();
     if items.is_empty() {
