@@ -95,7 +95,7 @@ pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
 
 #[derive(Args, Debug)]
 pub struct BenchArgs {
-    /// Named bench scenes (cornell, flight-helmet, spheres, crowd: fixed cameras) or glTF files (automatic
+    /// Named bench scenes (cornell, flight-helmet, spheres, crowd, env-lit, many-lights: fixed cameras) or glTF files (automatic
     /// camera); repeatable. Default: the suite's scenes.
     #[arg(long)]
     pub scene: Vec<String>,
