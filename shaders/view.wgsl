@@ -3,10 +3,14 @@
 
 struct Frame {
     world_from_camera: mat4x4<f32>,
-    env_color: vec3<f32>, tan_half_fov: f32,
+    // Thin lens: aperture radius 0 is a pinhole; the plane at focus_distance along the view axis is sharp.
+    tan_half_fov: f32, lens_radius: f32, focus_distance: f32, light_count: u32,
     width: u32, height: u32, sample_base: u32, spp: u32,
-    max_depth: u32, seed: u32, env_mode: u32, rr_depth: u32,
-    emitter_count: u32, flags: u32, emitter_total_power: f32, _pad: u32,
+    max_depth: u32, seed: u32, rr_depth: u32, flags: u32,
+    // Lights at infinity (the environment, the sun): lights[infinite_light_first ..][.. infinite_light_count].
+    infinite_light_first: u32, infinite_light_count: u32,
+    // Lights in the light tree (the list's first ones); 0: the light sampler samples by power alone.
+    tree_light_count: u32, _pad0: u32,
 }
 
 @group(1) @binding(0) var<uniform> frame: Frame;

@@ -7,6 +7,7 @@ pub mod animation;
 pub mod bvh;
 pub mod camera;
 pub mod editor;
+pub mod environment;
 pub mod frame_timing;
 pub mod gpu;
 pub mod gpu_deform;

@@ -191,7 +191,7 @@ pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
 
 #[derive(Args, Debug)]
 pub struct BenchArgs {
-    /// Named bench scenes (cornell, flight-helmet, spheres, crowd: fixed cameras) or glTF files (automatic
+    /// Named bench scenes (cornell, flight-helmet, spheres, crowd, env-lit, many-lights: fixed cameras) or glTF files (automatic
     /// camera); repeatable. Default: the suite's scenes.
     #[arg(long)]
     pub scene: Vec<String>,
@@ -279,11 +279,43 @@ pub struct SceneArgs {
     #[arg(long, default_value_t = 45.0, value_parser = parse_fov, allow_hyphen_values = true)]
     pub fov: f32,
     /// Constant environment radiance R,G,B (non-negative).
-    #[arg(long, value_parser = parse_radiance, conflicts_with = "sky", allow_hyphen_values = true)]
+    #[arg(long, value_parser = parse_radiance, conflicts_with_all = ["sky", "env_map", "sun_sky"], allow_hyphen_values = true)]
     pub env: Option<glam::Vec3>,
-    /// Sky-gradient environment (the default when --env is not given).
-    #[arg(long)]
+    /// Sky-gradient environment (the default when no other environment is given).
+    #[arg(long, conflicts_with_all = ["env_map", "sun_sky"])]
     pub sky: bool,
+    /// Equirectangular HDR environment map (.hdr or .exr; Mitsuba 3's `envmap` orientation, +Y up), importance
+    /// sampled.
+    #[arg(long, conflicts_with = "sun_sky")]
+    pub env_map: Option<PathBuf>,
+    /// Turn the environment map about +Y by this many degrees (Mitsuba's `rotate([0, 1, 0], DEG)`).
+    #[arg(
+        long,
+        default_value_t = 0.0,
+        allow_negative_numbers = true,
+        requires = "env_map"
+    )]
+    pub env_rotation: f32,
+    /// Scale of the environment's radiance (map or sun and sky).
+    #[arg(long, default_value_t = 1.0)]
+    pub env_strength: f32,
+    /// Physically based daylight: the Preetham sky and the sun at ELEVATION,AZIMUTH degrees (azimuth 0
+    /// towards -Z, 90 towards +X). Physical units: a sunlit white surface is about 30; try --exposure -5.
+    #[arg(long, value_parser = parse_pair)]
+    pub sun_sky: Option<(f32, f32)>,
+    /// Atmospheric turbidity of --sun-sky, 1.7 (very clear) to 10 (hazy).
+    #[arg(long, default_value_t = 3.0, requires = "sun_sky")]
+    pub turbidity: f32,
+    /// Thin-lens aperture radius in scene units (glTF: metres); needs --focus-distance.
+    #[arg(long, conflicts_with = "f_stop", requires = "focus_distance")]
+    pub aperture: Option<f32>,
+    /// Thin-lens f-number, converted to an aperture with a 35 mm full-frame sensor (24 mm tall) behind the
+    /// camera's field of view, in a scene measured in metres; needs --focus-distance.
+    #[arg(long, requires = "focus_distance")]
+    pub f_stop: Option<f32>,
+    /// Distance of the sharp plane along the view axis (with --aperture or --f-stop).
+    #[arg(long)]
+    pub focus_distance: Option<f32>,
     #[arg(long, default_value_t = 0)]
     pub seed: u32,
     /// Exposure in stops for PNG output (EXR is never exposed or tone-mapped).
@@ -494,5 +526,17 @@ pub fn parse_vec3(s: &str) -> Result<glam::Vec3, String> {
             Ok(glam::Vec3::new(x, y, z))
         }
         _ => Err(format!("expected three finite numbers X,Y,Z, got `{s}`")),
+    }
+}
+
+/// `A,B`: two finite numbers.
+pub fn parse_pair(s: &str) -> Result<(f32, f32), String> {
+    let parts: Vec<f32> = s
+        .split(',')
+        .map(|p| p.trim().parse::<f32>().map_err(|e| format!("`{p}`: {e}")))
+        .collect::<Result<_, _>>()?;
+    match parts[..] {
+        [a, b] if a.is_finite() && b.is_finite() => Ok((a, b)),
+        _ => Err(format!("expected two finite numbers A,B, got `{s}`")),
     }
 }

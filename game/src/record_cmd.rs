@@ -105,7 +105,7 @@ fn run(args: &RecordArgs) -> Result<ExitCode> {
             camera: camera_spec(scene_args),
             format: args.format,
             aovs: args.aovs.clone(),
-            render: settings_from(scene_args),
+            render: settings_from(scene_args, &scene)?,
         },
         scene: args.load.scene_index,
     };

@@ -28,16 +28,16 @@ pub fn check_size(ctx: &GpuContext, width: u32, height: u32) -> Result<()> {
         .with_context(|| format!("on {}", ctx.info.name))
 }
 
-pub fn settings_from(args: &SceneArgs) -> RenderSettings {
-    RenderSettings {
-        width: args.width,
-        height: args.height,
-        spp_per_frame: args.spp_per_dispatch,
+/// The render settings the arguments ask for; `scene` gives the field of view an f-number is converted with.
+/// Errors on a lens or environment value that cannot be rendered.
+pub fn settings_from(args: &SceneArgs, scene: &SceneAsset) -> Result<RenderSettings> {
+    Ok(RenderSettings {
+        width: args.width.max(1),
+        height: args.height.max(1),
+        spp_per_frame: args.spp_per_dispatch.max(1),
         max_depth: args.max_depth,
-        environment: match args.env {
-            Some(c) => Environment::Constant(c.to_array()),
-            None => Environment::Sky,
-        },
+        environment: environment_from(args)?,
+        lens: lens_from(args, scene)?,
         exposure: args.exposure,
         seed: args.seed,
         russian_roulette: !args.no_rr,
@@ -55,7 +55,82 @@ pub fn settings_from(args: &SceneArgs) -> RenderSettings {
         deform: args.deform.into(),
         static_bvh: args.static_bvh.into(),
         ..Default::default()
+    })
+}
+
+/// `--env`, `--sky`, `--env-map` (read here, so a bad file fails before the GPU opens) or `--sun-sky`.
+fn environment_from(args: &SceneArgs) -> Result<Environment> {
+    let strength = args.env_strength;
+    if !(strength.is_finite() && strength >= 0.0) {
+        anyhow::bail!("--env-strength {strength}: must be a finite number >= 0");
     }
+    if let Some(path) = &args.env_map {
+        raykin::environment::EnvironmentMap::load(path)?;
+        return Ok(Environment::Map(raykin::environment::MapSettings {
+            path: path.clone(),
+            rotation_degrees: args.env_rotation,
+            strength,
+        }));
+    }
+    if let Some((elevation, azimuth)) = args.sun_sky {
+        if !(1.7..=10.0).contains(&args.turbidity) {
+            anyhow::bail!(
+                "--turbidity {}: the sky model is fitted for 1.7 to 10",
+                args.turbidity
+            );
+        }
+        return Ok(Environment::SunSky(raykin::environment::SunSkySettings {
+            elevation_degrees: elevation,
+            azimuth_degrees: azimuth,
+            turbidity: args.turbidity,
+            strength,
+        }));
+    }
+    Ok(match args.env {
+        Some(c) => Environment::Constant((c * strength).to_array()),
+        None => Environment::Sky,
+    })
+}
+
+/// `--aperture` or `--f-stop` with `--focus-distance` (a pinhole without them).
+fn lens_from(args: &SceneArgs, scene: &SceneAsset) -> Result<raykin::render::ThinLens> {
+    let Some(focus) = args.focus_distance else {
+        return Ok(Default::default());
+    };
+    if !(focus.is_finite() && focus > 0.0) {
+        anyhow::bail!("--focus-distance {focus}: must be a positive distance");
+    }
+    if let Some(n) = args.f_stop {
+        if !(n.is_finite() && n > 0.0) {
+            anyhow::bail!("--f-stop {n}: must be a positive f-number");
+        }
+        return Ok(raykin::render::ThinLens::from_f_number(
+            n,
+            camera_yfov(args, scene),
+            focus,
+        ));
+    }
+    let radius = args.aperture.unwrap_or(0.0);
+    if !(radius.is_finite() && radius >= 0.0) {
+        anyhow::bail!("--aperture {radius}: must be a radius >= 0");
+    }
+    Ok(raykin::render::ThinLens {
+        aperture_radius: radius,
+        focus_distance: focus,
+    })
+}
+
+/// The vertical field of view the render will use: `--fov` with `--look-from`, else the chosen scene camera's,
+/// else the framing camera's 45 degrees.
+fn camera_yfov(args: &SceneArgs, scene: &SceneAsset) -> f32 {
+    if args.look_from.is_some() {
+        return args.fov.to_radians();
+    }
+    let cameras: Vec<usize> = scene.nodes.iter().filter_map(|n| n.camera).collect();
+    cameras
+        .get(args.camera.unwrap_or(0))
+        .and_then(|&c| scene.cameras.get(c))
+        .map_or(45f32.to_radians(), |c| c.yfov)
 }
 
 /// `--time T` / `--animation NAME|INDEX`: the clip and time to pose the scene at (clip 0, time 0 by default);
@@ -241,7 +316,7 @@ fn render_to_file(
         .extension()
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase);
-    let settings = settings_from(args);
+    let settings = settings_from(args, &scene)?;
     let mut app = HeadlessApp::new(ctx, scene.clone(), settings.clone(), &camera)?;
     // The denoiser is on or off for the whole render: its inputs accumulate only when it runs.
     app.set_keep_denoiser_inputs(false);
@@ -370,6 +445,14 @@ pub fn run_default() -> Result<()> {
         fov: 39.3077,
         env: Some(glam::Vec3::ZERO),
         sky: false,
+        env_map: None,
+        env_rotation: 0.0,
+        env_strength: 1.0,
+        sun_sky: None,
+        turbidity: 3.0,
+        aperture: None,
+        f_stop: None,
+        focus_distance: None,
         seed: 0,
         exposure: 0.0,
         no_nee: false,

@@ -41,13 +41,35 @@ pub enum Source {
     /// `raykin::animation::interior_scene`: CesiumMan and the Fox walking in the Cornell box, lit by its
     /// light, with a lamp the motion bench switches on.
     Interior,
+    /// A file of this repository (the light tests' scenes, in tests/reference/lights).
+    Repo(&'static str),
+    /// `raykin::scene::procedural::light_field(n)`: n x n small emissive squares over a floor.
+    LightField(usize),
+}
+
+/// An environment map of this repository, turned by `rotation_degrees` (a scene's fixed environment).
+pub struct RepoMap {
+    pub path: &'static str,
+    pub rotation_degrees: f32,
+}
+
+/// A file of this repository: relative to the working directory (a binary carried to another machine runs
+/// from the repository root), else to the repository it was built from.
+pub fn repo_path(rel: &str) -> PathBuf {
+    let here = PathBuf::from(rel);
+    if here.exists() {
+        return here;
+    }
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..").join(rel)
 }
 
 pub struct NamedScene {
     pub name: &'static str,
     pub source: Source,
     pub view: FixedView,
-    pub environment: Environment,
+    /// The environment, unless `environment_map` names one.
+    environment: Environment,
+    environment_map: Option<RepoMap>,
 }
 
 /// A named scene loaded: the asset, the animation players to attach (the crowd's), and the files whose bytes
@@ -73,6 +95,7 @@ pub const CORNELL: NamedScene = NamedScene {
         yfov_deg: 39.3077,
     },
     environment: Environment::Constant([0.0; 3]),
+    environment_map: None,
 };
 
 pub const FLIGHT_HELMET: NamedScene = NamedScene {
@@ -84,6 +107,7 @@ pub const FLIGHT_HELMET: NamedScene = NamedScene {
         yfov_deg: 45.0,
     },
     environment: Environment::Sky,
+    environment_map: None,
 };
 
 pub const SPHERES: NamedScene = NamedScene {
@@ -95,6 +119,7 @@ pub const SPHERES: NamedScene = NamedScene {
         yfov_deg: 45.0,
     },
     environment: Environment::Sky,
+    environment_map: None,
 };
 
 pub const CROWD: NamedScene = NamedScene {
@@ -106,6 +131,7 @@ pub const CROWD: NamedScene = NamedScene {
         yfov_deg: 45.0,
     },
     environment: Environment::Sky,
+    environment_map: None,
 };
 
 /// The animated interior, seen through the Cornell box's classic camera.
@@ -114,9 +140,49 @@ pub const INTERIOR: NamedScene = NamedScene {
     source: Source::Interior,
     view: CORNELL.view,
     environment: Environment::Constant([0.0; 3]),
+    environment_map: None,
 };
 
-const NAMED: &[&NamedScene] = &[&CORNELL, &FLIGHT_HELMET, &SPHERES, &INTERIOR, &CROWD];
+/// Importance sampling of an environment map with a small, very bright sun (issue 15's >= 5x target): the
+/// Mitsuba reference scene of tests/engine/lights_reference.rs, under its 64x33 sky whose sun is one texel of
+/// radiance ~900, turned 30 degrees.
+pub const ENV_LIT: NamedScene = NamedScene {
+    name: "env-lit",
+    source: Source::Repo("tests/reference/lights/envmap.gltf"),
+    view: FixedView {
+        eye: [0.0, 2.2, 5.0],
+        target: [0.0, 0.6, 0.0],
+        yfov_deg: 40.0,
+    },
+    environment: Environment::Constant([0.0; 3]),
+    environment_map: Some(RepoMap {
+        path: "tests/reference/lights/sunny_64x33.exr",
+        rotation_degrees: 30.0,
+    }),
+};
+
+/// 400 emitters (800 triangles) of which a few light each point: power vs tree light sampling.
+pub const MANY_LIGHTS: NamedScene = NamedScene {
+    name: "many-lights",
+    source: Source::LightField(20),
+    view: FixedView {
+        eye: [0.0, 9.0, 20.0],
+        target: [0.0, 0.0, 2.0],
+        yfov_deg: 45.0,
+    },
+    environment: Environment::Constant([0.0; 3]),
+    environment_map: None,
+};
+
+const NAMED: &[&NamedScene] = &[
+    &CORNELL,
+    &FLIGHT_HELMET,
+    &SPHERES,
+    &ENV_LIT,
+    &MANY_LIGHTS,
+    &INTERIOR,
+    &CROWD,
+];
 
 /// The named scene called `name`, if any.
 pub fn named(name: &str) -> Option<&'static NamedScene> {
@@ -131,6 +197,18 @@ pub fn names() -> Vec<&'static str> {
 impl NamedScene {
     pub fn camera(&self) -> CameraChoice {
         self.view.camera()
+    }
+
+    /// The scene's fixed environment.
+    pub fn environment(&self) -> Environment {
+        match &self.environment_map {
+            Some(map) => Environment::Map(raykin::environment::MapSettings {
+                path: repo_path(map.path),
+                rotation_degrees: map.rotation_degrees,
+                strength: 1.0,
+            }),
+            None => self.environment.clone(),
+        }
     }
 
     /// Loads the scene from the shared assets folder `assets`.
@@ -178,6 +256,24 @@ impl NamedScene {
                     switchable_light: Some((interior.lamp_material, interior.lamp_radiance)),
                 }
             }
+            Source::Repo(relative) => {
+                let path = repo_path(relative);
+                let mut source_files = gltf_files(&path);
+                source_files.extend(self.environment_map.as_ref().map(|m| repo_path(m.path)));
+                LoadedNamedScene {
+                    scene: load_scene(&path, &LoadOptions::default()).with_context(context)?,
+                    players: Vec::new(),
+                    source_files,
+                    switchable_light: None,
+                }
+            }
+            // The generator's source stands in for a file: editing it invalidates cached references.
+            Source::LightField(n) => LoadedNamedScene {
+                scene: Arc::new(raykin::scene::procedural::light_field(n)),
+                players: Vec::new(),
+                source_files: vec![repo_path("engine/src/scene/procedural.rs")],
+                switchable_light: None,
+            },
         })
     }
 }

@@ -35,13 +35,15 @@ struct DirectLight {
     contribution: vec3<f32>,
 }
 
-// Next-event estimation at `s`: one light picked by the light sampler, one point on it, weighed against BSDF
-// sampling. The shadow ray is returned, not traced, so that the path loop traces every ray at one call site (a
-// smaller kernel).
+// Next-event estimation at `s`: one light picked by the light sampler, one sample on it, weighed against BSDF
+// sampling (delta lights take no weight). The shadow ray is returned, not traced, so that the path loop traces
+// every ray at one call site (a smaller kernel).
 fn sample_direct(s: SurfaceInteraction, wo: vec3<f32>, tbn: mat3x3<f32>, sampler: Sampler, dims: u32) -> DirectLight {
     let none = DirectLight(Ray(vec3<f32>(0.0), vec3<f32>(0.0, 0.0, 1.0)), 0.0, vec3<f32>(0.0));
-    let choice = light_sampler_sample(get_1d(sampler, dims + DIM_LIGHT_CHOICE));
-    let ls = area_light_sample_li(emitters[choice.light], s.p, get_2d(sampler, dims + DIM_LIGHT_POINT));
+    let ctx = LightSampleContext(s.p, s.ng);
+    let choice = light_sampler_sample_at(ctx, get_1d(sampler, dims + DIM_LIGHT_CHOICE));
+    if choice.pmf <= 0.0 { return none; }
+    let ls = light_sample_li(choice.light, ctx, get_2d(sampler, dims + DIM_LIGHT_POINT));
     if ls.pdf <= 0.0 || choice.pmf <= 0.0 { return none; }
     // Light from behind the surface counts only through a transmitting lobe.
     let behind = dot(ls.wi, s.ng) <= 0.0;
@@ -53,14 +55,34 @@ fn sample_direct(s: SurfaceInteraction, wo: vec3<f32>, tbn: mat3x3<f32>, sampler
     let pdf_light = choice.pmf * ls.pdf;
     let weight = select(power_heuristic(pdf_light, bsdf_pdf(wo, wi, s.bsdf)), 1.0, ls.delta);
     // Stop the shadow ray just short of the light so it cannot hit the light itself.
-    return DirectLight(Ray(origin, ls.wi), ls.distance * (1.0 - 1e-4), f * abs(wi.z) * ls.li * weight / pdf_light);
+    let t_max = select(ls.distance * (1.0 - 1e-4), MISS, ls.distance >= MISS);
+    return DirectLight(Ray(origin, ls.wi), t_max, f * abs(wi.z) * ls.li * weight / pdf_light);
 }
 
-// Density with which next-event estimation would have produced the emissive hit `hit` seen along `dir`.
-fn direct_pdf_of_hit(hit: Hit, s: SurfaceInteraction, dir: vec3<f32>) -> f32 {
-    let area = triangle_area(world_triangle(hit.instance, hit.triangle));
-    let pmf = light_sampler_pmf_area(materials[s.material].emissive, area);
-    return pmf * area_light_pdf(area, hit.t * hit.t, abs(dot(s.ng, dir)));
+// Density with which next-event estimation from `last_vertex` would have produced the emissive hit `hit` at
+// `p`, seen along `dir` (alpha-blend pass-throughs may lie between, so the distance is measured, not hit.t).
+fn direct_pdf_of_hit(hit: Hit, p: vec3<f32>, last_vertex: LightSampleContext, dir: vec3<f32>) -> f32 {
+    let light = triangle_light_index(hit.instance, hit.triangle);
+    if light == NONE { return 0.0; }
+    return light_sampler_pmf_at(last_vertex, light) * light_pdf_li(light, last_vertex, dir, distance(p, last_vertex.p));
+}
+
+// What a ray leaving the scene along `dir` sees of the lights at infinity, each weighed against next-event
+// estimation from `last_vertex` when the ray was BSDF-sampled with density `bsdf_pdf` (0: a camera ray, counted in
+// full).
+fn escaped_radiance(dir: vec3<f32>, last_vertex: LightSampleContext, bsdf_pdf: f32, nee: bool) -> vec3<f32> {
+    var sum = vec3<f32>(0.0);
+    let end = frame.infinite_light_first + frame.infinite_light_count;
+    for (var light = frame.infinite_light_first; light < end; light++) {
+        let le = infinite_light_le(light, dir);
+        if all(le == vec3<f32>(0.0)) { continue; }
+        var weight = 1.0;
+        if nee && bsdf_pdf > 0.0 {
+            weight = power_heuristic(bsdf_pdf, light_sampler_pmf_at(last_vertex, light) * light_pdf_li(light, last_vertex, dir, MISS));
+        }
+        sum += le * weight;
+    }
+    return sum;
 }
 
 struct PathResult {
@@ -75,8 +97,8 @@ struct PathResult {
 
 // How a path begins. The real-time integrator (integrator/realtime.wgsl) starts from the camera ray's first hit,
 // already traced into its G-buffer, and may estimate direct light at that hit itself (ReSTIR DI): then this
-// integrator does no next-event estimation there, and emitters its BSDF-sampled ray hits next count for
-// nothing, so that light is counted once.
+// integrator does no next-event estimation there, and the emitters and lights at infinity its BSDF-sampled ray
+// meets next count for nothing, so that light is counted once.
 struct PathStart {
     ray: Ray,
     first_hit: Hit,
@@ -96,6 +118,8 @@ fn trace_path_from(start: PathStart, forward: vec3<f32>, sampler: Sampler) -> Pa
     var depth = 0u;
     var pass_throughs = 0u;
     var last_bsdf_pdf = 0.0; // 0: camera ray, emission counts in full
+    // Where the last scattering happened (what next-event estimation sampled lights from).
+    var last_vertex = LightSampleContext(start.ray.origin, vec3<f32>(0.0));
     let nee = (frame.flags & FRAME_NEE) != 0u && light_count() > 0u;
     // A shadow ray waiting to be traced before the next path ray, and whether the path goes on after it.
     var shadow = DirectLight(ray, 0.0, vec3<f32>(0.0));
@@ -122,8 +146,11 @@ fn trace_path_from(start: PathStart, forward: vec3<f32>, sampler: Sampler) -> Pa
             break;
         }
         if hit.instance == NONE {
-            result.radiance += throughput * environment(ray.dir);
-            if depth == 0u { result.unscattered += throughput * environment(ray.dir); }
+            // The lights at infinity are in the light list too: ReSTIR counted them at the first hit.
+            if depth == 1u && start.primary_direct_elsewhere { break; }
+            let escaped = throughput * escaped_radiance(ray.dir, last_vertex, last_bsdf_pdf, nee);
+            result.radiance += escaped;
+            if depth == 0u { result.unscattered += escaped; }
             break;
         }
         let s = resolve_hit(hit, ray);
@@ -143,7 +170,7 @@ fn trace_path_from(start: PathStart, forward: vec3<f32>, sampler: Sampler) -> Pa
         if any(s.emission > vec3<f32>(0.0)) && emits_towards_viewer(s) {
             var weight = 1.0;
             if nee && last_bsdf_pdf > 0.0 {
-                weight = power_heuristic(last_bsdf_pdf, direct_pdf_of_hit(hit, s, ray.dir));
+                weight = power_heuristic(last_bsdf_pdf, direct_pdf_of_hit(hit, s.p, last_vertex, ray.dir));
             }
             if depth == 1u && start.primary_direct_elsewhere { weight = 0.0; }
             result.radiance += throughput * s.emission * weight;
@@ -178,6 +205,7 @@ fn trace_path_from(start: PathStart, forward: vec3<f32>, sampler: Sampler) -> Pa
                 }
             }
             ray = Ray(offset_ray_origin(s.p, select(s.ng, -s.ng, transmitted)), dir);
+            last_vertex = LightSampleContext(s.p, s.ng);
         }
         if !path_alive && !shadow_pending { break; }
     }

@@ -1,5 +1,16 @@
-// Area lights: emissive triangles, sampled uniformly by area (pbrt-v4 `DiffuseAreaLight` with `Triangle`). One-
-// or two-sided as the material says; textured emission evaluated at the sampled point.
+// Area lights: emissive triangles (pbrt-v4 `DiffuseAreaLight` with `Triangle`), `index_a` = instance,
+// `index_b` = triangle slot. One- or two-sided as the material says; textured emission evaluated at the
+// sampled point.
+//
+// Seen from the shading point, a triangle is sampled uniformly in solid angle (Arvo's spherical triangles):
+// the density 1 / solid angle stays bounded however close the light is, so a shading point next to an emitter
+// (the Cornell box's ceiling above its lamp) no longer gets the 1/d^2 spikes of area sampling, whose variance
+// is infinite there. Triangles that subtend very little (where the spherical formulas lose precision in f32)
+// or almost a hemisphere fall back to area sampling, as pbrt-v4 does; the choice depends only on the shading
+// point, so `triangle_light_pdf` makes the same one.
+
+const MIN_SPHERICAL_SAMPLE_AREA: f32 = 3e-4;
+const MAX_SPHERICAL_SAMPLE_AREA: f32 = 6.22;
 
 // Emission of the light's material at barycentrics (b1, b2) of its triangle.
 fn area_light_emission(instance: u32, slot: u32, b: vec2<f32>) -> vec3<f32> {
@@ -13,35 +24,78 @@ fn area_light_emission(instance: u32, slot: u32, b: vec2<f32>) -> vec3<f32> {
     return emission;
 }
 
-// A point on the emitter seen from the shading point `origin`: direction, distance, arriving radiance and
-// the solid-angle density of having picked that point.
-fn area_light_sample_li(e: Emitter, origin: vec3<f32>, u: vec2<f32>) -> LightLiSample {
-    let p = world_triangle(e.instance, e.triangle);
-    let b = sample_triangle_uniform(u);
-    let point = p[0] * (1.0 - b.x - b.y) + p[1] * b.x + p[2] * b.y;
-    let cross_p = cross(p[1] - p[0], p[2] - p[0]);
-    let area = 0.5 * length(cross_p);
-    if area <= 0.0 { return no_light_sample(); }
-    let nl = cross_p / (2.0 * area);
-    let to_light = point - origin;
-    let dist2 = dot(to_light, to_light);
-    let dist = sqrt(dist2);
-    let dir = to_light / dist;
-    let cos_l_signed = -dot(nl, dir);
-    let double_sided = (materials[triangles[e.triangle].w].flags & MATERIAL_DOUBLE_SIDED) != 0u;
-    if cos_l_signed <= 0.0 && !double_sided { return no_light_sample(); }
-    let cos_l = abs(cos_l_signed);
-    if cos_l <= 1e-7 { return no_light_sample(); }
-    return LightLiSample(dir, dist, area_light_emission(e.instance, e.triangle, b), area_light_pdf(area, dist2, cos_l), false);
-}
-
-// Solid-angle density of sampling a point on a triangle of `area` by area, seen at squared distance `dist2`
-// under cosine `cos_l` at the light.
-fn area_light_pdf(area: f32, dist2: f32, cos_l: f32) -> f32 {
-    if area <= 0.0 || cos_l <= 0.0 { return 0.0; }
-    return dist2 / (cos_l * area);
-}
-
 fn triangle_area(p: array<vec3<f32>, 3>) -> f32 {
     return 0.5 * length(cross(p[1] - p[0], p[2] - p[0]));
+}
+
+// Solid angle the triangle subtends from `origin`, or 0 when it is to be area-sampled from there.
+fn triangle_spherical_area(p: array<vec3<f32>, 3>, origin: vec3<f32>) -> f32 {
+    let omega = spherical_triangle_area(normalize(p[0] - origin), normalize(p[1] - origin), normalize(p[2] - origin));
+    return select(0.0, omega, omega >= MIN_SPHERICAL_SAMPLE_AREA && omega <= MAX_SPHERICAL_SAMPLE_AREA);
+}
+
+// Whether the side of the triangle that `origin` sees emits.
+fn triangle_emits_towards(light: Light, p: array<vec3<f32>, 3>, origin: vec3<f32>) -> bool {
+    let side = dot(cross(p[1] - p[0], p[2] - p[0]), origin - p[0]);
+    let double_sided = (materials[triangles[light.index_b].w].flags & MATERIAL_DOUBLE_SIDED) != 0u;
+    return side > 0.0 || (side < 0.0 && double_sided);
+}
+
+// Where a direction sampled inside the triangle's solid angle meets its plane: (distance, b1, b2), with the
+// barycentrics clamped into the triangle (f32 rounding can put a direction on the edge a hair outside, and such
+// a sample must not be lost).
+fn triangle_plane_hit(p: array<vec3<f32>, 3>, origin: vec3<f32>, dir: vec3<f32>) -> vec3<f32> {
+    let e1 = p[1] - p[0];
+    let e2 = p[2] - p[0];
+    let n = cross(e1, e2);
+    let t = dot(n, p[0] - origin) / dot(n, dir);
+    let q = origin + t * dir - p[0];
+    // Barycentrics of q by Cramer's rule on the edge vectors.
+    let d11 = dot(e1, e1);
+    let d12 = dot(e1, e2);
+    let d22 = dot(e2, e2);
+    let q1 = dot(q, e1);
+    let q2 = dot(q, e2);
+    let det = d11 * d22 - d12 * d12;
+    var b = clamp(vec2<f32>(d22 * q1 - d12 * q2, d11 * q2 - d12 * q1) / det, vec2<f32>(0.0), vec2<f32>(1.0));
+    if b.x + b.y > 1.0 { b /= b.x + b.y; }
+    return vec3<f32>(t, b);
+}
+
+fn triangle_light_sample_li(light: Light, ctx: LightSampleContext, u: vec2<f32>) -> LightLiSample {
+    let p = world_triangle(light.index_a, light.index_b);
+    let area = triangle_area(p);
+    if area <= 0.0 || !triangle_emits_towards(light, p, ctx.p) { return no_light_sample(); }
+    let omega = triangle_spherical_area(p, ctx.p);
+    if omega > 0.0 {
+        let dir = sample_spherical_triangle(normalize(p[0] - ctx.p), normalize(p[1] - ctx.p), normalize(p[2] - ctx.p), u);
+        let h = triangle_plane_hit(p, ctx.p, dir);
+        if h.x <= 0.0 || !is_finite(h.x) { return no_light_sample(); }
+        return LightLiSample(dir, h.x, area_light_emission(light.index_a, light.index_b, h.yz), 1.0 / omega, false);
+    }
+    let b = sample_triangle_uniform(u);
+    let point = p[0] * (1.0 - b.x - b.y) + p[1] * b.x + p[2] * b.y;
+    let to_light = point - ctx.p;
+    let distance2 = dot(to_light, to_light);
+    if distance2 <= 0.0 { return no_light_sample(); }
+    let distance = sqrt(distance2);
+    let dir = to_light / distance;
+    let n = cross(p[1] - p[0], p[2] - p[0]) / (2.0 * area);
+    let cos_l = abs(dot(n, dir));
+    if cos_l <= 1e-7 { return no_light_sample(); }
+    return LightLiSample(dir, distance, area_light_emission(light.index_a, light.index_b, b), distance2 / (cos_l * area), false);
+}
+
+// Solid-angle density with which `triangle_light_sample_li` from ctx gives direction `wi`, which meets the
+// triangle at `distance`.
+fn triangle_light_pdf(light: Light, ctx: LightSampleContext, wi: vec3<f32>, distance: f32) -> f32 {
+    let p = world_triangle(light.index_a, light.index_b);
+    let area = triangle_area(p);
+    if area <= 0.0 || !triangle_emits_towards(light, p, ctx.p) { return 0.0; }
+    let omega = triangle_spherical_area(p, ctx.p);
+    if omega > 0.0 { return 1.0 / omega; }
+    let n = cross(p[1] - p[0], p[2] - p[0]) / (2.0 * area);
+    let cos_l = abs(dot(n, wi));
+    if cos_l <= 0.0 { return 0.0; }
+    return distance * distance / (cos_l * area);
 }

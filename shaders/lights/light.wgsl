@@ -1,18 +1,32 @@
 // What every light returns to next-event estimation (pbrt-v4 `LightLiSample`): a direction towards the light,
-// how far it is, the radiance arriving along it, and the density of having sampled it. Area lights now; punctual
-// and environment lights return the same (a delta light with `delta` set: BSDF sampling cannot hit it, so it
-// takes no MIS weight).
+// how far it is, the radiance arriving along it, and the density of having sampled it; and where the light is
+// seen from (pbrt-v4 `LightSampleContext`). Every kind of light (lights/dispatch.wgsl) answers with these.
 
 struct LightLiSample {
     // Unit direction from the shading point towards the light.
     wi: vec3<f32>,
     // Distance to the sampled point (MISS for lights at infinity).
     distance: f32,
-    // Radiance arriving at the shading point along -wi, before visibility.
+    // Radiance arriving at the shading point along -wi, before visibility (for a delta light: the radiant
+    // intensity x falloff or the irradiance, to be divided by pdf = 1 like any other sample).
     li: vec3<f32>,
     // Solid-angle density of this sample given the light (the light sampler's pmf not included); 0 = no sample.
     pdf: f32,
+    // A delta light (point, spot, directional): BSDF sampling cannot hit it, so it takes no MIS weight.
     delta: bool,
+}
+
+// The point a light is sampled from.
+struct LightSampleContext {
+    p: vec3<f32>,
+    // Geometric normal at p (zero in free space).
+    n: vec3<f32>,
+}
+
+// A light picked by a light sampler, with the probability of picking it.
+struct LightChoice {
+    light: u32,
+    pmf: f32,
 }
 
 fn no_light_sample() -> LightLiSample {

@@ -1,29 +1,67 @@
-// The light sampler (pbrt-v4 `PowerLightSampler`): picks a light in proportion to its power (luminance x world
-// area for emissive triangles), from the CDF the CPU built (engine/src/render/gpu_scene/instances.rs), and
-// gives the probability of any light it can pick.
-
-struct LightChoice {
-    light: u32,
-    pmf: f32,
-}
+// The light sampler. Two ways to pick one of all the lights (emissive triangles, punctual lights, the
+// environment and the sun), each with the probability of any light it can pick:
+//
+// - `light_sampler_sample(u)` / `light_sampler_pmf(light)`: in proportion to power (pbrt-v4
+//   `PowerLightSampler`), from the CDF the CPU built (engine/src/render/gpu_scene/lights.rs); no shading point
+//   needed (ReSTIR's candidates). The probability is the difference of adjacent CDF entries, exactly the
+//   chance that a uniform u lands between them, so sampling and MIS weights agree to the last bit.
+// - `light_sampler_sample_at(ctx, u)` / `light_sampler_pmf_at(ctx, light)`: what next-event estimation uses.
+//   With the light tree on (frame.tree_light_count > 0) the lights at finite distance (the list's first
+//   tree_light_count) share their total power's probability by the tree's spatial importance
+//   (lights/light_tree.wgsl); directional lights, the environment and the sun keep their power share. Without
+//   it, the same as power sampling.
 
 fn light_count() -> u32 {
-    return frame.emitter_count;
+    return frame.light_count;
+}
+
+fn light_sampler_pmf(light: u32) -> f32 {
+    return light_cdf[light] - select(0.0, light_cdf[light - 1u], light > 0u);
 }
 
 fn light_sampler_sample(u: f32) -> LightChoice {
     var lo = 0u;
-    var hi = frame.emitter_count - 1u;
+    var hi = frame.light_count - 1u;
     while lo < hi {
         let mid = (lo + hi) / 2u;
-        if emitters[mid].cdf < u { lo = mid + 1u; } else { hi = mid; }
+        if light_cdf[mid] <= u { lo = mid + 1u; } else { hi = mid; }
     }
-    return LightChoice(lo, emitters[lo].pmf);
+    return LightChoice(lo, light_sampler_pmf(lo));
 }
 
-// Probability of picking the emissive triangle a BSDF-sampled ray hit, from the same power the CPU weighed it by
-// (a hit knows its triangle, not its index in the light list).
-fn light_sampler_pmf_area(emission: vec3<f32>, area: f32) -> f32 {
-    if frame.emitter_total_power <= 0.0 { return 0.0; }
-    return luminance(emission) * area / frame.emitter_total_power;
+// The light index of emissive triangle `slot` on `instance` (NONE when it is not a light): the instance's
+// lights are sorted by slot.
+fn triangle_light_index(instance: u32, slot: u32) -> u32 {
+    let inst = instances[instance];
+    var lo = inst.first_light;
+    var hi = inst.first_light + inst.light_count;
+    while lo < hi {
+        let mid = (lo + hi) / 2u;
+        if lights[mid].index_b < slot { lo = mid + 1u; } else { hi = mid; }
+    }
+    return select(NONE, lo, lo < inst.first_light + inst.light_count && lights[lo].index_b == slot);
+}
+
+fn light_sampler_sample_at(ctx: LightSampleContext, u: f32) -> LightChoice {
+    let tree = frame.tree_light_count;
+    if tree == 0u { return light_sampler_sample(u); }
+    let tree_share = light_cdf[tree - 1u];
+    if u < tree_share {
+        let choice = light_tree_sample(ctx, min(u / tree_share, ONE_MINUS_EPSILON));
+        return LightChoice(choice.light, choice.pmf * tree_share);
+    }
+    // The rest by power: the first entry past the tree whose CDF exceeds u.
+    var lo = tree;
+    var hi = frame.light_count - 1u;
+    while lo < hi {
+        let mid = (lo + hi) / 2u;
+        if light_cdf[mid] <= u { lo = mid + 1u; } else { hi = mid; }
+    }
+    return LightChoice(lo, light_sampler_pmf(lo));
+}
+
+fn light_sampler_pmf_at(ctx: LightSampleContext, light: u32) -> f32 {
+    let tree = frame.tree_light_count;
+    if tree == 0u || light >= tree { return light_sampler_pmf(light); }
+    return light_cdf[tree - 1u] * light_tree_pmf(ctx, light);
 }

@@ -23,14 +23,9 @@ fn no_light_eval() -> LightEval {
     return LightEval(vec3<f32>(0.0), Ray(vec3<f32>(0.0), vec3<f32>(0.0, 0.0, 1.0)), 0.0);
 }
 
-// The light `sample_li` of light `light` (an index into the light sampler's list) at `u`.
-fn light_li(light: u32, p: vec3<f32>, u: vec2<f32>) -> LightLiSample {
-    return area_light_sample_li(emitters[light], p, u);
-}
-
 fn evaluate_light_sample(sp: ShadingPoint, light: u32, u: vec2<f32>) -> LightEval {
     if light >= light_count() { return no_light_eval(); }
-    let ls = light_li(light, sp.p, u);
+    let ls = light_sample_li(light, LightSampleContext(sp.p, sp.ng), u);
     if ls.pdf <= 0.0 { return no_light_eval(); }
     // As next-event estimation: light from behind the surface counts only through a transmitting lobe.
     let behind = dot(ls.wi, sp.ng) <= 0.0;

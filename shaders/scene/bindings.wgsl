@@ -9,6 +9,14 @@
 @group(0) @binding(6) var<storage, read> materials: array<Material>;
 @group(0) @binding(7) var<storage, read> texels: array<u32>;
 @group(0) @binding(8) var<storage, read> texture_infos: array<TextureInfo>;
-@group(0) @binding(9) var<storage, read> emitters: array<Emitter>;
+// Every light (engine/src/render/gpu_scene/lights.rs): emissive triangles first, then punctual lights, then
+// the lights at infinity (frame.infinite_light_first ..).
+@group(0) @binding(9) var<storage, read> lights: array<Light>;
 // Compressed 8-wide BVH nodes of static meshes (obvhs `CwBvhNode`, 80 bytes: engine/src/bvh/wide.rs).
 @group(0) @binding(10) var<storage, read> wide_nodes: array<WideNode>;
+// The light sampler's cumulative probabilities, one per light (the last is 1).
+@group(0) @binding(11) var<storage, read> light_cdf: array<f32>;
+// The environment map (lights/environment.wgsl): RGB texels, then per-row conditional CDFs, then the marginal.
+@group(0) @binding(12) var<storage, read> environment_map: array<f32>;
+// The light sampler's tree over the lights at finite distance (lights/light_tree.wgsl).
+@group(0) @binding(13) var<storage, read> light_tree: array<LightTreeNode>;

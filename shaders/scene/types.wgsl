@@ -11,7 +11,10 @@ struct WideNode { w0: vec4<u32>, w1: vec4<u32>, w2: vec4<u32>, w3: vec4<u32>, w4
 struct Instance {
     world_from_object: mat3x4<f32>, // rows
     object_from_world: mat3x4<f32>,
-    mesh: u32, _p0: u32, _p1: u32, _p2: u32,
+    mesh: u32,
+    // This instance's emissive triangles in the light list: lights[first_light .. first_light + light_count],
+    // sorted by triangle slot.
+    first_light: u32, light_count: u32, _p0: u32,
 }
 
 struct Mesh {
@@ -28,4 +31,18 @@ struct Material {
 
 struct TextureInfo { offset: u32, width: u32, height: u32, flags: u32 }
 
-struct Emitter { instance: u32, triangle: u32, cdf: f32, pmf: f32 }
+// One light of any kind (engine/src/render/layout.rs `GpuLight` documents each field per kind).
+struct Light {
+    kind: u32, index_a: u32, index_b: u32, flags: u32,
+    position: vec3<f32>, range: f32,
+    direction: vec3<f32>, cos_outer: f32,
+    radiance: vec3<f32>, cos_inner: f32,
+}
+
+// A node of the light sampler's tree (engine/src/render/gpu_scene/light_tree.rs `GpuLightTreeNode`).
+struct LightTreeNode {
+    lo: vec3<f32>, phi: f32,
+    hi: vec3<f32>, cos_theta_o: f32,
+    w: vec3<f32>, cos_theta_e: f32,
+    child_or_light: u32, flags: u32, _p0: u32, _p1: u32,
+}

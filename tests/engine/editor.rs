@@ -87,7 +87,7 @@ fn material_edits_reupload_and_restart_accumulation() {
     assert_eq!(app.samples(), 12);
 
     // Making the floor emissive turns it into a light: emitters appear (next-event estimation samples them).
-    assert_eq!(app.gpu_scene().emitter_count, 0);
+    assert_eq!(app.gpu_scene().lights.triangle_count, 0);
     let floor = app
         .app
         .world()
@@ -103,16 +103,16 @@ fn material_edits_reupload_and_restart_accumulation() {
     app.step();
     assert_eq!(app.samples(), 4);
     assert_eq!(
-        app.gpu_scene().emitter_count,
+        app.gpu_scene().lights.triangle_count,
         2,
         "the floor's two triangles"
     );
-    assert!(app.gpu_scene().emitter_total_power > 0.0);
+    assert!(app.gpu_scene().lights.triangle_power() > 0.0);
     // Revert to the file's values: no emitters again.
     let file = scene.materials[floor].clone();
     app.app.world_mut().resource_mut::<Materials>().0[floor] = file;
     app.step();
-    assert_eq!(app.gpu_scene().emitter_count, 0);
+    assert_eq!(app.gpu_scene().lights.triangle_count, 0);
 }
 
 /// Every instance's triangles in world space (current pose): (entity, triangle index, corners).

@@ -94,7 +94,13 @@ fn scene_structs_match_wgsl() {
         l,
         "Instance",
         GpuInstance,
-        [world_from_object, object_from_world, mesh]
+        [
+            world_from_object,
+            object_from_world,
+            mesh,
+            first_light,
+            light_count
+        ]
     );
     same_layout!(
         l,
@@ -130,26 +136,51 @@ fn scene_structs_match_wgsl() {
         ]
     );
     same_layout!(l, "TextureInfo", GpuTexture, [offset, width, height, flags]);
-    same_layout!(l, "Emitter", GpuEmitter, [instance, triangle, cdf, pmf]);
+    same_layout!(
+        l,
+        "Light",
+        GpuLight,
+        [
+            kind, index_a, index_b, flags, position, range, direction, cos_outer, radiance,
+            cos_inner
+        ]
+    );
+    same_layout!(
+        l,
+        "LightTreeNode",
+        GpuLightTreeNode,
+        [
+            lo,
+            phi,
+            hi,
+            cos_theta_o,
+            w,
+            cos_theta_e,
+            child_or_light,
+            flags
+        ]
+    );
     same_layout!(
         l,
         "Frame",
         GpuFrame,
         [
             world_from_camera,
-            env_color,
             tan_half_fov,
+            lens_radius,
+            focus_distance,
+            light_count,
             width,
             height,
             sample_base,
             spp,
             max_depth,
             seed,
-            env_mode,
             rr_depth,
-            emitter_count,
             flags,
-            emitter_total_power
+            infinite_light_first,
+            infinite_light_count,
+            tree_light_count
         ]
     );
 }

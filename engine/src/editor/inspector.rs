@@ -1,5 +1,5 @@
 //! The selected entity's components: transform (editable), world position, mesh, skin, morph weights,
-//! camera.
+//! light (editable), camera.
 
 use super::EditorState;
 use super::scene_tree::entity_name;
@@ -111,6 +111,7 @@ pub fn show(ui: &mut egui::Ui, world: &mut World, state: &mut EditorState) {
             *current = weights;
         }
     }
+    super::lights_panel::light_inspector(ui, world, entity);
     if let Some(camera) = world.get::<CameraComponent>(entity).copied() {
         ui.label(format!(
             "camera: vertical fov {:.1} deg",

@@ -7,6 +7,7 @@
 
 mod animation_panel;
 mod inspector;
+mod lights_panel;
 mod material_panel;
 pub mod prefs;
 mod render_panel;
@@ -328,6 +329,9 @@ fn side_panel(
     egui::CollapsingHeader::new("Material")
         .default_open(true)
         .show(ui, |ui| material_panel::show(ui, world, state));
+    egui::CollapsingHeader::new("Lights")
+        .default_open(false)
+        .show(ui, |ui| lights_panel::show(ui, world, state));
     egui::CollapsingHeader::new("Animation")
         .default_open(true)
         .show(ui, |ui| animation_panel::show(ui, world));
@@ -405,9 +409,10 @@ fn camera_section(ui: &mut egui::Ui, world: &mut World, state: &EditorState) {
     {
         rig.yfov = fov.to_radians();
     }
+    lens_rows(ui, world);
     ui.add(
         egui::Label::new(
-            "Drag: look/orbit; right or middle drag: pan; wheel: zoom (orbit) or speed (fly); WASD/QE: move; Shift: faster; click: select",
+            "Drag: look/orbit; right or middle drag: pan; wheel: zoom (orbit) or speed (fly); WASD/QE: move; Shift: faster; click: select; Ctrl+click: focus the lens there",
         )
         .wrap(),
     );
@@ -416,6 +421,33 @@ fn camera_section(ui: &mut egui::Ui, world: &mut World, state: &EditorState) {
     }
     if input != CameraInput::default() {
         merge_camera_input(world, input);
+    }
+}
+
+/// The thin lens: aperture radius (0: pinhole) and focus distance; edits restart accumulation next frame.
+fn lens_rows(ui: &mut egui::Ui, world: &mut World) {
+    let mut lens = world.resource::<RenderSettings>().lens;
+    let before = lens;
+    ui.horizontal(|ui| {
+        ui.label("aperture radius");
+        ui.add(
+            egui::DragValue::new(&mut lens.aperture_radius)
+                .speed(0.001)
+                .range(0.0..=1.0e3),
+        )
+        .on_hover_text("scene units (glTF: metres); 0 is a pinhole");
+    });
+    ui.horizontal(|ui| {
+        ui.label("focus distance");
+        ui.add(
+            egui::DragValue::new(&mut lens.focus_distance)
+                .speed(0.01)
+                .range(1.0e-3..=1.0e6),
+        )
+        .on_hover_text("along the view axis; Ctrl+click the image to focus on a surface");
+    });
+    if lens != before {
+        world.resource_mut::<RenderSettings>().lens = lens;
     }
 }
 

@@ -129,7 +129,7 @@ impl ViewerPrefs {
         if let Some(mut s) = world.get_resource_mut::<RenderSettings>() {
             s.spp_per_frame = self.spp_per_frame.max(1);
             s.max_depth = self.max_depth;
-            s.environment = self.environment;
+            s.environment = self.environment.clone();
             s.exposure = if self.exposure.is_finite() {
                 self.exposure
             } else {
@@ -165,7 +165,7 @@ impl ViewerPrefs {
         if let Some(s) = world.get_resource::<RenderSettings>() {
             self.spp_per_frame = s.spp_per_frame;
             self.max_depth = s.max_depth;
-            self.environment = s.environment;
+            self.environment = s.environment.clone();
             self.exposure = s.exposure;
             self.tonemapper = s.tonemapper;
             self.view = s.view;

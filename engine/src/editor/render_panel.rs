@@ -1,6 +1,7 @@
 //! Render settings: sampling, environment, display transform, AOV view, resolution and frame pacing.
 
 use super::EditorState;
+use crate::environment::{MapSettings, SunSkySettings};
 use crate::render::{AovView, DenoiserKind, Environment, RenderMode, RenderSettings, Tonemapper};
 use bevy_ecs::prelude::*;
 
@@ -34,36 +35,7 @@ pub fn show(ui: &mut egui::Ui, world: &mut World, state: &mut EditorState) {
             ui.add(egui::DragValue::new(&mut state.sample_limit).range(0..=1_000_000))
                 .on_hover_text("0: keep accumulating");
             ui.end_row();
-            ui.label("environment");
-            let mut sky = matches!(s.environment, Environment::Sky);
-            ui.horizontal(|ui| {
-                ui.selectable_value(&mut sky, true, "sky");
-                ui.selectable_value(&mut sky, false, "constant");
-            });
-            ui.end_row();
-            match (sky, s.environment) {
-                (true, _) => s.environment = Environment::Sky,
-                (false, Environment::Sky) => s.environment = Environment::Constant([1.0; 3]),
-                (false, Environment::Constant(mut c)) => {
-                    ui.label("radiance");
-                    // Colour and a strength, so bright (> 1) environments stay editable.
-                    let strength = c.iter().copied().fold(0.0f32, f32::max).max(1.0);
-                    let mut colour = c.map(|v| v / strength);
-                    let mut new_strength = strength;
-                    ui.horizontal(|ui| {
-                        ui.color_edit_button_rgb(&mut colour);
-                        ui.add(
-                            egui::DragValue::new(&mut new_strength)
-                                .speed(0.05)
-                                .range(1.0..=1.0e4)
-                                .prefix("x"),
-                        );
-                    });
-                    c = colour.map(|v| v * new_strength);
-                    s.environment = Environment::Constant(c);
-                    ui.end_row();
-                }
-            }
+            environment_rows(ui, &mut s.environment);
             ui.label("exposure (stops)");
             ui.add(egui::Slider::new(&mut s.exposure, -10.0..=10.0));
             ui.end_row();
@@ -252,5 +224,103 @@ fn oidn_status(status: &crate::oidn::OidnStatus) -> String {
             timings.total_ms()
         ),
         OidnStatus::Unavailable(why) => format!("unavailable, showing svgf: {why}"),
+    }
+}
+
+/// The environment's kind and its parameters (grid rows). A map's path applies when the field loses focus.
+fn environment_rows(ui: &mut egui::Ui, env: &mut Environment) {
+    ui.label("environment");
+    let kind = |e: &Environment| match e {
+        Environment::Sky => 0,
+        Environment::Constant(_) => 1,
+        Environment::Map(_) => 2,
+        Environment::SunSky(_) => 3,
+    };
+    let names = ["sky gradient", "constant", "HDR map", "sun and sky"];
+    let mut selected = kind(env);
+    egui::ComboBox::from_id_salt("environment")
+        .selected_text(names[selected])
+        .show_ui(ui, |ui| {
+            for (i, name) in names.iter().enumerate() {
+                ui.selectable_value(&mut selected, i, *name);
+            }
+        });
+    ui.end_row();
+    if selected != kind(env) {
+        *env = match selected {
+            0 => Environment::Sky,
+            1 => Environment::Constant([1.0; 3]),
+            2 => Environment::Map(MapSettings {
+                path: Default::default(),
+                rotation_degrees: 0.0,
+                strength: 1.0,
+            }),
+            _ => Environment::SunSky(SunSkySettings::default()),
+        };
+    }
+    match env {
+        Environment::Sky => {}
+        Environment::Constant(c) => {
+            ui.label("radiance");
+            // Colour and a strength, so bright (> 1) environments stay editable.
+            let strength = c.iter().copied().fold(0.0f32, f32::max).max(1.0);
+            let mut colour = c.map(|v| v / strength);
+            let mut new_strength = strength;
+            ui.horizontal(|ui| {
+                ui.color_edit_button_rgb(&mut colour);
+                ui.add(
+                    egui::DragValue::new(&mut new_strength)
+                        .speed(0.05)
+                        .range(1.0..=1.0e4)
+                        .prefix("x"),
+                );
+            });
+            *c = colour.map(|v| v * new_strength);
+            ui.end_row();
+        }
+        Environment::Map(m) => {
+            ui.label("  file (.hdr, .exr)");
+            let id = ui.make_persistent_id("environment map path");
+            let mut text = ui
+                .data_mut(|d| d.get_temp::<String>(id))
+                .unwrap_or_else(|| m.path.display().to_string());
+            let response = ui.text_edit_singleline(&mut text);
+            if response.lost_focus() {
+                m.path = text.trim().into();
+                ui.data_mut(|d| d.remove::<String>(id));
+            } else {
+                ui.data_mut(|d| d.insert_temp(id, text));
+            }
+            ui.end_row();
+            ui.label("  rotation (deg)");
+            ui.add(egui::Slider::new(&mut m.rotation_degrees, -180.0..=180.0));
+            ui.end_row();
+            ui.label("  strength");
+            ui.add(
+                egui::DragValue::new(&mut m.strength)
+                    .speed(0.01)
+                    .range(0.0..=1.0e6),
+            );
+            ui.end_row();
+        }
+        Environment::SunSky(sky) => {
+            ui.label("  sun elevation (deg)");
+            ui.add(egui::Slider::new(&mut sky.elevation_degrees, -10.0..=90.0));
+            ui.end_row();
+            ui.label("  sun azimuth (deg)");
+            ui.add(egui::Slider::new(&mut sky.azimuth_degrees, 0.0..=360.0));
+            ui.end_row();
+            ui.label("  turbidity");
+            ui.add(egui::Slider::new(&mut sky.turbidity, 1.7..=10.0));
+            ui.end_row();
+            ui.label("  strength");
+            ui.add(
+                egui::DragValue::new(&mut sky.strength)
+                    .speed(0.001)
+                    .range(0.0..=100.0),
+            )
+            .on_hover_text("1: physical units (W/m^2/sr); try exposure -5");
+            ui.end_row();
+        }
     }
 }

@@ -97,17 +97,27 @@ pub fn show(ui: &mut egui::Ui, world: &mut World, state: &mut EditorState) {
         && rect.contains(pos)
     {
         let local = (pos - rect.min) / rect.size();
-        let hit = crate::render::picking::pick_pixel(
-            world,
+        let (x, y) = (
             (local.x * size.0 as f32) as u32,
             (local.y * size.1 as f32) as u32,
         );
-        match hit {
-            Some(hit) => {
-                scene_tree::select(world, state, hit.entity);
-                state.selection.material = hit.material.or(state.selection.material);
+        if ui.input(|i| i.modifiers.command) {
+            // Ctrl+click: focus the lens on the surface under the cursor.
+            match crate::render::picking::depth_at(world, x, y) {
+                Some(depth) => world.resource_mut::<RenderSettings>().lens.focus_distance = depth,
+                None => state.report(
+                    super::Severity::Info,
+                    "nothing to focus on there: the ray leaves the scene",
+                ),
             }
-            None => state.selection = Default::default(),
+        } else {
+            match crate::render::picking::pick_pixel(world, x, y) {
+                Some(hit) => {
+                    scene_tree::select(world, state, hit.entity);
+                    state.selection.material = hit.material.or(state.selection.material);
+                }
+                None => state.selection = Default::default(),
+            }
         }
     }
     // Keys move the camera unless a text field has the keyboard.

@@ -145,8 +145,8 @@ impl GpuContext {
 }
 
 /// A compute pipeline from one WGSL module and its bind group layouts; `label` names the module, layout and
-/// pipeline.
-pub(crate) fn compute_pipeline(
+/// pipeline. Public for kernels outside the renderer's passes (tests probing the WGSL library).
+pub fn compute_pipeline(
     device: &wgpu::Device,
     label: &str,
     source: String,

@@ -34,7 +34,7 @@ use super::realtime::{
     Realtime, RealtimePasses, RealtimeTargets, SceneGroups, Shown, runs as realtime_runs,
 };
 use super::scene_bindings::SceneBindings;
-use super::settings::{Environment, RenderSettings};
+use super::settings::{LightSampler, RenderSettings};
 use super::stats::*;
 use super::view::ViewTargets;
 use crate::camera::CameraView;
@@ -281,7 +281,7 @@ pub fn encode_realtime_frame(
     stats: &mut FrameStats,
     deform: Vec<wgpu::CommandBuffer>,
 ) {
-    let lights = scene.emitter_count > 0;
+    let lights = scene.lights.count > 0;
     realtime.targets_for(ctx, view.width, view.height);
     let Realtime {
         passes,
@@ -506,27 +506,23 @@ pub fn write_frame_constants(
     camera: &CameraView,
     c: FrameConstants,
 ) {
-    let (env_mode, env_color) = match settings.environment {
-        Environment::Constant(c) => (0, c),
-        Environment::Sky => (1, [0.0; 3]),
-    };
     let frame = GpuFrame {
         world_from_camera: camera.world_from_camera.to_cols_array_2d(),
-        env_color,
         tan_half_fov: (camera.yfov * 0.5).tan(),
+        lens_radius: settings.lens.aperture_radius.max(0.0),
+        focus_distance: settings.lens.focus_distance.max(1e-6),
+        light_count: scene.lights.count,
         width: view.width,
         height: view.height,
         sample_base: c.sample_base,
         spp: c.spp,
         max_depth: c.max_depth,
         seed: settings.seed,
-        env_mode,
         rr_depth: if settings.russian_roulette {
             settings.rr_depth
         } else {
             u32::MAX
         },
-        emitter_count: scene.emitter_count,
         // The primary-hit AOV is written by the first dispatch of an accumulation.
         flags: if settings.nee { FRAME_NEE } else { 0 }
             | if view.hit_aov && c.sample_base == 0 {
@@ -539,7 +535,12 @@ pub fn write_frame_constants(
             } else {
                 0
             },
-        emitter_total_power: scene.emitter_total_power,
+        infinite_light_first: scene.lights.infinite_first,
+        infinite_light_count: scene.lights.infinite_count,
+        tree_light_count: match settings.light_sampler {
+            LightSampler::Tree => scene.lights.tree_count,
+            LightSampler::Power => 0,
+        },
         _pad: 0,
     };
     ctx.queue

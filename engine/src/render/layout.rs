@@ -26,7 +26,11 @@ pub struct GpuInstance {
     pub world_from_object: [[f32; 4]; 3],
     pub object_from_world: [[f32; 4]; 3],
     pub mesh: u32,
-    pub _pad: [u32; 3],
+    /// This instance's emissive triangles in the light list: `first_light .. first_light + light_count`,
+    /// sorted by triangle slot (how a BSDF-sampled hit finds its light for MIS).
+    pub first_light: u32,
+    pub light_count: u32,
+    pub _pad: u32,
 }
 
 impl GpuInstance {
@@ -42,7 +46,9 @@ impl GpuInstance {
             world_from_object: rows(world),
             object_from_world: rows(world.inverse()),
             mesh,
-            _pad: [0; 3],
+            first_light: 0,
+            light_count: 0,
+            _pad: 0,
         }
     }
 }
@@ -89,18 +95,59 @@ pub struct GpuTexture {
     pub flags: u32,
 }
 
-/// An emissive triangle for next-event estimation, with the cumulative power used to pick it.
+pub const LIGHT_TRIANGLE: u32 = 0;
+pub const LIGHT_POINT: u32 = 1;
+pub const LIGHT_SPOT: u32 = 2;
+pub const LIGHT_DIRECTIONAL: u32 = 3;
+pub const LIGHT_ENVIRONMENT: u32 = 4;
+pub const LIGHT_SUN: u32 = 5;
+
+/// One light of any kind (`shaders/scene/types.wgsl` `Light`; `shaders/lights/` reads it). What each field
+/// holds per kind:
+///
+/// | kind | index_a, index_b | position, range | direction, cos_outer | radiance, cos_inner |
+/// |---|---|---|---|---|
+/// | triangle | instance, triangle slot | - | - | - (the material's emission) |
+/// | point | - | world position, range (0: none) | - | intensity (W/sr) |
+/// | spot | - | world position, range | axis it shines along, cos outer cone | intensity, cos inner cone |
+/// | directional | - | - | direction it travels | irradiance (W/m^2) |
+/// | environment | map width, height | (cos, sin) of the turn about +Y | - | strength |
+/// | sun | - | -, 1 - cos(angular radius) | towards the sun | radiance |
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
-pub struct GpuEmitter {
-    pub instance: u32,
-    /// Triangle slot in the triangle buffer (already offset by the mesh).
-    pub triangle: u32,
-    /// Cumulative selection probability up to and including this emitter.
-    pub cdf: f32,
-    /// Selection probability of this emitter.
-    pub pmf: f32,
+pub struct GpuLight {
+    pub kind: u32,
+    pub index_a: u32,
+    pub index_b: u32,
+    pub flags: u32,
+    pub position: [f32; 3],
+    pub range: f32,
+    pub direction: [f32; 3],
+    pub cos_outer: f32,
+    pub radiance: [f32; 3],
+    pub cos_inner: f32,
 }
+
+/// A node of the light sampler's tree (`shaders/scene/types.wgsl` `LightTreeNode`; built by
+/// `render::gpu_scene::light_tree`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct GpuLightTreeNode {
+    pub lo: [f32; 3],
+    pub phi: f32,
+    pub hi: [f32; 3],
+    pub cos_theta_o: f32,
+    pub w: [f32; 3],
+    pub cos_theta_e: f32,
+    /// Interior node: index of the second child (the first follows the node); leaf: the light's index.
+    pub child_or_light: u32,
+    /// [`LIGHT_TREE_LEAF`], [`LIGHT_TREE_TWO_SIDED`].
+    pub flags: u32,
+    pub _pad: [u32; 2],
+}
+
+pub const LIGHT_TREE_LEAF: u32 = 1;
+pub const LIGHT_TREE_TWO_SIDED: u32 = 2;
 
 /// Workgroup size of the skin + morph pass (`deform.wgsl`): vertices per workgroup.
 pub const DEFORM_GROUP: u32 = 64;
@@ -120,6 +167,14 @@ pub const WGSL_CONSTANTS: &[(&str, u32)] = &[
     ("FRAME_NEE", FRAME_NEE),
     ("FRAME_HIT_AOV", FRAME_HIT_AOV),
     ("FRAME_MOMENTS", FRAME_MOMENTS),
+    ("LIGHT_TRIANGLE", LIGHT_TRIANGLE),
+    ("LIGHT_POINT", LIGHT_POINT),
+    ("LIGHT_SPOT", LIGHT_SPOT),
+    ("LIGHT_DIRECTIONAL", LIGHT_DIRECTIONAL),
+    ("LIGHT_ENVIRONMENT", LIGHT_ENVIRONMENT),
+    ("LIGHT_SUN", LIGHT_SUN),
+    ("LIGHT_TREE_LEAF", LIGHT_TREE_LEAF),
+    ("LIGHT_TREE_TWO_SIDED", LIGHT_TREE_TWO_SIDED),
     // A BVH2 traversal stack needs at most one entry per level below the root; builds deeper than
     // MAX_TRAVERSAL_DEPTH are refused on the CPU, so neither stack can overflow.
     ("BLAS_STACK_SIZE", crate::bvh::MAX_TRAVERSAL_DEPTH),
@@ -234,8 +289,13 @@ pub struct GpuRealtimeSample {
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
 pub struct GpuFrame {
     pub world_from_camera: [[f32; 4]; 4],
-    pub env_color: [f32; 3],
     pub tan_half_fov: f32,
+    /// Thin-lens aperture radius in scene units (0: a pinhole).
+    pub lens_radius: f32,
+    /// Distance of the sharp plane along the view axis.
+    pub focus_distance: f32,
+    /// Lights in the light list (and entries of its CDF).
+    pub light_count: u32,
     pub width: u32,
     pub height: u32,
     /// Samples per pixel already accumulated before this dispatch (the sample index base for the RNG).
@@ -243,15 +303,15 @@ pub struct GpuFrame {
     pub spp: u32,
     pub max_depth: u32,
     pub seed: u32,
-    /// 0 constant colour, 1 sky gradient.
-    pub env_mode: u32,
     /// Path depth from which Russian roulette may end a path (u32::MAX: never).
     pub rr_depth: u32,
-    pub emitter_count: u32,
     /// Bit 0: next-event estimation on; bit 1: write the primary-hit AOV.
     pub flags: u32,
-    /// Sum over emitters of luminance(emissive) x world area: the normaliser of emitter selection.
-    pub emitter_total_power: f32,
+    /// The lights at infinity (environment, sun), which rays leaving the scene see: a range of the light list.
+    pub infinite_light_first: u32,
+    pub infinite_light_count: u32,
+    /// Lights in the light tree, the list's first ones (0: the light sampler samples by power alone).
+    pub tree_light_count: u32,
     pub _pad: u32,
 }
 

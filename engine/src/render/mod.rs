@@ -1,16 +1,18 @@
 //! The render plugin: the scene's GPU buffers, the view's targets, the GPU passes and the frame that runs them.
 //!
 //! - [`gpu_scene`]: the scene packed into storage buffers (meshes, BLASes, materials, textures, instances,
-//!   emitters); [`scene_bindings`]: group 0 over them.
+//!   lights); [`scene_bindings`]: group 0 over them; [`environment`]: the environment setting as lights.
 //! - [`view`]: the view's targets (accumulation, AOVs, display image); [`accumulation`]: its sample count and
 //!   restart flag; [`host_denoised`]: an image denoised on the host (OIDN) for the display to show;
 //!   [`realtime`]: the real-time path's targets and state (G-buffers, histories, reservoirs).
 //! - [`passes`]: one struct per GPU pass beside its WGSL kernel; [`shaders`]: the WGSL library they compose.
 //! - [`frame`]: the frame's passes in order, in one submission; [`systems`]: what runs before it (refit on the
-//!   CPU backend, the top-level BVH, material edits); [`queries`]: GPU work run on demand; [`picking`].
+//!   CPU backend, the top-level BVH, material edits, the light list); [`queries`]: GPU work run on demand;
+//!   [`picking`].
 //! - [`stats`]: GPU pass times; [`layout`]: the structs and constants Rust shares with WGSL; [`settings`].
 
 pub mod accumulation;
+pub mod environment;
 pub mod frame;
 pub mod gpu_scene;
 pub mod host_denoised;
@@ -31,8 +33,8 @@ pub use gpu_scene::{GpuMemory, GpuScene, InstanceInput, UploadError};
 pub use host_denoised::HostDenoised;
 pub use passes::denoise::{DenoiseParams, Denoiser};
 pub use settings::{
-    AovView, DenoiserKind, Environment, RealtimeSettings, RenderMode, RenderSettings,
-    RestirSettings, Tonemapper,
+    AovView, DenoiserKind, Environment, LightSampler, RealtimeSettings, RenderMode, RenderSettings,
+    RestirSettings, ThinLens, Tonemapper,
 };
 pub use stats::{FrameStats, GpuFrameStats, PassTimes, RayCastTiming};
 pub use view::{Aovs, PrimaryHit, ViewTargets};
@@ -61,13 +63,18 @@ pub fn insert_resources(
     settings: &RenderSettings,
     binding_limit: Option<u64>,
 ) -> Result<Vec<String>, UploadError> {
-    let (gpu_scene, notes) = GpuScene::new(
+    let (mut gpu_scene, mut notes) = GpuScene::new(
         ctx,
         scene,
         settings.bvh_quality,
         settings.static_bvh,
         binding_limit,
     )?;
+    let baked = environment::bake(&settings.environment, gpu_scene.binding_limit)
+        .map_err(UploadError::Environment)?;
+    notes.extend(baked.notes.iter().cloned());
+    gpu_scene.set_environment(ctx, Some(&baked));
+    world.insert_resource(systems::UploadedEnvironment(settings.environment.clone()));
     let bindings = SceneBindings::new(ctx);
     world.insert_resource(TracePass::new(ctx, &bindings.layout));
     world.insert_resource(TonemapPass::new(ctx));
@@ -110,7 +117,9 @@ impl Plugin for RenderPlugin {
                     )
                         .chain()
                         .in_set(FrameSet::Bvh),
-                    systems::upload_materials.in_set(FrameSet::Upload),
+                    (systems::upload_materials, systems::update_lights)
+                        .chain()
+                        .in_set(FrameSet::Upload),
                     frame::render_frame.in_set(FrameSet::Render),
                 ),
             );

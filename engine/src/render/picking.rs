@@ -25,6 +25,8 @@ pub struct PickHit {
     pub material: Option<usize>,
     /// Weights of the triangle's second and third vertices at the hit.
     pub barycentrics: [f32; 2],
+    /// Distance from the camera along the pixel centre's ray.
+    pub distance: f32,
 }
 
 /// The hit through pixel (`x`, `y`) of the current image (pixels from the top-left); `None` where the ray
@@ -38,7 +40,7 @@ pub fn pick_pixel(world: &World, x: u32, y: u32) -> Option<PickHit> {
         .get_resource::<OnFirstUse<PickPass>>()?
         .get_or_init(|| PickPass::new(ctx, &bindings.layout));
     let view = world.get_resource::<ViewTargets>()?;
-    let hit = pass.pick(ctx, &bindings.fresh(ctx, gpu_scene), view, x, y)?;
+    let (hit, distance) = pass.pick(ctx, &bindings.fresh(ctx, gpu_scene), view, x, y)?;
     let entity = *world
         .get_resource::<InstanceMap>()?
         .entities
@@ -54,5 +56,16 @@ pub fn pick_pixel(world: &World, x: u32, y: u32) -> Option<PickHit> {
         triangle,
         material: (material < scene.materials.len()).then_some(material),
         barycentrics: hit.barycentrics,
+        distance,
     })
+}
+
+/// Camera depth (distance along the view axis) of the surface through pixel (`x`, `y`)'s centre: the focus
+/// distance that makes it sharp. `None` where the ray leaves the scene.
+pub fn depth_at(world: &World, x: u32, y: u32) -> Option<f32> {
+    let hit = pick_pixel(world, x, y)?;
+    let camera = world.get_resource::<crate::camera::CameraView>()?;
+    let view = world.get_resource::<ViewTargets>()?;
+    let (_, dir) = camera.ray_through(x as f32 + 0.5, y as f32 + 0.5, view.width, view.height);
+    Some(hit.distance * dir.dot(camera.forward()))
 }

@@ -7,7 +7,7 @@ use crate::gpu::bind::{Binding, bind_group, compute_layout};
 use bevy_ecs::prelude::Resource;
 
 /// Buffers bound, in binding order.
-const SCENE_BINDINGS: usize = 11;
+const SCENE_BINDINGS: usize = 14;
 
 #[derive(Resource)]
 pub struct SceneBindings {
@@ -58,8 +58,11 @@ impl SceneBindings {
                 &scene.materials,
                 &scene.texels,
                 &scene.texture_infos,
-                &scene.emitters,
+                &scene.light_buffer,
                 &scene.wide_nodes,
+                &scene.light_cdf,
+                &scene.environment_map,
+                &scene.light_tree,
             ],
         )
     }

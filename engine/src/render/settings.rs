@@ -3,12 +3,71 @@
 use bevy_ecs::prelude::Resource;
 use serde::{Deserialize, Serialize};
 
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+/// What rays leaving the scene see. Every kind is a light the light sampler picks (importance-sampled,
+/// with MIS against BSDF sampling): `crate::environment` turns it into a map (and a sun).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub enum Environment {
     /// Uniform radiance from every direction.
     Constant([f32; 3]),
-    /// White at and below the horizon, blue at the zenith.
+    /// A gradient from white-blue at and below the horizon to blue at the zenith.
     Sky,
+    /// An HDR equirectangular map (`.hdr` / `.exr`).
+    Map(crate::environment::MapSettings),
+    /// The Preetham sky with the sun as a disc light.
+    SunSky(crate::environment::SunSkySettings),
+}
+
+/// How next-event estimation picks a light.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+pub enum LightSampler {
+    /// In proportion to power (pbrt-v4 `PowerLightSampler`).
+    Power,
+    /// The lights at finite distance by a light tree's spatial importance (pbrt-v4 `BVHLightSampler`), the
+    /// lights at infinity by power.
+    #[default]
+    Tree,
+}
+
+/// A thin lens (pbrt-v4's perspective camera): depth of field around the plane at `focus_distance`.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ThinLens {
+    /// Radius of the aperture in scene units (glTF: metres); 0 is a pinhole, everything sharp.
+    pub aperture_radius: f32,
+    /// Distance from the lens to the sharp plane, along the view axis.
+    pub focus_distance: f32,
+}
+
+impl Default for ThinLens {
+    fn default() -> Self {
+        Self {
+            aperture_radius: 0.0,
+            focus_distance: 1.0,
+        }
+    }
+}
+
+impl ThinLens {
+    /// Height of the 35 mm full-frame sensor the f-number is converted with (metres).
+    pub const SENSOR_HEIGHT: f32 = 0.024;
+
+    /// The lens of a camera with vertical field of view `yfov` (radians) on a 35 mm full-frame sensor at
+    /// f-number `f_number`, in a scene measured in metres: focal length = (sensor height / 2) / tan(yfov / 2),
+    /// aperture diameter = focal length / f-number.
+    pub fn from_f_number(f_number: f32, yfov: f32, focus_distance: f32) -> Self {
+        let focal_length = 0.5 * Self::SENSOR_HEIGHT / (0.5 * yfov).tan();
+        Self {
+            aperture_radius: 0.5 * focal_length / f_number,
+            focus_distance,
+        }
+    }
+
+    /// Diameter in pixels of the circle a point at camera depth `depth` blurs into, for an image `height`
+    /// pixels tall seen through `yfov` (the thin-lens formula: aperture x |1/depth - 1/focus| in units of
+    /// the film at distance 1).
+    pub fn circle_of_confusion_pixels(&self, depth: f32, yfov: f32, height: u32) -> f32 {
+        2.0 * self.aperture_radius * (1.0 / depth - 1.0 / self.focus_distance).abs() * height as f32
+            / (2.0 * (0.5 * yfov).tan())
+    }
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
@@ -241,6 +300,9 @@ pub struct RenderSettings {
     /// Surface interactions after the camera ray.
     pub max_depth: u32,
     pub environment: Environment,
+    /// The camera's lens (a pinhole by default).
+    #[serde(default)]
+    pub lens: ThinLens,
     /// Exposure in stops (display only; EXR output is never exposed).
     pub exposure: f32,
     pub tonemapper: Tonemapper,
@@ -251,8 +313,11 @@ pub struct RenderSettings {
     pub russian_roulette: bool,
     /// First path depth at which Russian roulette may end a path.
     pub rr_depth: u32,
-    /// Next-event estimation on emissive triangles (with MIS).
+    /// Next-event estimation on every light (with MIS).
     pub nee: bool,
+    /// How next-event estimation picks the light.
+    #[serde(default)]
+    pub light_sampler: LightSampler,
     pub bvh_quality: crate::bvh::BvhQuality,
     /// Show the denoised image (display-side: turning it on or off keeps the accumulated samples).
     #[serde(default)]
@@ -284,6 +349,7 @@ impl Default for RenderSettings {
             spp_per_frame: 1,
             max_depth: 6,
             environment: Environment::Sky,
+            lens: ThinLens::default(),
             exposure: 0.0,
             tonemapper: Tonemapper::AcesFitted,
             view: AovView::Color,
@@ -292,6 +358,7 @@ impl Default for RenderSettings {
             russian_roulette: true,
             rr_depth: 3,
             nee: true,
+            light_sampler: LightSampler::default(),
             bvh_quality: crate::bvh::BvhQuality::Medium,
             denoise: false,
             denoise_params: Default::default(),

@@ -175,3 +175,48 @@ fn keep_previous_positions(
     }
     ctx.queue.submit([encoder.finish()]);
 }
+
+/// The environment setting the GPU's environment map was made from.
+#[derive(Resource)]
+pub struct UploadedEnvironment(pub super::Environment);
+
+/// Keeps the light list current: the environment when its setting changed (a map that cannot be read becomes
+/// a black environment, with the error logged), the punctual lights from their nodes (only when one moved or
+/// was edited), and the emissive triangles `update_instances` and `upload_materials` rebuilt. Uploads once
+/// and restarts accumulation when anything changed.
+pub fn update_lights(
+    ctx: Res<GpuContext>,
+    settings: Res<super::RenderSettings>,
+    mut uploaded: ResMut<UploadedEnvironment>,
+    mut scene: ResMut<GpuScene>,
+    mut accumulation: ResMut<Accumulation>,
+    lights: Query<(Entity, &GlobalTransform, &crate::scene::LightSource)>,
+) {
+    if uploaded.0 != settings.environment {
+        uploaded.0 = settings.environment.clone();
+        match super::environment::bake(&settings.environment, scene.binding_limit) {
+            Ok(baked) => {
+                for note in &baked.notes {
+                    tracing::warn!("{note}");
+                }
+                scene.set_environment(&ctx, Some(&baked));
+            }
+            Err(e) => {
+                tracing::error!("{e}; the environment is black");
+                scene.set_environment(&ctx, None);
+            }
+        }
+    }
+    let mut placed: Vec<(Entity, glam::Mat4, crate::scene::PunctualLight)> = lights
+        .iter()
+        .map(|(e, g, l)| (e, g.0, l.0.clone()))
+        .collect();
+    // Query order is not stable across archetype changes.
+    placed.sort_by_key(|(e, _, _)| *e);
+    let placed: Vec<(glam::Mat4, crate::scene::PunctualLight)> =
+        placed.into_iter().map(|(_, m, l)| (m, l)).collect();
+    scene.set_punctual_lights(&placed);
+    if scene.upload_lights(&ctx) {
+        accumulation.restart();
+    }
+}

@@ -159,6 +159,7 @@ pub fn compose(
         let node_offset = out.nodes.len() + 1;
         let skin_offset = out.skins.len();
         let camera_offset = out.cameras.len();
+        let light_offset = out.lights.len();
         let group = out.nodes.len();
         out.nodes.push(NodeData {
             name: format!("{} #{}", asset.source, copies.len()),
@@ -174,6 +175,7 @@ pub fn compose(
                 mesh: node.mesh.map(|m| mesh_map[m]),
                 camera: node.camera.map(|c| c + camera_offset),
                 skin: node.skin.map(|s| s + skin_offset),
+                light: node.light.map(|l| l + light_offset),
                 ..node.clone()
             });
         }
@@ -184,6 +186,7 @@ pub fn compose(
             }
         }
         out.cameras.extend(asset.cameras.iter().copied());
+        out.lights.extend(asset.lights.iter().cloned());
         out.skins.extend(asset.skins.iter().map(|s| SkinData {
             joints: s.joints.iter().map(|j| j + node_offset).collect(),
             skeleton: s.skeleton.map(|j| j + node_offset),

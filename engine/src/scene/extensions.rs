@@ -5,6 +5,7 @@
 /// are parsed but not rendered yet, which the loader reports per file.
 pub(super) const SUPPORTED: &[&str] = &[
     "KHR_materials_emissive_strength",
+    "KHR_lights_punctual",
     "KHR_mesh_quantization",
     super::draco::EXTENSION,
     "EXT_meshopt_compression",

@@ -236,6 +236,7 @@ impl<'a> Loader<'a> {
         let (nodes, roots) = self.load_nodes()?;
         let skins = self.load_skins();
         let animations = self.load_animations();
+        let lights = super::lights::read_lights(&self.document, |w| self.warn(w));
         let mut scene = SceneAsset {
             source: self.path.display().to_string(),
             meshes,
@@ -252,6 +253,7 @@ impl<'a> Loader<'a> {
             roots,
             variants,
             active_variant: None,
+            lights,
             warnings: self.warnings.take(),
             files: self.files.take(),
         };
@@ -829,6 +831,7 @@ impl<'a> Loader<'a> {
                     mesh: n.mesh().map(|m| m.index()),
                     camera: n.camera().map(|c| c.index()),
                     skin: n.skin().map(|s| s.index()),
+                    light: n.light().map(|l| l.index()),
                     morph_weights: n.weights().map(<[f32]>::to_vec),
                 }
             })

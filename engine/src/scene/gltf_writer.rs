@@ -1,11 +1,11 @@
-//! "File > Save as": the scene file written back with edited materials. The original glTF JSON is kept as the
+//! "File > Save as": the scene file written back with edited materials and lights. The original glTF JSON is kept as the
 //! gltf crate parses it (nodes, meshes, animations, cameras, extensions and extras); only material entries
 //! change. Buffers and images come along: a `.gltf` output references the original external files from its
 //! own folder (and a GLB's binary chunk becomes `NAME.bin` beside it); a `.glb` output packs every buffer and
 //! external image into its one binary chunk.
 
 use super::inputs::Access;
-use super::{AlphaMode, Material};
+use super::{AlphaMode, Material, PunctualLight};
 use gltf::json;
 use std::path::{Component, Path, PathBuf};
 
@@ -35,6 +35,28 @@ pub fn save_with_materials(
     source_name: &str,
     access: Access,
     materials: &[Material],
+    out: &Path,
+) -> Result<(), SaveError> {
+    save_edited(
+        source_bytes,
+        source_dir,
+        source_name,
+        access,
+        materials,
+        None,
+        out,
+    )
+}
+
+/// [`save_with_materials`], and with `node_lights` (glTF node index, its light) the file's
+/// KHR_lights_punctual lights are replaced: one light per node that has one (`None` keeps the file's).
+pub fn save_edited(
+    source_bytes: &[u8],
+    source_dir: &Path,
+    source_name: &str,
+    access: Access,
+    materials: &[Material],
+    node_lights: Option<&[(usize, PunctualLight)]>,
     out: &Path,
 ) -> Result<(), SaveError> {
     let ext = out
@@ -82,6 +104,9 @@ pub fn save_with_materials(
     {
         root.extensions_used
             .push("KHR_materials_emissive_strength".into());
+    }
+    if let Some(node_lights) = node_lights {
+        apply_lights(&mut root, node_lights).map_err(source_err)?;
     }
     let write_err = |path: &Path, reason: String| SaveError::Write {
         path: path.to_path_buf(),
@@ -148,6 +173,49 @@ fn check_reads_back(
         )),
         _ => Ok(()),
     }
+}
+
+/// Replaces the file's KHR_lights_punctual lights by one per entry of `node_lights`, referenced from its node.
+fn apply_lights(
+    root: &mut json::Root,
+    node_lights: &[(usize, PunctualLight)],
+) -> Result<(), String> {
+    use json::extensions::scene::khr_lights_punctual::KhrLightsPunctual;
+    for node in &mut root.nodes {
+        if let Some(ext) = &mut node.extensions {
+            ext.khr_lights_punctual = None;
+        }
+    }
+    for (i, (node, _)) in node_lights.iter().enumerate() {
+        let count = root.nodes.len();
+        let n = root
+            .nodes
+            .get_mut(*node)
+            .ok_or_else(|| format!("a light is on node {node}, but the file has {count} nodes"))?;
+        n.extensions
+            .get_or_insert_with(Default::default)
+            .khr_lights_punctual = Some(KhrLightsPunctual {
+            light: json::Index::new(i as u32),
+        });
+    }
+    let name = "KHR_lights_punctual";
+    if node_lights.is_empty() {
+        if let Some(ext) = &mut root.extensions {
+            ext.khr_lights_punctual = None;
+        }
+        root.extensions_used.retain(|e| e != name);
+        root.extensions_required.retain(|e| e != name);
+    } else {
+        root.extensions
+            .get_or_insert_with(Default::default)
+            .khr_lights_punctual = Some(json::extensions::root::KhrLightsPunctual {
+            lights: node_lights.iter().map(|(_, l)| l.to_json()).collect(),
+        });
+        if !root.extensions_used.iter().any(|e| e == name) {
+            root.extensions_used.push(name.into());
+        }
+    }
+    Ok(())
 }
 
 /// Writes the editable parameters of `m` over the JSON material; texture references the editor turned off are

@@ -110,6 +110,7 @@ pub(super) fn expand(nodes: &mut Vec<NodeData>, instanced: Vec<(usize, Vec<NodeT
                 transform,
                 mesh: Some(mesh),
                 camera: None,
+                light: None,
                 skin: base.skin,
                 morph_weights: base.morph_weights.clone(),
             });

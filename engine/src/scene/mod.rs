@@ -9,6 +9,7 @@ mod gltf_loader;
 pub mod gltf_writer;
 pub mod inputs;
 mod instancing;
+pub mod lights;
 pub mod material_extensions;
 mod materials;
 mod meshopt;
@@ -23,8 +24,9 @@ pub mod variants;
 
 pub use compose::{compose, unshare_deformable_meshes};
 pub use gltf_loader::{LoadOptions, load_gltf, load_gltf_slice};
-pub use gltf_writer::{SaveError, save_with_materials};
+pub use gltf_writer::{SaveError, save_edited, save_with_materials};
 pub(crate) use inputs::percent_decode;
+pub use lights::{LightSource, PunctualKind, PunctualLight};
 pub use material_extensions::MaterialExtensions;
 pub use materials::Materials;
 pub use spawn::{
@@ -325,6 +327,8 @@ pub struct NodeData {
     pub mesh: Option<usize>,
     pub camera: Option<usize>,
     pub skin: Option<usize>,
+    /// KHR_lights_punctual light index ([`SceneAsset::lights`]).
+    pub light: Option<usize>,
     /// node.weights: overrides the mesh's default morph weights.
     pub morph_weights: Option<Vec<f32>>,
 }
@@ -433,6 +437,8 @@ pub struct SceneAsset {
     pub variants: Vec<String>,
     /// The selected variant (index into `variants`), `None` for the file's own materials.
     pub active_variant: Option<usize>,
+    /// KHR_lights_punctual lights, referenced by [`NodeData::light`].
+    pub lights: Vec<PunctualLight>,
     /// Problems that were worked around (skipped primitives, missing textures...), one line each.
     pub warnings: Vec<String>,
     /// The files the scene was read from (canonical paths): the .gltf/.glb and every buffer and image file

@@ -1,4 +1,5 @@
-//! Meshes and scenes made in code: test scenes (furnace spheres), ground planes for benches.
+//! Meshes and scenes made in code: test scenes (furnace spheres), ground planes and a field of lights for
+//! benches.
 
 use super::*;
 
@@ -100,4 +101,57 @@ pub fn scene_from_meshes(
         scene.meshes.push(mesh);
     }
     scene
+}
+
+/// The many-lights scene: a 40 x 40 floor under `n x n` small emissive squares (0.3 wide, facing down, 1.5
+/// apart, at heights 1.5 to 3.3), their radiance spread over two orders of magnitude and three tints. Light
+/// sampling benches and tests use it: most squares light only the floor beneath them.
+pub fn light_field(n: usize) -> SceneAsset {
+    let mut meshes = vec![(ground_quad(40.0, 0), NodeTransform::default())];
+    let mut materials = vec![Material {
+        name: "floor".into(),
+        base_color: glam::Vec4::new(0.7, 0.7, 0.7, 1.0),
+        metallic: 0.0,
+        roughness: 0.7,
+        ..Default::default()
+    }];
+    for k in 0..n * n {
+        let (i, j) = ((k % n) as f32, (k / n) as f32);
+        let centre = Vec3::new(
+            i - n as f32 / 2.0,
+            1.0 + 0.3 * ((k * 7) % 5) as f32,
+            j - n as f32 / 2.0,
+        ) * 1.5;
+        let h = 0.15;
+        let material = k as u32 + 1;
+        materials.push(Material {
+            name: format!("lamp {k}"),
+            base_color: glam::Vec4::new(0.0, 0.0, 0.0, 1.0),
+            emissive: Vec3::new(1.0, 0.5 + 0.25 * (k % 3) as f32, 0.3),
+            emissive_strength: 10f32.powf(((k * 37) % 100) as f32 / 50.0),
+            ..Default::default()
+        });
+        meshes.push((
+            MeshData {
+                name: format!("lamp {k}"),
+                positions: vec![
+                    centre + Vec3::new(-h, 0.0, -h),
+                    centre + Vec3::new(-h, 0.0, h),
+                    centre + Vec3::new(h, 0.0, h),
+                    centre + Vec3::new(h, 0.0, -h),
+                ],
+                // Wound to face -Y, towards the floor.
+                triangles: vec![[0, 2, 1], [0, 3, 2]],
+                triangle_materials: vec![material; 2],
+                primitives: vec![PrimitiveRange {
+                    vertex_offset: 0,
+                    vertex_count: 4,
+                    material,
+                }],
+                ..Default::default()
+            },
+            NodeTransform::default(),
+        ));
+    }
+    scene_from_meshes("light field", meshes, materials)
 }

@@ -126,6 +126,9 @@ pub fn spawn_scene(
                     e.insert(MorphWeights(w));
                 }
             }
+            if let Some(light) = node.light.and_then(|l| scene.lights.get(l)) {
+                e.insert(super::LightSource(light.clone()));
+            }
             if let Some(camera) = node.camera {
                 e.insert(CameraComponent {
                     camera,

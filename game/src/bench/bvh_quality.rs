@@ -136,7 +136,12 @@ pub fn refit_vs_rebuild(
     seconds: f32,
     repeats: usize,
 ) -> Result<RefitResult> {
-    let scene = BenchScene::still("CesiumMan".into(), asset.clone(), camera, base.environment);
+    let scene = BenchScene::still(
+        "CesiumMan".into(),
+        asset.clone(),
+        camera,
+        base.environment.clone(),
+    );
     // CPU deformation: its refit and rebuild run synchronously in the frame they are asked for, so each pose
     // is traced with exactly the tree this comparison is about (the GPU backend rebuilds asynchronously).
     let base = &RenderSettings {

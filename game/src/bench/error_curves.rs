@@ -36,6 +36,10 @@ pub const CURVES: &[Curve] = &[
     curve("max depth 3", |s| s.max_depth = s.max_depth.min(3)),
     curve("Russian roulette off", |s| s.russian_roulette = false),
     curve("NEE/MIS off (BRDF sampling only)", |s| s.nee = false),
+    // The light sampler the default does not use (power vs the spatial tree).
+    curve("power light sampler", |s| {
+        s.light_sampler = raykin::render::LightSampler::Power
+    }),
     // The image at each point is denoised once; its time includes that pass (for OIDN: the copy of the
     // accumulation and AOVs to the host, OIDN's own copies, prefilters and filter).
     curve("svgf (a-trous)", |s| {
@@ -77,6 +81,9 @@ pub struct CurvePoint {
 pub struct CurveResult {
     pub name: String,
     pub points: Vec<CurvePoint>,
+    /// Trace ms until the tone-mapped relMSE (reference noise subtracted) first reaches 0.01, where the curve
+    /// got there: how curves compare (importance sampling vs BSDF sampling only, light samplers).
+    pub ms_to_rel_mse_0_01: Option<f64>,
 }
 
 #[derive(Clone, Debug, serde::Serialize)]
@@ -189,7 +196,7 @@ pub fn measure(
         if runs.is_empty() {
             continue;
         }
-        let points = checkpoints
+        let points: Vec<CurvePoint> = checkpoints
             .iter()
             .enumerate()
             .map(|(k, &spp)| {
@@ -210,8 +217,13 @@ pub fn measure(
                 }
             })
             .collect();
+        let reached: Vec<(f64, f64)> = points
+            .iter()
+            .map(|p| (p.time_ms, (p.rel_mse - r.noise).max(1e-12)))
+            .collect();
         curves.push(CurveResult {
             name: c.name.to_string(),
+            ms_to_rel_mse_0_01: time_to_reach(&reached, 0.01),
             points,
         });
     }

@@ -89,7 +89,7 @@ struct Results {
 /// A headless app on `scene` with its fixed camera and environment, players attached, GPU passes timed.
 fn open_app(ctx: &GpuContext, scene: &BenchScene, settings: RenderSettings) -> Result<HeadlessApp> {
     let settings = RenderSettings {
-        environment: scene.environment,
+        environment: scene.environment.clone(),
         ..settings
     };
     let mut app = HeadlessApp::new(ctx.clone(), scene.scene.clone(), settings, &scene.camera)

@@ -168,7 +168,7 @@ pub fn measure(
     let base = RenderSettings {
         width: w,
         height: h,
-        environment: scene.environment,
+        environment: scene.environment.clone(),
         ..base.clone()
     };
     let switch = scene.switchable_light.map(|_| plan.frames / 2);

@@ -171,7 +171,7 @@ pub fn gains(
         name: scene.name.clone(),
         scene: scene.scene.clone(),
         camera: scene.camera.clone(),
-        environment: scene.environment,
+        environment: scene.environment.clone(),
         players: Vec::new(),
         source_files: scene.source_files.clone(),
         switchable_light: scene.switchable_light,

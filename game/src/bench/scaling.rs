@@ -41,7 +41,7 @@ pub fn triangles(
     for &n in copies {
         let (scene, camera) = instanced_grid(asset, n);
         let name = format!("{n} x {}", asset.source);
-        let bench = BenchScene::still(name, Arc::new(scene), camera, base.environment);
+        let bench = BenchScene::still(name, Arc::new(scene), camera, base.environment.clone());
         let row = super::frame_loop::measure(ctx, &bench, base.clone(), 1, frames)?;
         rows.push(TriangleScalingRow {
             copies: n,

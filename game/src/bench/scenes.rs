@@ -57,7 +57,7 @@ pub fn resolve(spec: &str, assets: &Path) -> Result<BenchScene> {
             name: named.name.to_string(),
             scene: loaded.scene,
             camera: named.camera(),
-            environment: named.environment,
+            environment: named.environment(),
             players: loaded.players,
             source_files: loaded.source_files,
             switchable_light: loaded.switchable_light,

@@ -37,6 +37,9 @@ pub enum Setting {
     View(AovView),
     Sky,
     Env([f32; 3]),
+    /// Thin-lens aperture radius (0: pinhole).
+    Aperture(f32),
+    FocusDistance(f32),
     SampleLimit(u32),
     Seed(u32),
     Mode(RenderMode),
@@ -60,6 +63,8 @@ pub enum Command {
     Camera(CameraMode),
     ResetCamera,
     Pick(u32, u32),
+    /// Ctrl+click: focus the lens on the surface at an image pixel.
+    Focus(u32, u32),
     Set(Setting),
     Open(PathBuf),
     SaveAs(PathBuf),
@@ -170,6 +175,14 @@ fn parse_line(line: &str) -> Result<Option<Command>> {
             ),
             _ => bail!("usage: pick X Y (image pixels)"),
         },
+        "focus" => match args {
+            [x, y] => Command::Focus(
+                x.parse()
+                    .with_context(|| format!("`{x}`: a pixel column"))?,
+                y.parse().with_context(|| format!("`{y}`: a pixel row"))?,
+            ),
+            _ => bail!("usage: focus X Y (image pixels)"),
+        },
         "set" => {
             let [setting, values @ ..] = args else {
                 bail!("usage: set SETTING VALUE");
@@ -216,6 +229,8 @@ fn parse_line(line: &str) -> Result<Option<Command>> {
                         _ => bail!("{stage}: on or off"),
                     },
                 ),
+                "aperture" => Setting::Aperture(floats::<1>(values)?[0].max(0.0)),
+                "focus_distance" => Setting::FocusDistance(floats::<1>(values)?[0].max(1e-3)),
                 "tonemapper" => Setting::Tonemapper(match values {
                     ["aces"] => Tonemapper::AcesFitted,
                     ["reinhard"] => Tonemapper::Reinhard,
@@ -430,6 +445,14 @@ fn run(session: &mut Session, host: &mut dyn ScriptHost, command: &Command) -> R
             state.selection.material = hit.and_then(|h| h.material);
             eprintln!("raykin: pick {x} {y}: {hit:?}");
         }
+        Command::Focus(x, y) => {
+            let world = session.world();
+            let depth = raykin::render::picking::depth_at(world, *x, *y).with_context(|| {
+                format!("focus {x} {y}: the ray through that pixel leaves the scene")
+            })?;
+            world.resource_mut::<RenderSettings>().lens.focus_distance = depth;
+            eprintln!("raykin: focus {x} {y}: focus distance {depth}");
+        }
         Command::Set(setting) => apply_setting(session, setting),
         // As when a file is dropped on the window: a bad file is reported in the panel, the scene stays.
         Command::Open(path) => {
@@ -532,6 +555,8 @@ fn apply_setting(session: &mut Session, setting: &Setting) {
         Setting::View(v) => s.view = v,
         Setting::Sky => s.environment = Environment::Sky,
         Setting::Env(c) => s.environment = Environment::Constant(c),
+        Setting::Aperture(r) => s.lens.aperture_radius = r,
+        Setting::FocusDistance(d) => s.lens.focus_distance = d,
         Setting::Seed(n) => s.seed = n,
         Setting::Mode(mode) => s.mode = mode,
         Setting::HistoryCap(n) => s.realtime.history_cap = n,

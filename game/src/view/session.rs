@@ -326,7 +326,7 @@ impl Session {
         self.recording = None;
     }
 
-    /// File > Save as: the source glTF with the edited materials.
+    /// File > Save as: the source glTF with the edited materials and lights.
     pub fn save_as(&mut self, out: &Path) -> Result<()> {
         let (bytes, dir, name) = match &self.source {
             SceneSource::File(p) => (
@@ -344,8 +344,15 @@ impl Session {
             }
         };
         let materials = self.world().resource::<Materials>().0.clone();
+        let world = self.world();
+        let mut lights: Vec<(usize, raykin::scene::PunctualLight)> = world
+            .query::<(&raykin::scene::SceneNode, &raykin::scene::LightSource)>()
+            .iter(world)
+            .map(|(n, l)| (n.node, l.0.clone()))
+            .collect();
+        lights.sort_by_key(|(node, _)| *node);
         let access = self.options.load.access();
-        raykin::scene::save_with_materials(&bytes, &dir, &name, access, &materials, out)?;
+        raykin::scene::save_edited(&bytes, &dir, &name, access, &materials, Some(&lights), out)?;
         Ok(())
     }
 

@@ -1,7 +1,9 @@
-//! Placements: instances in top-level BVH leaf order, the top-level BVH, and the emitter list that follows
-//! them (and follows material edits that change emission).
+//! Placements: instances in top-level BVH leaf order, the top-level BVH, and the emissive triangles of the
+//! light list that follow them (and follow material edits that change emission).
 
 use super::GpuScene;
+use super::light_tree::LightBounds;
+use super::lights::WeightedLight;
 use super::packing::{emissive_slots, gpu_material, luminance};
 use crate::bvh::FlatBvh;
 use crate::gpu::GpuContext;
@@ -9,6 +11,7 @@ use crate::gpu::bind::write_or_grow;
 use crate::render::layout::*;
 use crate::scene::SceneAsset;
 use bevy_ecs::prelude::{Entity, Resource};
+use bytemuck::Zeroable;
 use glam::{Mat4, Vec3};
 
 /// Per-instance data the renderer needs each frame: world matrix and mesh.
@@ -19,7 +22,8 @@ pub struct InstanceInput {
 }
 
 impl GpuScene {
-    /// Uploads instances (in TLAS leaf order), the TLAS and the emitter list for this frame's placements.
+    /// Uploads instances (in TLAS leaf order), the TLAS and the light list's triangles for this frame's
+    /// placements.
     pub fn update_instances(
         &mut self,
         ctx: &GpuContext,
@@ -38,11 +42,21 @@ impl GpuScene {
             .collect();
         let tlas = crate::bvh::build_tlas(&boxes)?;
         self.upload_instances(ctx, scene, inputs, tlas);
+        let (lo, hi) = boxes.iter().fold((Vec3::MAX, Vec3::MIN), |(lo, hi), b| {
+            (lo.min(b.0), hi.max(b.1))
+        });
+        let radius = if lo.x <= hi.x {
+            0.5 * (hi - lo).length()
+        } else {
+            0.0
+        };
+        self.lights.set_bounds_radius(radius);
         Ok(())
     }
 
-    /// Uploads instances in `tlas`'s leaf order, the tree itself and the emitter list. [`Self::update_instances`]
-    /// builds the tree; tests hand in pathological ones (a top-level tree deeper than any build makes).
+    /// Uploads instances in `tlas`'s leaf order and the tree itself, and rebuilds the light list's emissive
+    /// triangles (uploaded by [`Self::upload_lights`]). [`Self::update_instances`] builds the tree; tests hand in
+    /// pathological ones (a top-level tree deeper than any build makes).
     pub fn upload_instances(
         &mut self,
         ctx: &GpuContext,
@@ -50,36 +64,33 @@ impl GpuScene {
         inputs: &[InstanceInput],
         tlas: FlatBvh,
     ) {
-        let ordered: Vec<GpuInstance> = tlas
+        let mut ordered: Vec<GpuInstance> = tlas
             .order
             .iter()
             .map(|&i| GpuInstance::new(inputs[i as usize].world, inputs[i as usize].mesh))
             .collect();
-        let emitters = self.build_emitters(scene, &ordered);
+        let triangles = self.triangle_lights(scene, &mut ordered);
+        self.lights.set_triangles(triangles);
         let instance_bytes = bytemuck::cast_slice::<_, u8>(&ordered);
         let tlas_bytes = bytemuck::cast_slice::<_, u8>(&tlas.nodes);
-        let emitter_bytes = bytemuck::cast_slice::<_, u8>(&emitters);
         let mut recreated = false;
         for (buffer, bytes, label) in [
             (&mut self.instances, instance_bytes, "instances"),
             (&mut self.tlas_nodes, tlas_bytes, "tlas nodes"),
-            (&mut self.emitters, emitter_bytes, "emitters"),
         ] {
             recreated |= write_or_grow(ctx, buffer, bytes, label);
         }
         if recreated {
             self.generation += 1;
         }
-        self.emitter_count = emitters.len() as u32;
         self.instance_order = tlas.order;
-        self.memory.instances_and_tlas =
-            (instance_bytes.len() + tlas_bytes.len() + emitter_bytes.len()) as u64;
+        self.memory.instances_and_tlas = (instance_bytes.len() + tlas_bytes.len()) as u64;
         self.uploaded_instances = ordered;
-        self.emitter_list = emitters;
     }
 
-    /// Uploads the materials that differ from what the GPU holds; returns their indices. When the set of
-    /// emissive triangles or their power changes, the emitter list is rebuilt for the current instances.
+    /// Uploads the materials that differ from what the GPU holds; returns how many changed. When the set of
+    /// emissive triangles or their power changes, the light list's triangles (and the instances' ranges into
+    /// it) are rebuilt for the current instances.
     pub fn update_materials(
         &mut self,
         ctx: &GpuContext,
@@ -112,29 +123,33 @@ impl GpuScene {
                     &self.material_data,
                 );
             }
-            let instances = std::mem::take(&mut self.uploaded_instances);
-            let emitters = self.build_emitters(scene, &instances);
+            let mut instances = std::mem::take(&mut self.uploaded_instances);
+            let triangles = self.triangle_lights(scene, &mut instances);
+            self.lights.set_triangles(triangles);
             if write_or_grow(
                 ctx,
-                &mut self.emitters,
-                bytemuck::cast_slice(&emitters),
-                "emitters",
+                &mut self.instances,
+                bytemuck::cast_slice(&instances),
+                "instances",
             ) {
                 self.generation += 1;
             }
-            self.emitter_count = emitters.len() as u32;
-            self.emitter_list = emitters;
             self.uploaded_instances = instances;
         }
         changed
     }
 
-    /// Emissive triangles of every instance, with a CDF proportional to luminance x world area (the shader
-    /// computes the same power to weigh BRDF-sampled hits against light sampling).
-    fn build_emitters(&mut self, scene: &SceneAsset, instances: &[GpuInstance]) -> Vec<GpuEmitter> {
-        let mut weighted = Vec::new();
-        let mut total = 0.0f64;
-        for (i, inst) in instances.iter().enumerate() {
+    /// The emissive triangles of every instance as lights, weighed by power (pi x luminance x world area, twice
+    /// for two-sided materials), and each instance's range of them (`first_light`, `light_count`).
+    fn triangle_lights(
+        &self,
+        scene: &SceneAsset,
+        instances: &mut [GpuInstance],
+    ) -> Vec<WeightedLight> {
+        let mut lights = Vec::new();
+        for (i, inst) in instances.iter_mut().enumerate() {
+            inst.first_light = lights.len() as u32;
+            inst.light_count = 0;
             let mesh = inst.mesh as usize;
             if self.emissive_triangles[mesh].is_empty() {
                 continue;
@@ -147,39 +162,42 @@ impl GpuScene {
                 .positions
                 .as_deref()
                 .unwrap_or(&scene.meshes[mesh].positions);
-            for &(t, material) in &self.emissive_triangles[mesh] {
+            let mut emissive = self.emissive_triangles[mesh].clone();
+            // Sorted by slot: the shader finds a hit's light by binary search.
+            emissive.sort_unstable_by_key(|&(t, _)| t);
+            for (t, material) in emissive {
                 let local = (t - slot.gpu.triangle_offset) as usize;
                 let [a, b, c] = slot.gpu_triangles[local]
                     .map(|v| world.transform_point3(positions[v as usize]));
                 let area = 0.5 * (b - a).cross(c - a).length() as f64;
-                let power = luminance(Vec3::from(self.material_data[material as usize].emissive))
-                    as f64
-                    * area;
+                let m = &self.material_data[material as usize];
+                let sides = if m.flags & MATERIAL_DOUBLE_SIDED != 0 {
+                    2.0
+                } else {
+                    1.0
+                };
+                let power =
+                    std::f64::consts::PI * sides * luminance(Vec3::from(m.emissive)) as f64 * area;
                 if power > 0.0 {
-                    total += power;
-                    weighted.push((
-                        GpuEmitter {
-                            instance: i as u32,
-                            triangle: t,
-                            cdf: 0.0,
-                            pmf: 0.0,
-                        },
+                    let mut light = GpuLight::zeroed();
+                    light.kind = LIGHT_TRIANGLE;
+                    light.index_a = i as u32;
+                    light.index_b = t;
+                    let bounds = LightBounds::triangle(
+                        [a, b, c],
+                        luminance(Vec3::from(m.emissive)),
+                        sides > 1.0,
+                    );
+                    lights.push(WeightedLight {
+                        light,
                         power,
-                    ));
+                        bounds: Some(bounds),
+                    });
+                    inst.light_count += 1;
                 }
             }
         }
-        self.emitter_total_power = total as f32;
-        let mut running = 0.0f64;
-        weighted
-            .into_iter()
-            .map(|(mut e, p)| {
-                running += p;
-                e.cdf = ((running / total) as f32).min(1.0);
-                e.pmf = (p / total) as f32;
-                e
-            })
-            .collect()
+        lights
     }
 }
 

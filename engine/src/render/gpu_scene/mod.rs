@@ -1,13 +1,16 @@
 //! Packs a scene's meshes, materials and textures into the GPU buffers the kernels read.
-//! Static data is uploaded once; instances, the top-level BVH and emitters are rewritten when they change;
+//! Static data is uploaded once; instances, the top-level BVH and the light list are rewritten when they change;
 //! a deformed mesh rewrites only its own positions/normals and BLAS nodes.
 
 mod deformed;
 mod instances;
+pub mod light_tree;
+pub mod lights;
 pub mod motion;
 mod packing;
 
 pub use instances::{InstanceInput, InstanceMap, transform_box};
+pub use lights::LightList;
 pub use packing::{gpu_material, luminance};
 
 use super::layout::*;
@@ -31,6 +34,8 @@ pub enum UploadError {
         limit_mib: f64,
         adapter: String,
     },
+    #[error(transparent)]
+    Environment(crate::environment::EnvironmentError),
     #[error("{scene}: mesh `{mesh}`: {source}")]
     Bvh {
         scene: String,
@@ -106,6 +111,8 @@ pub struct GpuMemory {
     pub materials: u64,
     pub texels: u64,
     pub instances_and_tlas: u64,
+    /// The light list, its CDF and the environment map.
+    pub lights: u64,
     /// GPU deformation: rest attributes, influences, morph deltas, per-frame matrices/weights and refit
     /// tables of the meshes the GPU deforms (0 on the CPU backend).
     pub deform: u64,
@@ -119,7 +126,7 @@ impl GpuMemory {
         self.blas_nodes + self.triangles + self.vertex_pool + self.instances_and_tlas + self.deform
     }
     pub fn total(&self) -> u64 {
-        self.geometry_and_bvh() + self.materials + self.texels
+        self.geometry_and_bvh() + self.materials + self.texels + self.lights
     }
 }
 
@@ -135,23 +142,30 @@ pub struct GpuScene {
     pub texture_infos: wgpu::Buffer,
     pub tlas_nodes: wgpu::Buffer,
     pub instances: wgpu::Buffer,
-    pub emitters: wgpu::Buffer,
+    /// Every light (`lights::LightList` says the order).
+    pub light_buffer: wgpu::Buffer,
+    /// The light sampler's CDF over `light_buffer`.
+    pub light_cdf: wgpu::Buffer,
+    /// Environment texels and their sampling distribution.
+    pub environment_map: wgpu::Buffer,
+    /// The light sampler's tree over the lights at finite distance.
+    pub light_tree: wgpu::Buffer,
     pub meshes: wgpu::Buffer,
     pub mesh_slots: Vec<MeshSlot>,
     pub material_data: Vec<GpuMaterial>,
     pub memory: GpuMemory,
-    pub emitter_count: u32,
-    pub emitter_total_power: f32,
+    /// The light list's parts and what was last uploaded.
+    pub lights: LightList,
     /// For each GPU instance (TLAS leaf order), its index in the last [`Self::update_instances`] input.
     pub instance_order: Vec<u32>,
-    /// Emissive triangles per mesh (triangle slot, material), for building the emitter list.
+    /// Emissive triangles per mesh (triangle slot, material), for building the light list.
     emissive_triangles: Vec<Vec<(u32, u32)>>,
-    /// Instances as last uploaded (TLAS leaf order): material edits rebuild the emitter list from them.
+    /// Instances as last uploaded (TLAS leaf order): material edits rebuild the light list from them.
     uploaded_instances: Vec<GpuInstance>,
-    /// The emitter list as last uploaded.
-    emitter_list: Vec<GpuEmitter>,
     /// The real-time path's previous-frame data, while it runs.
     pub motion: Option<motion::SceneMotion>,
+    /// The most bytes one storage buffer may bind on this adapter.
+    pub binding_limit: u64,
     /// Bumped whenever buffers are recreated, so bind groups are rebuilt.
     pub generation: u64,
     /// Build quality of the upload (rebuilds of the upload tree use it).
@@ -288,6 +302,7 @@ impl GpuScene {
             materials: (materials.len() * 64 + texture_infos.len() * 16) as u64,
             texels: (texels.len() * 4) as u64,
             instances_and_tlas: 0,
+            lights: 0,
             deform: 0,
             motion: 0,
         };
@@ -301,19 +316,21 @@ impl GpuScene {
             texture_infos: storage(ctx, "texture infos", bytemuck::cast_slice(&texture_infos)),
             tlas_nodes: storage(ctx, "tlas nodes", &[0; 64]),
             instances: storage(ctx, "instances", &[0; 112]),
-            emitters: storage(ctx, "emitters", &[0; 16]),
+            light_buffer: storage(ctx, "lights", &[0; 64]),
+            light_cdf: storage(ctx, "light cdf", &[0; 16]),
+            environment_map: storage(ctx, "environment map", &[0; 16]),
+            light_tree: storage(ctx, "light tree", &[0; 64]),
             meshes: storage(ctx, "meshes", bytemuck::cast_slice(&meshes)),
             mesh_slots: slots,
             material_data: materials,
             memory,
-            emitter_count: 0,
-            emitter_total_power: 0.0,
+            lights: LightList::default(),
             instance_order: Vec::new(),
             emissive_triangles,
             uploaded_instances: Vec::new(),
-            emitter_list: Vec::new(),
             motion: None,
             generation: 1,
+            binding_limit: limit,
             bvh_quality: quality,
             build_seconds: start.elapsed().as_secs_f64(),
         };

@@ -12,7 +12,7 @@
 use super::GpuScene;
 use crate::gpu::GpuContext;
 use crate::gpu::bind::{storage_buffer, storage_with, write_or_grow};
-use crate::render::layout::{GpuEmitter, GpuMotionInstance, NONE};
+use crate::render::layout::{GpuLight, GpuMotionInstance, NONE};
 use crate::scene::SceneAsset;
 
 pub struct SceneMotion {
@@ -201,7 +201,7 @@ impl GpuScene {
     }
 
     /// The light list as last uploaded (the light sampler's table).
-    pub fn light_list(&self) -> &[GpuEmitter] {
-        &self.emitter_list
+    pub fn light_list(&self) -> &[GpuLight] {
+        &self.lights.uploaded
     }
 }

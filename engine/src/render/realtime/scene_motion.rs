@@ -6,7 +6,7 @@
 use crate::gpu::GpuContext;
 use crate::render::gpu_scene::GpuScene;
 use crate::render::gpu_scene::InstanceMap;
-use crate::render::layout::GpuMotionInstance;
+use crate::render::layout::{GpuMotionInstance, LIGHT_TRIANGLE};
 use crate::render::settings::{RenderMode, RenderSettings};
 use crate::scene::SceneAssets;
 use bevy_ecs::prelude::*;
@@ -77,14 +77,23 @@ pub fn update_scene_motion(
         .zip(scene.uploaded_instances())
         .map(|(&e, inst)| (e, inst.world_from_object))
         .collect();
+    // Keys that follow a light from frame to frame while the list is rebuilt: an emissive triangle by its
+    // object and slot, any other light by its kind and rank among the lights of that kind.
+    let mut rank_of_kind = HashMap::<u32, u32>::new();
     let lights: Vec<(u32, u32)> = scene
         .light_list()
         .iter()
         .map(|l| {
-            let object = instances
-                .get(l.instance as usize)
-                .map_or(u32::MAX, |i| i.object);
-            (object, l.triangle)
+            if l.kind == LIGHT_TRIANGLE {
+                let object = instances
+                    .get(l.index_a as usize)
+                    .map_or(u32::MAX, |i| i.object);
+                (object, l.index_b)
+            } else {
+                let rank = rank_of_kind.entry(l.kind).or_default();
+                *rank += 1;
+                (u32::MAX - 1 - l.kind, *rank - 1)
+            }
         })
         .collect();
     let motion = scene.motion.as_mut().expect("checked above");

@@ -54,7 +54,7 @@ impl PickPass {
         view: &ViewTargets,
         x: u32,
         y: u32,
-    ) -> Option<PrimaryHit> {
+    ) -> Option<(PrimaryHit, f32)> {
         if x >= view.width || y >= view.height {
             return None;
         }
@@ -73,9 +73,8 @@ impl PickPass {
             pass.dispatch_workgroups(1, 1, 1);
         }
         ctx.queue.submit([encoder.finish()]);
-        let bytes = ctx.read_buffer_range(&self.io, 16, 16);
-        Some(PrimaryHit::decode(
-            bytemuck::cast_slice::<u8, [u32; 4]>(&bytes)[0],
-        ))
+        let bytes = ctx.read_buffer_range(&self.io, 0, 32);
+        let words = bytemuck::cast_slice::<u8, [u32; 4]>(&bytes);
+        Some((PrimaryHit::decode(words[1]), f32::from_bits(words[0][2])))
     }
 }

@@ -1,0 +1,216 @@
+//! Importance sampling of an environment map: a piecewise-constant 2D distribution over the cells between the
+//! map's texel lattice (W columns x H-1 rows, see [`super::map`]), each cell weighed by the mean luminance of
+//! its four corner texels times the mean sin(theta) over its rows. The bilinear radiance inside a cell is
+//! zero only where all four corners are, so every direction that carries light has a positive density.
+//!
+//! A row is picked by the marginal CDF, a cell within it by that row's conditional CDF, and the point inside
+//! the cell uniformly in (u, v). The density of a direction is computed from the same CDFs (differences of
+//! adjacent entries), so it is exactly the density the sampler draws from, and it integrates to 1 over the
+//! sphere (`tests`). The WGSL twin is `shaders/lights/environment.wgsl`.
+
+use super::map::{EnvironmentMap, direction_to_uv, uv_to_direction};
+use glam::Vec3;
+use std::f64::consts::PI;
+
+/// The CDFs, as the GPU reads them.
+#[derive(Clone, Debug, PartialEq)]
+pub struct EnvironmentDistribution {
+    pub columns: u32,
+    pub rows: u32,
+    /// Per row, the cumulative probability of its cells (each row ends at 1).
+    pub conditional_cdf: Vec<f32>,
+    /// The cumulative probability of the rows (ends at 1).
+    pub marginal_cdf: Vec<f32>,
+    /// Integral of luminance over the sphere (W/m^2 per unit luminance scale): the power estimate's input.
+    pub luminance_integral: f64,
+}
+
+impl EnvironmentDistribution {
+    pub fn new(map: &EnvironmentMap) -> Self {
+        let (w, h) = (map.width as usize, map.height as usize);
+        let rows = h - 1;
+        let luminance = |x: usize, y: usize| {
+            let t = map.texel(x as u32, y as u32);
+            0.2126 * t[0] as f64 + 0.7152 * t[1] as f64 + 0.0722 * t[2] as f64
+        };
+        let mut conditional_cdf = Vec::with_capacity(w * rows);
+        let mut row_weights = Vec::with_capacity(rows);
+        let mut luminance_integral = 0.0;
+        let d_theta = PI / rows as f64;
+        for j in 0..rows {
+            let (t0, t1) = (j as f64 * d_theta, (j + 1) as f64 * d_theta);
+            // Mean of sin(theta) over the row's band.
+            let mean_sin = (t0.cos() - t1.cos()) / d_theta;
+            let weights: Vec<f64> = (0..w)
+                .map(|i| {
+                    let i1 = (i + 1) % w;
+                    0.25 * (luminance(i, j)
+                        + luminance(i1, j)
+                        + luminance(i, j + 1)
+                        + luminance(i1, j + 1))
+                        * mean_sin
+                })
+                .collect();
+            let total: f64 = weights.iter().sum();
+            // Solid angle of a cell is (2pi / W) (pi / rows) sin(theta).
+            luminance_integral += total * (2.0 * PI / w as f64) * d_theta;
+            push_cdf(&mut conditional_cdf, &weights, total);
+            row_weights.push(total);
+        }
+        let total: f64 = row_weights.iter().sum();
+        let mut marginal_cdf = Vec::with_capacity(rows);
+        push_cdf(&mut marginal_cdf, &row_weights, total);
+        Self {
+            columns: w as u32,
+            rows: rows as u32,
+            conditional_cdf,
+            marginal_cdf,
+            luminance_integral,
+        }
+    }
+
+    fn row_cdf(&self, j: u32) -> &[f32] {
+        let w = self.columns as usize;
+        &self.conditional_cdf[j as usize * w..(j as usize + 1) * w]
+    }
+
+    /// Solid-angle density of the map-local direction `d`.
+    pub fn pdf(&self, d: Vec3) -> f32 {
+        let (u, v) = direction_to_uv(d);
+        let (i, j) = self.cell_of(u, v);
+        let sin_theta = (1.0 - d.y * d.y).max(0.0).sqrt();
+        if sin_theta <= 0.0 {
+            return 0.0;
+        }
+        let p = difference(&self.marginal_cdf, j) * difference(self.row_cdf(j), i);
+        p * (self.columns * self.rows) as f32 / (2.0 * std::f32::consts::PI.powi(2) * sin_theta)
+    }
+
+    /// The cell holding (u, v): column i spans u in [(i + 1/2) / W, (i + 3/2) / W) (wrapping), row j spans
+    /// v in [j / rows, (j + 1) / rows].
+    fn cell_of(&self, u: f32, v: f32) -> (u32, u32) {
+        let x = u * self.columns as f32 - 0.5;
+        let i = (x.floor() as i64).rem_euclid(self.columns as i64) as u32;
+        let j = ((v * self.rows as f32).floor().max(0.0) as u32).min(self.rows - 1);
+        (i, j)
+    }
+
+    /// A map-local direction for the uniform pair `u`, with its solid-angle density (0: no sample).
+    pub fn sample(&self, u: [f32; 2]) -> (Vec3, f32) {
+        let (j, fy) = sample_cdf(&self.marginal_cdf, u[1]);
+        let (i, fx) = sample_cdf(self.row_cdf(j), u[0]);
+        let uu = (i as f32 + 0.5 + fx) / self.columns as f32;
+        let d = uv_to_direction(uu - uu.floor(), (j as f32 + fy) / self.rows as f32);
+        (d, self.pdf(d))
+    }
+}
+
+/// Appends the normalised running sum of `weights` (uniform when they sum to 0); the last entry is exactly 1.
+fn push_cdf(out: &mut Vec<f32>, weights: &[f64], total: f64) {
+    let n = weights.len();
+    let mut running = 0.0;
+    for (k, w) in weights.iter().enumerate() {
+        running += w;
+        let c = if total > 0.0 {
+            running / total
+        } else {
+            (k + 1) as f64 / n as f64
+        };
+        out.push(if k + 1 == n { 1.0 } else { c.min(1.0) as f32 });
+    }
+}
+
+fn difference(cdf: &[f32], k: u32) -> f32 {
+    let k = k as usize;
+    cdf[k] - if k == 0 { 0.0 } else { cdf[k - 1] }
+}
+
+/// The first entry whose CDF exceeds `u`, and where `u` falls inside it (0..1).
+fn sample_cdf(cdf: &[f32], u: f32) -> (u32, f32) {
+    let k = cdf.partition_point(|&c| c <= u).min(cdf.len() - 1);
+    let lo = if k == 0 { 0.0 } else { cdf[k - 1] };
+    let width = cdf[k] - lo;
+    let f = if width > 0.0 {
+        ((u - lo) / width).clamp(0.0, 0.99999994)
+    } else {
+        0.5
+    };
+    (k as u32, f)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A map with a small, very bright "sun" and a dim gradient.
+    pub fn sunny_map() -> EnvironmentMap {
+        let (w, h) = (32u32, 17u32);
+        let mut texels = Vec::new();
+        for y in 0..h {
+            for x in 0..w {
+                let sky = 0.2 + 0.5 * (1.0 - y as f32 / (h - 1) as f32);
+                let sun = if (x, y) == (7, 5) { 5000.0 } else { 0.0 };
+                texels.push([sky + sun, sky + sun * 0.9, sky * 1.3 + sun * 0.8]);
+            }
+        }
+        EnvironmentMap::new(w, h, texels)
+    }
+
+    /// Integrates the density over the sphere with a fine (theta, phi) midpoint rule.
+    #[test]
+    fn pdf_integrates_to_one() {
+        for map in [
+            sunny_map(),
+            EnvironmentMap::constant([1.0, 2.0, 3.0]),
+            EnvironmentMap::new(3, 4, (0..12).map(|i| [i as f32; 3]).collect()),
+        ] {
+            let dist = EnvironmentDistribution::new(&map);
+            let (nt, np) = (1200, 2400);
+            let mut sum = 0.0f64;
+            for a in 0..nt {
+                let theta = (a as f64 + 0.5) / nt as f64 * PI;
+                for b in 0..np {
+                    let phi = (b as f64 + 0.5) / np as f64 * 2.0 * PI;
+                    let d = uv_to_direction((phi / (2.0 * PI)) as f32, (theta / PI) as f32);
+                    sum += dist.pdf(d) as f64
+                        * theta.sin()
+                        * (PI / nt as f64)
+                        * (2.0 * PI / np as f64);
+                }
+            }
+            assert!((sum - 1.0).abs() < 2e-3, "integral of the pdf {sum}");
+        }
+    }
+
+    #[test]
+    fn samples_carry_their_density_and_favour_the_sun() {
+        let map = sunny_map();
+        let dist = EnvironmentDistribution::new(&map);
+        let sun = uv_to_direction(7.5 / 32.0, 5.0 / 16.0);
+        let mut near_sun = 0;
+        let n = 20000;
+        let mut state = 12345u64;
+        let mut rand = || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 40) as f32 / (1u64 << 24) as f32
+        };
+        for _ in 0..n {
+            let (d, pdf) = dist.sample([rand(), rand()]);
+            assert!(pdf > 0.0 && (d.length() - 1.0).abs() < 1e-4);
+            assert!((pdf - dist.pdf(d)).abs() <= 1e-3 * pdf);
+            if d.dot(sun) > 0.98 {
+                near_sun += 1;
+            }
+        }
+        // The sun texel carries most of the map's power.
+        assert!(near_sun > n / 2, "{near_sun} of {n} samples near the sun");
+    }
+
+    #[test]
+    fn luminance_integral_of_a_constant_map_is_4pi_times_luminance() {
+        let dist = EnvironmentDistribution::new(&EnvironmentMap::constant([2.0; 3]));
+        assert!((dist.luminance_integral - 8.0 * PI).abs() < 1e-6 * 8.0 * PI);
+    }
+}

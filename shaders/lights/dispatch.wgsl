@@ -1,0 +1,33 @@
+// Any light by its index in `lights`: the one interface next-event estimation, MIS and ReSTIR use, whatever
+// the light's kind (pbrt-v4's `Light` TaggedPointer dispatch).
+//
+// - light_sample_li(light, ctx, u): a sample towards the light from ctx (LightLiSample);
+// - light_pdf_li(light, ctx, wi, distance): the density `light_sample_li` gives `wi` (met at `distance`;
+//   MISS for lights at infinity); 0 for delta lights, which BSDF sampling cannot hit;
+// - infinite_light_le(light, dir): what a ray leaving the scene along `dir` sees of a light at infinity
+//   (lights[frame.infinite_light_first ..]); emissive triangles are seen through `resolve_hit`.
+
+fn light_sample_li(index: u32, ctx: LightSampleContext, u: vec2<f32>) -> LightLiSample {
+    let light = lights[index];
+    if light.kind == LIGHT_TRIANGLE { return triangle_light_sample_li(light, ctx, u); }
+    if light.kind == LIGHT_POINT || light.kind == LIGHT_SPOT { return point_light_sample_li(light, ctx); }
+    if light.kind == LIGHT_DIRECTIONAL { return directional_light_sample_li(light); }
+    if light.kind == LIGHT_ENVIRONMENT { return environment_sample_li(light, u); }
+    if light.kind == LIGHT_SUN { return sun_sample_li(light, u); }
+    return no_light_sample();
+}
+
+fn light_pdf_li(index: u32, ctx: LightSampleContext, wi: vec3<f32>, distance: f32) -> f32 {
+    let light = lights[index];
+    if light.kind == LIGHT_TRIANGLE { return triangle_light_pdf(light, ctx, wi, distance); }
+    if light.kind == LIGHT_ENVIRONMENT { return environment_pdf(light, wi); }
+    if light.kind == LIGHT_SUN { return sun_pdf(light, wi); }
+    return 0.0;
+}
+
+fn infinite_light_le(index: u32, dir: vec3<f32>) -> vec3<f32> {
+    let light = lights[index];
+    if light.kind == LIGHT_ENVIRONMENT { return environment_le(light, dir); }
+    if light.kind == LIGHT_SUN { return sun_le(light, dir); }
+    return vec3<f32>(0.0);
+}

@@ -1,0 +1,566 @@
+//! The light library's sampling on the GPU, through a probe kernel composed from the same WGSL modules the
+//! path tracer uses (`lights/dispatch`, `lights/light_sampler`): every sample's density equals what
+//! `light_pdf_li` gives its direction (the MIS weights depend on it), the densities integrate to 1, and sample
+//! means of known integrands converge to the integrals computed independently (quadrature, Lambert's polygon
+//! formula), which checks that each sampler draws from the density it claims.
+
+use crate::common::*;
+use glam::Vec3;
+use raykin::camera::CameraChoice;
+use raykin::gpu::GpuContext;
+use raykin::gpu::bind::{Binding, bind_group, compute_layout, storage_buffer, uniform_buffer};
+use raykin::headless::HeadlessApp;
+use raykin::render::shaders::{ShaderModule, compose};
+use raykin::render::{Environment, GpuScene, RenderSettings, ViewTargets};
+use std::sync::Arc;
+
+const PROBE: &str = r#"
+struct Probe { p: vec3<f32>, light: u32, n: vec3<f32>, count: u32, grid_w: u32, grid_h: u32, seed: u32, _pad: u32 }
+@group(1) @binding(1) var<uniform> probe: Probe;
+@group(1) @binding(2) var<storage, read_write> out: array<vec4<f32>>;
+
+// Sample i: (wi, pdf), (luminance of li, pdf of wi again, distance, 0).
+@compute @workgroup_size(64)
+fn sample_light(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let i = gid.x;
+    if i >= probe.count { return; }
+    let u = get_2d(sampler_start(i, 0u, probe.seed), 0u);
+    let ctx = LightSampleContext(probe.p, probe.n);
+    let s = light_sample_li(probe.light, ctx, u);
+    out[2u * i] = vec4<f32>(s.wi, s.pdf);
+    out[2u * i + 1u] = vec4<f32>(luminance(s.li), light_pdf_li(probe.light, ctx, s.wi, s.distance), s.distance, 0.0);
+}
+
+// Grid cell i (theta rows, phi columns, midpoints): (pdf, luminance of what a ray leaving along it sees, 0, 0).
+@compute @workgroup_size(64)
+fn pdf_grid(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let i = gid.x;
+    if i >= probe.grid_w * probe.grid_h { return; }
+    let theta = (f32(i / probe.grid_w) + 0.5) / f32(probe.grid_h) * PI;
+    let phi = (f32(i % probe.grid_w) + 0.5) / f32(probe.grid_w) * 2.0 * PI;
+    let dir = vec3<f32>(sin(theta) * cos(phi), cos(theta), sin(theta) * sin(phi));
+    let ctx = LightSampleContext(probe.p, probe.n);
+    out[i] = vec4<f32>(light_pdf_li(probe.light, ctx, dir, MISS), luminance(infinite_light_le(probe.light, dir)), 0.0, 0.0);
+}
+
+// Light i's probability from (probe.p, probe.n): the light sampler NEE uses, and by power alone.
+@compute @workgroup_size(64)
+fn pmf_all(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let i = gid.x;
+    if i >= frame.light_count { return; }
+    let ctx = LightSampleContext(probe.p, probe.n);
+    out[i] = vec4<f32>(light_sampler_pmf_at(ctx, i), light_sampler_pmf(i), 0.0, 0.0);
+}
+
+// Choice i of the light sampler NEE uses: (light index as f32 bits, pmf).
+@compute @workgroup_size(64)
+fn choose(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let i = gid.x;
+    if i >= probe.count { return; }
+    let u = get_1d(sampler_start(i, 1u, probe.seed), 0u);
+    let c = light_sampler_sample_at(LightSampleContext(probe.p, probe.n), u);
+    out[i] = vec4<f32>(bitcast<f32>(c.light), c.pmf, 0.0, 0.0);
+}
+
+// The light's triangle in world space (for the CPU's closed forms).
+@compute @workgroup_size(1)
+fn light_triangle() {
+    let light = lights[probe.light];
+    let p = world_triangle(light.index_a, light.index_b);
+    out[0] = vec4<f32>(p[0], 0.0);
+    out[1] = vec4<f32>(p[1], 0.0);
+    out[2] = vec4<f32>(p[2], 0.0);
+}
+"#;
+
+const KERNEL: ShaderModule = ShaderModule {
+    name: "light_probe",
+    source: PROBE,
+    requires: &[
+        "constants",
+        "view",
+        "sampler",
+        "color",
+        "math",
+        "lights/dispatch",
+        "lights/light_sampler",
+    ],
+};
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct Probe {
+    p: [f32; 3],
+    light: u32,
+    n: [f32; 3],
+    count: u32,
+    grid_w: u32,
+    grid_h: u32,
+    seed: u32,
+    _pad: u32,
+}
+
+/// Runs one probe entry point over `invocations` against `app`'s scene and view; returns the output.
+fn run_probe(
+    app: &HeadlessApp,
+    probe: Probe,
+    entry: &str,
+    invocations: u32,
+    out_len: usize,
+) -> Vec<[f32; 4]> {
+    let ctx: &GpuContext = &app.ctx;
+    let world = app.app.world();
+    let scene = world.resource::<GpuScene>();
+    let bindings = world.resource::<raykin::render::scene_bindings::SceneBindings>();
+    let view = world.resource::<ViewTargets>();
+    let layout = compute_layout(
+        ctx,
+        "probe",
+        &[Binding::Uniform, Binding::Uniform, Binding::ReadWrite],
+    );
+    let pipeline = raykin::gpu::compute_pipeline(
+        &ctx.device,
+        "light probe",
+        compose(&KERNEL),
+        &[Some(&bindings.layout), Some(&layout)],
+        entry,
+    );
+    let uniform = uniform_buffer(ctx, "probe", std::mem::size_of::<Probe>());
+    ctx.queue
+        .write_buffer(&uniform, 0, bytemuck::bytes_of(&probe));
+    let out = storage_buffer(ctx, "probe out", (out_len * 16) as u64);
+    let group = bind_group(ctx, "probe", &layout, &[&view.frame, &uniform, &out]);
+    let scene_group = bindings.fresh(ctx, scene);
+    let mut encoder = ctx.device.create_command_encoder(&Default::default());
+    {
+        let mut pass = encoder.begin_compute_pass(&Default::default());
+        pass.set_pipeline(&pipeline);
+        pass.set_bind_group(0, &scene_group, &[]);
+        pass.set_bind_group(1, &group, &[]);
+        let groups = invocations.div_ceil(64);
+        pass.dispatch_workgroups(groups.min(65535), groups.div_ceil(65535), 1);
+    }
+    ctx.queue.submit([encoder.finish()]);
+    bytemuck::cast_slice::<u8, [f32; 4]>(&ctx.read_buffer(&out, (out_len * 16) as u64)).to_vec()
+}
+
+fn app_with(
+    ctx: &GpuContext,
+    scene: Arc<raykin::scene::SceneAsset>,
+    environment: Environment,
+) -> HeadlessApp {
+    let settings = RenderSettings {
+        width: 8,
+        height: 8,
+        environment,
+        light_sampler: raykin::render::LightSampler::Tree,
+        ..Default::default()
+    };
+    let mut app =
+        HeadlessApp::new(ctx.clone(), scene, settings, &CameraChoice::Auto).expect("uploads");
+    // The first frame uploads instances and the light list and writes the frame constants.
+    app.step();
+    ctx.wait_idle();
+    app
+}
+
+fn reference_file(name: &str) -> std::path::PathBuf {
+    repo_root().join("tests/reference/lights").join(name)
+}
+
+fn sunny_environment() -> Environment {
+    Environment::Map(raykin::environment::MapSettings {
+        path: reference_file("sunny_64x33.exr"),
+        rotation_degrees: 30.0,
+        strength: 1.0,
+    })
+}
+
+/// Integrates a light's density over the sphere (midpoint rule on a theta-phi grid) and returns it with the
+/// integral of the luminance seen along the same directions.
+fn integrate_over_sphere(app: &HeadlessApp, light: u32, w: u32, h: u32) -> (f64, f64) {
+    let cells = run_probe(
+        app,
+        Probe {
+            p: [0.0; 3],
+            light,
+            n: [0.0; 3],
+            count: 0,
+            grid_w: w,
+            grid_h: h,
+            seed: 0,
+            _pad: 0,
+        },
+        "pdf_grid",
+        w * h,
+        (w * h) as usize,
+    );
+    let (mut pdf_sum, mut le_sum) = (0.0f64, 0.0f64);
+    for (i, c) in cells.iter().enumerate() {
+        let theta = ((i as u32 / w) as f64 + 0.5) / h as f64 * std::f64::consts::PI;
+        let d_omega = theta.sin()
+            * (std::f64::consts::PI / h as f64)
+            * (2.0 * std::f64::consts::PI / w as f64);
+        pdf_sum += c[0] as f64 * d_omega;
+        le_sum += c[1] as f64 * d_omega;
+    }
+    (pdf_sum, le_sum)
+}
+
+/// Samples from `ctx` and checks each against `light_pdf_li`; returns the samples.
+fn samples_consistent(app: &HeadlessApp, probe: Probe, what: &str) -> Vec<([f32; 4], [f32; 4])> {
+    let raw = run_probe(
+        app,
+        probe,
+        "sample_light",
+        probe.count,
+        2 * probe.count as usize,
+    );
+    let samples: Vec<([f32; 4], [f32; 4])> = raw.chunks(2).map(|c| (c[0], c[1])).collect();
+    let valid: Vec<_> = samples.iter().filter(|s| s.0[3] > 0.0).collect();
+    assert!(
+        valid.len() as f64 > 0.99 * samples.len() as f64,
+        "{what}: only {} of {} samples succeeded",
+        valid.len(),
+        samples.len()
+    );
+    let mismatched = valid
+        .iter()
+        .filter(|(a, b)| ((a[3] - b[1]) / a[3]).abs() > 2e-3)
+        .count();
+    assert!(
+        mismatched * 1000 <= valid.len(),
+        "{what}: {mismatched} of {} samples have a density light_pdf_li does not reproduce",
+        valid.len()
+    );
+    samples
+}
+
+/// Mean and standard error.
+fn mean_and_error(values: &[f64]) -> (f64, f64) {
+    let n = values.len() as f64;
+    let mean = values.iter().sum::<f64>() / n;
+    let var = values.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / (n - 1.0);
+    (mean, (var / n).sqrt())
+}
+
+#[test]
+fn environment_map_density_integrates_to_one_and_samples_match_it() {
+    let (ctx, _gpu) = gpu();
+    let scene = Arc::new(
+        raykin::scene::load_gltf(reference_file("envmap.gltf"), &Default::default())
+            .expect("loads"),
+    );
+    let app = app_with(&ctx, scene, sunny_environment());
+    let lights = &app.gpu_scene().lights;
+    assert_eq!(lights.infinite_count, 1, "the map is one light at infinity");
+    let env = lights.infinite_first;
+    // The map is 64 x 33 texels: a 2048 x 1024 grid resolves its cells 32 times over.
+    let (pdf_integral, le_integral) = integrate_over_sphere(&app, env, 2048, 1024);
+    eprintln!("environment: integral of the pdf {pdf_integral:.5}, of luminance {le_integral:.4}");
+    assert!(
+        (pdf_integral - 1.0).abs() < 2e-3,
+        "the density integrates to {pdf_integral}"
+    );
+
+    let count = 1 << 18;
+    let samples = samples_consistent(
+        &app,
+        Probe {
+            p: [0.0; 3],
+            light: env,
+            n: [0.0; 3],
+            count,
+            grid_w: 0,
+            grid_h: 0,
+            seed: 11,
+            _pad: 0,
+        },
+        "environment map",
+    );
+    // E[L / pdf] is the integral of L over the sphere: the sampler draws from the density it reports.
+    let estimates: Vec<f64> = samples
+        .iter()
+        .map(|(a, b)| {
+            if a[3] > 0.0 {
+                b[0] as f64 / a[3] as f64
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    let (mean, error) = mean_and_error(&estimates);
+    eprintln!("E[L/pdf] = {mean:.4} +- {error:.4}, quadrature {le_integral:.4}");
+    assert!(
+        (mean - le_integral).abs() < 4.0 * error + 3e-3 * le_integral,
+        "importance-sampled integral {mean} vs quadrature {le_integral}"
+    );
+    // Importance sampling pays: the estimator's relative spread is far below uniform sphere sampling's.
+    let uniform_rel = {
+        let cells = run_probe(
+            &app,
+            Probe {
+                p: [0.0; 3],
+                light: env,
+                n: [0.0; 3],
+                count: 0,
+                grid_w: 512,
+                grid_h: 256,
+                seed: 0,
+                _pad: 0,
+            },
+            "pdf_grid",
+            512 * 256,
+            512 * 256,
+        );
+        // Var of 4 pi L under uniform directions, from the grid (weights sin theta).
+        let (mut m1, mut m2, mut wsum) = (0.0, 0.0, 0.0);
+        for (i, c) in cells.iter().enumerate() {
+            let theta = ((i / 512) as f64 + 0.5) / 256.0 * std::f64::consts::PI;
+            let w = theta.sin();
+            let x = 4.0 * std::f64::consts::PI * c[1] as f64;
+            m1 += w * x;
+            m2 += w * x * x;
+            wsum += w;
+        }
+        let (m1, m2) = (m1 / wsum, m2 / wsum);
+        (m2 - m1 * m1).sqrt() / m1
+    };
+    let importance_rel = error * (count as f64).sqrt() / mean;
+    eprintln!(
+        "relative standard deviation: importance {importance_rel:.3}, uniform {uniform_rel:.3}"
+    );
+    assert!(importance_rel * 3.0 < uniform_rel);
+}
+
+#[test]
+fn sun_and_sky_sample_inside_the_disc_and_the_sky_integrates_to_one() {
+    let (ctx, _gpu) = gpu();
+    let scene = Arc::new(
+        raykin::scene::load_gltf(reference_file("envmap.gltf"), &Default::default())
+            .expect("loads"),
+    );
+    let sky = raykin::environment::SunSkySettings {
+        elevation_degrees: 30.0,
+        azimuth_degrees: 120.0,
+        turbidity: 3.0,
+        strength: 1.0,
+    };
+    let app = app_with(&ctx, scene, Environment::SunSky(sky));
+    let lights = &app.gpu_scene().lights;
+    assert_eq!(lights.infinite_count, 2, "sky map and sun");
+    let (sky_light, sun_light) = (lights.infinite_first, lights.infinite_first + 1);
+    let (pdf_integral, _) = integrate_over_sphere(&app, sky_light, 2048, 1024);
+    assert!(
+        (pdf_integral - 1.0).abs() < 2e-3,
+        "sky density integrates to {pdf_integral}"
+    );
+    let sun = sky.params().sun().expect("above the horizon");
+    let samples = samples_consistent(
+        &app,
+        Probe {
+            p: [0.0; 3],
+            light: sun_light,
+            n: [0.0; 3],
+            count: 1 << 14,
+            grid_w: 0,
+            grid_h: 0,
+            seed: 5,
+            _pad: 0,
+        },
+        "sun",
+    );
+    let expected_pdf = 1.0 / (2.0 * std::f32::consts::PI * sun.one_minus_cos);
+    for (a, b) in &samples {
+        let wi = Vec3::new(a[0], a[1], a[2]);
+        assert!(
+            1.0 - wi.dot(sun.direction) <= sun.one_minus_cos * 1.01,
+            "sample outside the disc"
+        );
+        assert!((a[3] / expected_pdf - 1.0).abs() < 1e-3);
+        let lum = 0.2126 * sun.radiance[0] + 0.7152 * sun.radiance[1] + 0.0722 * sun.radiance[2];
+        assert!((b[0] / lum - 1.0).abs() < 1e-4);
+    }
+}
+
+/// The integral of cos(theta) (to normal n) over the solid angle of triangle `v` seen from `p`: Lambert's
+/// formula for polygons, 1/2 sum over edges of the edge's angle times n . (the edge plane's unit normal).
+fn projected_solid_angle(p: Vec3, v: [Vec3; 3], n: Vec3) -> f64 {
+    let r: Vec<glam::DVec3> = v.iter().map(|x| (*x - p).as_dvec3().normalize()).collect();
+    let n = n.as_dvec3();
+    let mut sum = 0.0;
+    for k in 0..3 {
+        let (a, b) = (r[k], r[(k + 1) % 3]);
+        let gamma = a.dot(b).clamp(-1.0, 1.0).acos();
+        sum += gamma * n.dot(a.cross(b).normalize());
+    }
+    (0.5 * sum).abs()
+}
+
+#[test]
+fn triangle_lights_sample_their_solid_angle_near_and_far() {
+    let (ctx, _gpu) = gpu();
+    let scene = Arc::new(
+        raykin::scene::load_gltf(
+            shared_assets().join("CornellBox/CornellBox.glb"),
+            &Default::default(),
+        )
+        .expect("CornellBox loads"),
+    );
+    let app = app_with(&ctx, scene, Environment::Constant([0.0; 3]));
+    assert!(app.gpu_scene().lights.triangle_count >= 2);
+    let probe = |p: Vec3, n: Vec3, light: u32, count: u32, seed: u32| Probe {
+        p: p.to_array(),
+        light,
+        n: n.to_array(),
+        count,
+        grid_w: 0,
+        grid_h: 0,
+        seed,
+        _pad: 0,
+    };
+    let tri = run_probe(
+        &app,
+        probe(Vec3::ZERO, Vec3::ZERO, 0, 0, 0),
+        "light_triangle",
+        1,
+        3,
+    );
+    let v = [0, 1, 2].map(|k| Vec3::new(tri[k][0], tri[k][1], tri[k][2]));
+    let centroid = (v[0] + v[1] + v[2]) / 3.0;
+    let normal = (v[1] - v[0]).cross(v[2] - v[0]).normalize();
+    // The lamp is double-sided and hangs under the ceiling: points 0.5 above it (spherical sampling, the
+    // case area sampling made infinitely variable), at a slant, and far away (area sampling).
+    for (label, p) in [
+        ("0.5 above", centroid + normal * 0.5),
+        ("0.5 below", centroid - normal * 0.5),
+        ("slanted", centroid + normal * 20.0 + (v[1] - v[0]) * 0.8),
+        ("far", centroid + normal * 4000.0),
+    ] {
+        let n = (centroid - p).normalize();
+        let samples = samples_consistent(&app, probe(p, n, 0, 1 << 16, 3), label);
+        let estimates: Vec<f64> = samples
+            .iter()
+            .map(|(a, _)| {
+                if a[3] > 0.0 {
+                    (Vec3::new(a[0], a[1], a[2]).dot(n).max(0.0) / a[3]) as f64
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        let (mean, error) = mean_and_error(&estimates);
+        let exact = projected_solid_angle(p, v, n);
+        eprintln!("{label}: E[cos/pdf] = {mean:.6} +- {error:.6}, Lambert {exact:.6}");
+        assert!(
+            (mean - exact).abs() < 4.0 * error + 1e-3 * exact,
+            "{label}: sampled projected solid angle {mean} vs Lambert's formula {exact}"
+        );
+        // Solid-angle sampling keeps the estimator bounded next to the light.
+        if label.starts_with("0.5") {
+            let max = estimates.iter().cloned().fold(0.0, f64::max);
+            assert!(
+                max < 20.0 * exact,
+                "{label}: a sample of {max} against a mean of {exact}"
+            );
+        }
+    }
+}
+
+#[test]
+fn light_tree_probabilities_sum_to_one_and_match_its_choices() {
+    let (ctx, _gpu) = gpu();
+    let mut asset = raykin::scene::procedural::light_field(12);
+    // A point and a spot among the emissive quads, on their own nodes.
+    for (i, kind) in [
+        raykin::scene::PunctualKind::Point,
+        raykin::scene::PunctualKind::Spot {
+            inner_cone_angle: 0.3,
+            outer_cone_angle: 0.7,
+        },
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        asset.lights.push(raykin::scene::PunctualLight {
+            name: format!("punctual {i}"),
+            kind,
+            color: Vec3::ONE,
+            intensity: 50.0,
+            range: None,
+        });
+        asset.nodes.push(raykin::scene::NodeData {
+            name: format!("punctual {i}"),
+            transform: raykin::scene::NodeTransform {
+                translation: Vec3::new(3.0 * i as f32 - 2.0, 3.0, 1.0),
+                rotation: glam::Quat::from_rotation_x(-std::f32::consts::FRAC_PI_2),
+                ..Default::default()
+            },
+            light: Some(i),
+            ..Default::default()
+        });
+        asset.roots.push(asset.nodes.len() - 1);
+    }
+    let app = app_with(&ctx, Arc::new(asset), Environment::Constant([0.05; 3]));
+    let lights = &app.gpu_scene().lights;
+    assert_eq!(lights.triangle_count, 288);
+    assert_eq!(
+        lights.tree_count, 290,
+        "triangles, point and spot in the tree"
+    );
+    let count = lights.count;
+    for (label, p, n) in [
+        ("on the floor", Vec3::new(0.5, 0.0, -0.3), Vec3::Y),
+        ("under one lamp", Vec3::new(-9.0, 0.0, -9.0), Vec3::Y),
+        ("in the air", Vec3::new(2.0, 2.0, 2.0), Vec3::ZERO),
+    ] {
+        let probe = Probe {
+            p: p.to_array(),
+            light: 0,
+            n: n.to_array(),
+            count: 1 << 17,
+            grid_w: 0,
+            grid_h: 0,
+            seed: 9,
+            _pad: 0,
+        };
+        let pmfs = run_probe(&app, probe, "pmf_all", count, count as usize);
+        let total: f64 = pmfs.iter().map(|p| p[0] as f64).sum();
+        assert!(
+            (total - 1.0).abs() < 1e-4,
+            "{label}: the tree's probabilities sum to {total}"
+        );
+        let choices = run_probe(&app, probe, "choose", probe.count, probe.count as usize);
+        let mut histogram = vec![0u32; count as usize];
+        for c in &choices {
+            let light = c[0].to_bits() as usize;
+            assert!(light < count as usize, "{label}: chose light {light}");
+            assert!(
+                (c[1] / pmfs[light][0] - 1.0).abs() < 1e-4,
+                "{label}: the choice's pmf {} differs from light_sampler_pmf_at {}",
+                c[1],
+                pmfs[light][0]
+            );
+            histogram[light] += 1;
+        }
+        let n_samples = probe.count as f64;
+        for (light, &observed) in histogram.iter().enumerate() {
+            let expected = pmfs[light][0] as f64 * n_samples;
+            let sigma = expected.max(1.0).sqrt();
+            assert!(
+                (observed as f64 - expected).abs() < 5.0 * sigma + 1.0,
+                "{label}: light {light} chosen {observed} times, expected {expected:.1}"
+            );
+        }
+        // Spatially aware: the lamps nearest the point are far likelier than by power alone.
+        let gain = pmfs
+            .iter()
+            .map(|p| p[0] as f64 / p[1].max(1e-12) as f64)
+            .fold(0.0, f64::max);
+        eprintln!("{label}: sum {total:.6}; largest tree/power probability ratio {gain:.1}");
+        assert!(
+            gain > 3.0,
+            "{label}: the tree favours no light over power sampling"
+        );
+    }
+}
