@@ -33,7 +33,8 @@ pub struct GpuBvhChild {
 }
 
 impl GpuBvhChild {
-    /// An inverted box no ray can hit: the second child of a single-leaf tree.
+    /// The second child of a single-leaf tree: an inverted box, and index `NONE`, which the traversals check
+    /// (a slab test alone does not reject an inverted box for rays that start inside [-1, 1]^3).
     pub const EMPTY: Self = Self {
         min: [1.0; 3],
         index: u32::MAX,
