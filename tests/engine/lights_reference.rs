@@ -3,6 +3,7 @@
 //! and images), and, for the spot light's glTF falloff, which Mitsuba's `spot` does not have, a numerical
 //! integration of the spec's formulas written here.
 
+use crate::common::cornell::mean_of;
 use crate::common::*;
 use glam::Vec3;
 use raykin::camera::{CameraChoice, CameraView};
@@ -44,13 +45,6 @@ fn settings(seed: u32, environment: Environment) -> RenderSettings {
     }
 }
 
-fn average(a: &[[f32; 3]], b: &[[f32; 3]]) -> Vec<[f32; 3]> {
-    a.iter()
-        .zip(b)
-        .map(|(x, y)| [0, 1, 2].map(|c| 0.5 * (x[c] + y[c])))
-        .collect()
-}
-
 /// Our image (two independent halves) against Mitsuba's (two halves): the expected relMSE of two unbiased
 /// estimates is the sum of their variances, each measured from its halves; the bound adds a margin for the
 /// estimate's own scatter. A bias of a few percent exceeds it by far.
@@ -71,7 +65,7 @@ fn matches_mitsuba(
     let b = render(&ctx, scene, settings(2, environment), &camera(), spp);
     assert_all_finite(&a, name);
     assert_all_finite(&b, name);
-    let ours = average(&a, &b);
+    let ours = mean_of(&a, &b);
     let read = |half: &str| {
         let (w, h, img) = raykin::image_io::read_exr(&dir().join(format!("{name}_{half}.exr")))
             .expect("reference image");
@@ -79,7 +73,7 @@ fn matches_mitsuba(
         img
     };
     let (ra, rb) = (read("a"), read("b"));
-    let reference = average(&ra, &rb);
+    let reference = mean_of(&ra, &rb);
     let ours_noise = rel_mse(&a, &b, EPS) / 4.0;
     let ref_noise = rel_mse(&ra, &rb, EPS) / 4.0;
     let measured = rel_mse(&ours, &reference, EPS);
@@ -358,7 +352,7 @@ fn spot_light_matches_numerical_integration_of_the_spec() {
     };
     let a = render(&ctx, &scene, settings(1), &choice, 16);
     let b = render(&ctx, &scene, settings(2), &choice, 16);
-    let ours = average(&a, &b);
+    let ours = mean_of(&a, &b);
     let app = raykin::headless::HeadlessApp::new(ctx.clone(), scene.clone(), settings(0), &choice)
         .unwrap();
     let view = app.camera();
