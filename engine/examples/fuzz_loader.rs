@@ -10,7 +10,8 @@
 //!     --out fuzz-out --seconds 3600 --seed 1
 //! target/debug/examples/fuzz_loader --replay fuzz-out/findings/panic-1234.gltf   # re-run one file
 //! ```
-//! A case is reproducible from its seed file and case number (`--case FILE:N`, printed with each finding).
+//! A case is reproducible from its seed file and case number (`--case FILE:N`, printed with each finding);
+//! `--case` also writes the mutated file into `--out`.
 
 use raykin::bvh::{Blas, BvhQuality, StaticLayout, build_tlas};
 use raykin::scene::{LoadOptions, SceneAsset, SceneError};
@@ -34,6 +35,8 @@ struct Options {
     seed: u64,
     replay: Vec<PathBuf>,
     case: Option<(PathBuf, u64)>,
+    /// The campaign's first case number: after a hang the fuzzer restarts itself here, one past the hang.
+    first_case: u64,
 }
 
 fn parse_args() -> Result<Options, String> {
@@ -45,6 +48,7 @@ fn parse_args() -> Result<Options, String> {
         seed: 1,
         replay: Vec::new(),
         case: None,
+        first_case: 0,
     };
     let mut args = std::env::args().skip(1);
     while let Some(a) = args.next() {
@@ -56,6 +60,9 @@ fn parse_args() -> Result<Options, String> {
             "--cases" => o.cases = value()?.parse().map_err(|e| format!("--cases: {e}"))?,
             "--seed" => o.seed = value()?.parse().map_err(|e| format!("--seed: {e}"))?,
             "--replay" => o.replay.push(value()?.into()),
+            "--first-case" => {
+                o.first_case = value()?.parse().map_err(|e| format!("--first-case: {e}"))?
+            }
             "--case" => {
                 let v = value()?;
                 let (file, n) = v.rsplit_once(':').ok_or("--case FILE:N")?;
@@ -95,6 +102,19 @@ fn main() {
     if let Some((file, n)) = &options.case {
         let seed = Seed::read(file).expect("seed file");
         let bytes = mutate(&seed, n_rng(options.seed, *n));
+        // Written before the check, so a case that hangs can still be read and kept as a regression file.
+        let ext = if bytes.starts_with(b"glTF") {
+            "glb"
+        } else {
+            "gltf"
+        };
+        let saved = options.out.join(format!("case-{}-{n}.{ext}", options.seed));
+        if std::fs::create_dir_all(&options.out)
+            .and_then(|()| std::fs::write(&saved, &bytes))
+            .is_ok()
+        {
+            eprintln!("fuzz_loader: case written to {}", saved.display());
+        }
         let verdict = check_case(&bytes, &seed.base_dir, &seed.path, true);
         println!("case {}:{n}: {verdict}", file.display());
         std::process::exit(i32::from(verdict.is_finding()));
@@ -155,15 +175,28 @@ fn run_campaign(options: &Options, seeds: &[Seed]) {
     let current = Arc::new(Mutex::new(String::new()));
     // CPU time (ms) at the start of the running case; u64::MAX between cases.
     let started_case = Arc::new(AtomicU64::new(u64::MAX));
-    spawn_watchdog(current.clone(), started_case.clone(), options.out.clone());
+    let current_case = Arc::new(AtomicU64::new(options.first_case));
     let start = Instant::now();
+    let deadline = std::time::SystemTime::now() + Duration::from_secs(options.seconds);
+    spawn_watchdog(Watch {
+        label: current.clone(),
+        started: started_case.clone(),
+        case: current_case.clone(),
+        out: options.out.clone(),
+        deadline,
+    });
     let cpu_start = cpu_seconds();
     let mut seen = std::collections::HashSet::new();
     // Why cases were refused (digits dropped): shows which mutations never get past the parser.
     let mut reasons: std::collections::HashMap<String, u64> = Default::default();
-    let (mut cases, mut loaded, mut finds) = (0u64, 0u64, 0u64);
+    let (mut cases, mut loaded, mut finds) = (options.first_case, 0u64, 0u64);
     let mut last_report = Instant::now();
     let mut picker = fastrand::Rng::with_seed(options.seed);
+    // Resuming after a hang: the same seed choices as an uninterrupted campaign.
+    for _ in 0..options.first_case {
+        picker.f64();
+    }
+    let first_case = options.first_case;
     while cases < options.cases && start.elapsed() < Duration::from_secs(options.seconds) {
         let n = cases;
         let mut pick = picker.f64() * total;
@@ -177,6 +210,7 @@ fn run_campaign(options: &Options, seeds: &[Seed]) {
             .map_or(&seeds[0], |(s, _)| s);
         let label = format!("{}:{n}", seed.path.display());
         *current.lock().unwrap() = label.clone();
+        current_case.store(n, Ordering::SeqCst);
         started_case.store((cpu_seconds() * 1000.0) as u64, Ordering::SeqCst);
         let bytes = mutate(seed, n_rng(options.seed, n));
         let decode_images = n % 16 == 0;
@@ -213,10 +247,10 @@ fn run_campaign(options: &Options, seeds: &[Seed]) {
         }
         if last_report.elapsed() > Duration::from_secs(60) {
             last_report = Instant::now();
-            report(options, cases, loaded, finds, start, cpu_start);
+            report(options, cases - first_case, loaded, finds, start, cpu_start);
         }
     }
-    report(options, cases, loaded, finds, start, cpu_start);
+    report(options, cases - first_case, loaded, finds, start, cpu_start);
     let mut top: Vec<_> = reasons.into_iter().collect();
     top.sort_by_key(|(_, n)| std::cmp::Reverse(*n));
     for (why, n) in top.iter().take(12) {
@@ -233,9 +267,12 @@ fn report(options: &Options, cases: u64, loaded: u64, finds: u64, start: Instant
         cases as f64 / cpu.max(1e-9)
     );
     eprintln!("fuzz_loader: {line}");
-    // One line per campaign, rewritten as it runs: the hours are summed from this file.
+    // One line per campaign (per restart after a hang), rewritten as it runs: the hours are summed from
+    // these files.
     let _ = std::fs::write(
-        options.out.join(format!("stats-{}.txt", options.seed)),
+        options
+            .out
+            .join(format!("stats-{}-{}.txt", options.seed, options.first_case)),
         line + "\n",
     );
 }
@@ -258,21 +295,57 @@ fn cpu_seconds() -> f64 {
     (ticks(11) + ticks(12)) / 100.0
 }
 
-fn spawn_watchdog(current: Arc<Mutex<String>>, started: Arc<AtomicU64>, out: PathBuf) {
+/// What the watchdog needs to name a hung case and restart the campaign after it.
+struct Watch {
+    label: Arc<Mutex<String>>,
+    /// CPU time (ms) at the start of the running case; u64::MAX between cases.
+    started: Arc<AtomicU64>,
+    case: Arc<AtomicU64>,
+    out: PathBuf,
+    deadline: std::time::SystemTime,
+}
+
+/// A case over the CPU limit is recorded as a hang; the process then replaces itself with the same campaign
+/// from the next case (a hung thread cannot be stopped), so one hang does not end the campaign.
+fn spawn_watchdog(watch: Watch) {
     std::thread::spawn(move || {
         loop {
             std::thread::sleep(Duration::from_secs(1));
-            let s = started.load(Ordering::SeqCst);
+            let s = watch.started.load(Ordering::SeqCst);
             if s != u64::MAX && cpu_seconds() - s as f64 / 1000.0 > HANG_CPU_SECONDS {
-                let label = current.lock().map(|l| l.clone()).unwrap_or_default();
+                let label = watch.label.lock().map(|l| l.clone()).unwrap_or_default();
                 let note = format!("hang: case {label} used over {HANG_CPU_SECONDS} CPU seconds\n");
                 let name = format!("hang-{:08x}.txt", fxhash(label.as_bytes()));
-                let _ = std::fs::write(out.join("findings").join(name), &note);
+                let _ = std::fs::write(watch.out.join("findings").join(name), &note);
                 eprintln!("fuzz_loader: {note}");
+                let left = watch
+                    .deadline
+                    .duration_since(std::time::SystemTime::now())
+                    .unwrap_or_default();
+                if left.as_secs() > 0 {
+                    restart(watch.case.load(Ordering::SeqCst) + 1, left.as_secs());
+                }
                 std::process::exit(3);
             }
         }
     });
+}
+
+/// Replaces this process with the same command line, resumed at `first_case` for `seconds`.
+fn restart(first_case: u64, seconds: u64) {
+    use std::os::unix::process::CommandExt;
+    let mut args: Vec<String> = std::env::args().skip(1).collect();
+    for (flag, value) in [("--first-case", first_case), ("--seconds", seconds)] {
+        match args.iter().position(|a| a == flag) {
+            Some(i) if i + 1 < args.len() => args[i + 1] = value.to_string(),
+            _ => args.extend([flag.to_string(), value.to_string()]),
+        }
+    }
+    let Ok(exe) = std::env::current_exe() else {
+        return;
+    };
+    let error = std::process::Command::new(exe).args(args).exec();
+    eprintln!("fuzz_loader: cannot restart after the hang: {error}");
 }
 
 fn fxhash(bytes: &[u8]) -> u32 {

@@ -440,16 +440,24 @@ pub(crate) fn obvhs_triangles(positions: &[Vec3], triangles: &[[u32; 3]]) -> Vec
         .collect()
 }
 
+/// Build coordinates are clamped to this magnitude. obvhs's PLOC builder merges neighbours whose union
+/// has the smallest half area; once those areas overflow to infinity (coordinates above about 5e18) they
+/// no longer compare, a pass merges almost nothing and the build turns quadratic, as a fuzzed file with
+/// garbage positions (a misaligned accessor) showed. At 1e16 the largest half area, 1.2e33, stays far
+/// from f32::MAX.
+const BUILD_COORDINATE_LIMIT: f32 = 1e16;
+
 /// A point obvhs can build over. Its PLOC builder asserts (debug) or merges a node with itself (release)
-/// on infinite or NaN boxes, which an overflowing transform or deformation can produce; such a triangle or
-/// instance cannot be hit anyway (traversal tests its real coordinates), so it only needs a finite place
-/// in the tree.
+/// on infinite or NaN boxes, which an overflowing transform or deformation can produce, and never ends when
+/// areas overflow (above). Geometry beyond the limit cannot be rendered usefully in f32 anyway, and the box
+/// of the clamped vertices is the real box cut to the limit cube, so every hit inside the cube is still
+/// found (traversal tests the real coordinates).
 fn finite(p: Vec3) -> Vec3A {
     let clamp = |v: f32| {
         if v.is_nan() {
             0.0
         } else {
-            v.clamp(-f32::MAX, f32::MAX)
+            v.clamp(-BUILD_COORDINATE_LIMIT, BUILD_COORDINATE_LIMIT)
         }
     };
     Vec3A::new(clamp(p.x), clamp(p.y), clamp(p.z))
@@ -509,5 +517,30 @@ mod tests {
             Vec3::new(0.0, f32::NAN, 1.0),
         ];
         assert!(MeshBvh::build(&positions, &[[0, 1, 2], [0, 1, 3]], BvhQuality::Fast).is_ok());
+    }
+
+    /// Triangles with coordinates near f32::MAX (garbage read through a misaligned accessor) made every
+    /// PLOC merge cost overflow to infinity: the builder then merged a pair or so per pass, a quadratic
+    /// build (seconds per mesh, minutes for the fuzzed file's 98 meshes) into a tree whose SAH cost is
+    /// infinite. With the clamp, costs stay comparable.
+    #[test]
+    fn overflowing_areas_keep_the_build_cost_finite() {
+        // Magnitudes spread log-uniformly over f32's range, as reinterpreted mesh data comes out.
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut coordinate = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            let exponent = (state % 76) as i32 - 37;
+            let sign = if state & (1 << 40) == 0 { 1.0 } else { -1.0 };
+            sign * 3.4f32 * 10f32.powi(exponent)
+        };
+        let positions: Vec<Vec3> = (0..5400)
+            .map(|_| Vec3::new(coordinate(), coordinate(), coordinate()))
+            .collect();
+        let triangles: Vec<[u32; 3]> = (0..1800).map(|t| [3 * t, 3 * t + 1, 3 * t + 2]).collect();
+        let bvh = MeshBvh::build(&positions, &triangles, BvhQuality::Fast).unwrap();
+        assert!(bvh.build_sah.is_finite(), "SAH cost {}", bvh.build_sah);
+        assert!(bvh.flat.depth <= MAX_TRAVERSAL_DEPTH);
     }
 }
