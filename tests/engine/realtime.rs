@@ -481,16 +481,70 @@ fn resize_and_camera_cut_reset_history() {
 /// block error within 3x NEE's: a bias of several percent (a wrong MIS weight, double-counted light) fails it.
 #[test]
 fn restir_di_matches_next_event_estimation() {
+    restir_converges_to_nee(
+        cornell(),
+        |seed| cornell_settings(32, seed),
+        &cornell_camera(0.0),
+    );
+}
+
+/// The same under a sky with a lamp: the environment is one light of the list ReSTIR draws from beside an
+/// emissive sphere, and escaped BSDF paths at the first hit must not count the sky a second time. A sphere on
+/// a floor, so that shadows and a light seen only partly (the lower hemisphere) are both in the image.
+#[test]
+fn restir_di_matches_next_event_estimation_under_a_sky_with_a_lamp() {
+    use raykin::scene::{Material, NodeTransform, procedural};
+    let grey = Material {
+        name: "grey".into(),
+        base_color: glam::Vec4::new(0.7, 0.7, 0.7, 1.0),
+        roughness: 0.6,
+        ..Default::default()
+    };
+    let lamp = Material {
+        name: "lamp".into(),
+        emissive: Vec3::splat(1.0),
+        emissive_strength: 20.0,
+        ..Default::default()
+    };
+    let at = |x, y, z| NodeTransform {
+        translation: Vec3::new(x, y, z),
+        ..Default::default()
+    };
+    let scene = Arc::new(procedural::scene_from_meshes(
+        "sphere on a floor",
+        vec![
+            (procedural::ground_quad(20.0, 0), NodeTransform::default()),
+            (procedural::uv_sphere(1.0, 48, 24, 0), at(0.0, 1.0, 0.0)),
+            (procedural::uv_sphere(0.25, 16, 8, 1), at(1.6, 2.2, 0.5)),
+        ],
+        vec![grey, lamp],
+    ));
+    let settings = |seed| RenderSettings {
+        environment: Environment::Sky,
+        ..cornell_settings(32, seed)
+    };
+    let camera = CameraChoice::LookAt {
+        eye: Vec3::new(0.0, 2.5, 5.0),
+        target: Vec3::new(0.0, 0.7, 0.0),
+        yfov: 50f32.to_radians(),
+    };
+    restir_converges_to_nee(scene, settings, &camera);
+}
+
+fn restir_converges_to_nee(
+    scene: Arc<SceneAsset>,
+    settings: impl Fn(u32) -> RenderSettings,
+    camera: &CameraChoice,
+) {
     let (ctx, _gpu) = gpu();
-    let scene = cornell();
     const SIZE: u32 = 32;
     const FRAMES: u32 = 96;
     let history_after = |restir: bool| {
         let mut app = HeadlessApp::new(
             ctx.clone(),
             scene.clone(),
-            realtime(cornell_settings(SIZE, 21), restir),
-            &cornell_camera(0.0),
+            realtime(settings(21), restir),
+            camera,
         )
         .expect("uploads");
         steps(&mut app, FRAMES);
@@ -508,13 +562,7 @@ fn restir_di_matches_next_event_estimation() {
     let on = history_after(true);
     let off = history_after(false);
     assert_all_finite(&on, "ReSTIR history");
-    let reference = render(
-        &ctx,
-        &scene,
-        cornell_settings(SIZE, 22),
-        &cornell_camera(0.0),
-        512,
-    );
+    let reference = render(&ctx, &scene, settings(22), camera, 512);
     // 4x4 block means: noise averages out, a bias does not.
     let blocks = |img: &[[f32; 3]]| -> Vec<[f32; 3]> {
         let b = SIZE / 4;
