@@ -51,7 +51,7 @@ pub const METHODS: &[Method] = &[
     },
     Method {
         name: "+ ReSTIR DI",
-        apply: |_| {},
+        apply: |r| r.restir.enabled = true,
     },
 ];
 
