@@ -99,8 +99,10 @@ pub fn show(ui: &mut egui::Ui, world: &mut World) {
         let memory = world.resource::<GpuScene>().memory;
         let realtime = world
             .get_resource::<crate::render::realtime::Realtime>()
-            .and_then(|r| r.targets.as_ref())
-            .map_or(0, |t| t.memory_bytes());
+            .map_or(0, |r| {
+                r.targets.as_ref().map_or(0, |t| t.memory_bytes())
+                    + r.spatial_filter.as_ref().map_or(0, |f| f.memory_bytes())
+            });
         ui.label("GPU memory");
         ui.add(
             egui::Label::new(format!(

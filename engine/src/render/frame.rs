@@ -235,7 +235,7 @@ fn encode_accumulation_display(
         ctx,
         encoder,
         &HandoverBuffers {
-            realtime: realtime_image(targets, settings),
+            realtime: realtime_image(targets, realtime.spatial_filter.as_ref(), settings),
             accumulated,
             output: &targets.handover,
         },
@@ -261,10 +261,13 @@ fn encode_accumulation_display(
 /// or the history itself when the filter is off.
 pub fn realtime_image<'t>(
     targets: &'t RealtimeTargets,
+    spatial_filter: Option<&'t Denoiser>,
     settings: &RenderSettings,
 ) -> &'t wgpu::Buffer {
     if settings.realtime.spatial {
-        targets.denoiser.output().unwrap_or(&targets.history.accum)
+        spatial_filter
+            .and_then(Denoiser::output)
+            .unwrap_or(&targets.history.accum)
     } else {
         &targets.history.accum
     }
@@ -297,9 +300,11 @@ pub fn encode_realtime_frame(
     let Realtime {
         passes,
         targets,
+        spatial_filter,
         state,
     } = realtime;
     let targets = targets.as_mut().expect("made by targets_for");
+    let spatial_filter = spatial_filter.as_ref().expect("made by targets_for");
     let passes = passes.get_or_insert_with(|| RealtimePasses::new(ctx, &bindings.layout));
     let motion = scene
         .motion
@@ -387,7 +392,7 @@ pub fn encode_realtime_frame(
     );
     let image = if plan.spatial {
         let h = &targets.history;
-        targets.denoiser.encode(
+        spatial_filter.encode(
             ctx,
             &mut encoder,
             &DenoiseInputs {

@@ -21,6 +21,7 @@ pub mod passes;
 pub mod picking;
 pub mod queries;
 pub mod realtime;
+pub mod realtime_targets;
 pub mod scene_bindings;
 pub mod settings;
 pub mod shaders;

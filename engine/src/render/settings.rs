@@ -190,7 +190,7 @@ pub enum DenoiserKind {
     /// Intel Open Image Denoise on the host (the `oidn` module); where it cannot run, svgf is used instead.
     #[default]
     Oidn,
-    /// The GPU a-trous filter ([`super::passes::denoise`]).
+    /// The GPU a-trous filter (the `denoise` pass).
     Svgf,
 }
 
@@ -325,7 +325,7 @@ pub struct RenderSettings {
     #[serde(default)]
     pub denoise: bool,
     #[serde(default)]
-    pub denoise_params: super::passes::denoise::DenoiseParams,
+    pub denoise_params: DenoiseParams,
 
     #[serde(default)]
     pub denoiser: DenoiserKind,
@@ -420,6 +420,49 @@ impl DeformBackend {
             Self::Auto if device_type == wgpu::DeviceType::Cpu => Self::Cpu,
             Self::Auto => Self::Gpu,
             other => other,
+        }
+    }
+}
+
+/// The a-trous filter's parameters (the `denoise` pass; here because the settings name them). The defaults
+/// are SVGF's.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct DenoiseParams {
+    /// A-trous iterations; iteration k places its taps 2^k pixels apart (5 iterations: 125 pixels across).
+    pub iterations: u32,
+    /// Luminance edge-stopping, in standard deviations of the pixel's mean.
+    pub sigma_luminance: f32,
+    /// Exponent of the normal weight max(0, n_p . n_q)^sigma.
+    pub sigma_normal: f32,
+    /// Depth edge-stopping, in units of the depth change the centre's tangent plane predicts.
+    pub sigma_depth: f32,
+}
+
+impl Default for DenoiseParams {
+    fn default() -> Self {
+        Self {
+            iterations: 5,
+            sigma_luminance: 4.0,
+            sigma_normal: 128.0,
+            sigma_depth: 1.0,
+        }
+    }
+}
+
+impl DenoiseParams {
+    pub const MAX_ITERATIONS: u32 = 8;
+
+    /// Iterations clamped to 1..=[`Self::MAX_ITERATIONS`]; a sigma that is not a positive finite number
+    /// takes its default.
+    pub fn sanitized(&self) -> Self {
+        let d = Self::default();
+        let sigma = |v: f32, default: f32| if v.is_finite() && v > 0.0 { v } else { default };
+        Self {
+            iterations: self.iterations.clamp(1, Self::MAX_ITERATIONS),
+            sigma_luminance: sigma(self.sigma_luminance, d.sigma_luminance),
+            sigma_normal: sigma(self.sigma_normal, d.sigma_normal),
+            sigma_depth: sigma(self.sigma_depth, d.sigma_depth),
         }
     }
 }

@@ -9,7 +9,6 @@ use crate::render::shaders::{ShaderModule, compose};
 use crate::render::view::ViewTargets;
 use bevy_ecs::prelude::Resource;
 use bytemuck::{Pod, Zeroable};
-use serde::{Deserialize, Serialize};
 use std::sync::OnceLock;
 
 pub const KERNEL: ShaderModule = ShaderModule {
@@ -18,47 +17,7 @@ pub const KERNEL: ShaderModule = ShaderModule {
     requires: &["color"],
 };
 
-/// Filter parameters; the defaults are SVGF's.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
-pub struct DenoiseParams {
-    /// A-trous iterations; iteration k places its taps 2^k pixels apart (5 iterations: 125 pixels across).
-    pub iterations: u32,
-    /// Luminance edge-stopping, in standard deviations of the pixel's mean.
-    pub sigma_luminance: f32,
-    /// Exponent of the normal weight max(0, n_p . n_q)^sigma.
-    pub sigma_normal: f32,
-    /// Depth edge-stopping, in units of the depth change the centre's tangent plane predicts.
-    pub sigma_depth: f32,
-}
-
-impl Default for DenoiseParams {
-    fn default() -> Self {
-        Self {
-            iterations: 5,
-            sigma_luminance: 4.0,
-            sigma_normal: 128.0,
-            sigma_depth: 1.0,
-        }
-    }
-}
-
-impl DenoiseParams {
-    pub const MAX_ITERATIONS: u32 = 8;
-
-    /// Iterations clamped to 1..=[`Self::MAX_ITERATIONS`]; a sigma that is not a positive finite number
-    /// takes its default.
-    pub fn sanitized(&self) -> Self {
-        let d = Self::default();
-        let sigma = |v: f32, default: f32| if v.is_finite() && v > 0.0 { v } else { default };
-        Self {
-            iterations: self.iterations.clamp(1, Self::MAX_ITERATIONS),
-            sigma_luminance: sigma(self.sigma_luminance, d.sigma_luminance),
-            sigma_normal: sigma(self.sigma_normal, d.sigma_normal),
-            sigma_depth: sigma(self.sigma_depth, d.sigma_depth),
-        }
-    }
-}
+pub use crate::render::settings::DenoiseParams;
 
 /// One pass's uniform (the `Params` struct of denoise.wgsl).
 #[repr(C)]

@@ -4,7 +4,7 @@
 
 use crate::gpu::GpuContext;
 use crate::gpu::bind::{Binding, bind_group, compute_layout};
-use crate::render::realtime::{RealtimeTargets, SceneGroups};
+use crate::render::realtime_targets::{RealtimeTargets, SceneGroups};
 use crate::render::shaders::{ShaderModule, compose};
 use crate::render::view::ViewTargets;
 use bytemuck::{Pod, Zeroable};
@@ -21,7 +21,7 @@ pub const KERNEL: ShaderModule = ShaderModule {
     ],
 };
 
-pub use crate::render::realtime::{
+pub use crate::render::realtime_targets::{
     FILTERED_GRADIENTS as FILTERED, GRADIENT_FILTER_ITERATIONS as FILTER_ITERATIONS,
 };
 

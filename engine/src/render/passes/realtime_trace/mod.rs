@@ -4,7 +4,7 @@
 
 use crate::gpu::GpuContext;
 use crate::gpu::bind::{Binding, CachedGroup, bind_group, compute_layout};
-use crate::render::realtime::{RealtimeTargets, SceneGroups};
+use crate::render::realtime_targets::{RealtimeTargets, SceneGroups};
 use crate::render::shaders::{ShaderModule, compose};
 use crate::render::view::ViewTargets;
 

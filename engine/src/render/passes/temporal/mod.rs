@@ -6,7 +6,7 @@
 
 use crate::gpu::GpuContext;
 use crate::gpu::bind::{Binding, CachedGroup, bind_group, compute_layout};
-use crate::render::realtime::RealtimeTargets;
+use crate::render::realtime_targets::RealtimeTargets;
 use crate::render::shaders::{ShaderModule, compose};
 use crate::render::view::ViewTargets;
 
@@ -80,7 +80,7 @@ impl TemporalPass {
                         &targets.gbuffer,
                         &targets.gbuffer_prev,
                         &targets.samples,
-                        &targets.gradients[crate::render::realtime::FILTERED_GRADIENTS],
+                        &targets.gradients[crate::render::realtime_targets::FILTERED_GRADIENTS],
                         &targets.edited_materials,
                         &p.accum,
                         &p.albedo_depth,
