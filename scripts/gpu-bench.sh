@@ -12,15 +12,8 @@
 # BENCH_ARGS adds arguments to the bench (e.g. "--parts frames --parts errors" to split the run over two calls);
 # CORNELL_RENDER=0 skips the converged render (for a dry run of this script on a CPU adapter).
 set -uo pipefail
-out="${1:-gpu-out}"
-mkdir -p "$out"
-bin="${RAYKIN_BIN:-rel/raykin}"
-if ! "$bin" --version >/dev/null 2>&1; then echo "no raykin binary at $bin" >&2; exit 1; fi
-if [ -z "${VK_DRIVER_FILES:-}" ] && [ -f /usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json ]; then
-  export VK_DRIVER_FILES=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
-fi
-export RAYKIN_COMMIT="${RAYKIN_COMMIT:-$(git rev-parse --short HEAD 2>/dev/null || echo unknown)}"
-assets="${ASSETS:-shared/assets}"
+# shellcheck source=scripts/gpu-common.sh
+. "$(dirname "$0")/gpu-common.sh"
 work="$(mktemp -d)"
 {
   nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv,noheader 2>/dev/null || true
@@ -40,5 +33,5 @@ work="$(mktemp -d)"
     "$bin" render "$assets/CornellBox/CornellBox.glb" --look-from=-278,273,800 --look-at=-278,273,0 --fov 39.3077 \
       --env 0,0,0 --width 1024 --height 1024 --spp 1024 --out "$out/cornell-1024spp.png" --report "$out/cornell-render.json"
   fi
-} 2>&1 | grep -v "zero-area triangles dropped" | tee "$out/gpu-bench.log"
+} 2>&1 | grep --line-buffered -v "zero-area triangles dropped" | tee "$out/gpu-bench.log"
 rm -rf "$work"

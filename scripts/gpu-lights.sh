@@ -13,15 +13,8 @@
 # cornell.png, env-lit.png, sun-sky.png, dof.png. ASSETS must hold CornellBox (a copy of ../shared/assets).
 # Expected wall time on an H200: about 4-6 minutes.
 set -uo pipefail
-out="${1:-gpu-out}"
-mkdir -p "$out"
-bin="${RAYKIN_BIN:-rel/raykin}"
-if ! "$bin" --version >/dev/null 2>&1; then echo "no raykin binary at $bin" >&2; exit 1; fi
-if [ -z "${VK_DRIVER_FILES:-}" ] && [ -f /usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json ]; then
-  export VK_DRIVER_FILES=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
-fi
-export RAYKIN_COMMIT="${RAYKIN_COMMIT:-$(git rev-parse --short HEAD 2>/dev/null || echo unknown)}"
-assets="${ASSETS:-shared/assets}"
+# shellcheck source=scripts/gpu-common.sh
+. "$(dirname "$0")/gpu-common.sh"
 lights=tests/reference/lights
 work="$(mktemp -d)"
 {

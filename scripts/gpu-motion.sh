@@ -10,15 +10,8 @@
 # view-crowd-realtime-1440p.json. ASSETS must hold CornellBox, CesiumMan and Fox (copies of ../shared/assets).
 # MOTION_ARGS adds arguments to the bench (e.g. "--scene interior --frames 60" to split the run over two calls).
 set -uo pipefail
-out="${1:-gpu-out}"
-mkdir -p "$out"
-bin="${RAYKIN_BIN:-rel/raykin}"
-if ! "$bin" --version >/dev/null 2>&1; then echo "no raykin binary at $bin" >&2; exit 1; fi
-if [ -z "${VK_DRIVER_FILES:-}" ] && [ -f /usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json ]; then
-  export VK_DRIVER_FILES=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
-fi
-export RAYKIN_COMMIT="${RAYKIN_COMMIT:-$(git rev-parse --short HEAD 2>/dev/null || echo unknown)}"
-assets="${ASSETS:-shared/assets}"
+# shellcheck source=scripts/gpu-common.sh
+. "$(dirname "$0")/gpu-common.sh"
 work="$(mktemp -d)"
 {
   nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv,noheader 2>/dev/null || true
@@ -28,5 +21,5 @@ work="$(mktemp -d)"
   (cd "$work/bench" && tar -cf "$out/charts.tar" charts) 2>/dev/null
   "$bin" view crowd --assets "$assets" --offscreen --frames 300 --image-size 2560x1440 --spp-per-frame 1 \
     --max-depth 6 --no-settings --mode realtime --report "$out/view-crowd-realtime-1440p.json"
-} 2>&1 | grep -v "zero-area triangles dropped" | tee "$out/gpu-motion.log"
+} 2>&1 | grep --line-buffered -v "zero-area triangles dropped" | tee "$out/gpu-motion.log"
 rm -rf "$work"

@@ -3,7 +3,7 @@
 //! and images), and, for the spot light's glTF falloff, which Mitsuba's `spot` does not have, a numerical
 //! integration of the spec's formulas written here.
 
-use crate::common::cornell::mean_of;
+use crate::common::cornell::{assert_agree_within_noise, mean_of};
 use crate::common::*;
 use glam::Vec3;
 use raykin::camera::{CameraChoice, CameraView};
@@ -65,7 +65,6 @@ fn matches_mitsuba(
     let b = render(&ctx, scene, settings(2, environment), &camera(), spp);
     assert_all_finite(&a, name);
     assert_all_finite(&b, name);
-    let ours = mean_of(&a, &b);
     let read = |half: &str| {
         let (w, h, img) = raykin::image_io::read_exr(&dir().join(format!("{name}_{half}.exr")))
             .expect("reference image");
@@ -73,27 +72,7 @@ fn matches_mitsuba(
         img
     };
     let (ra, rb) = (read("a"), read("b"));
-    let reference = mean_of(&ra, &rb);
-    let ours_noise = rel_mse(&a, &b, EPS) / 4.0;
-    let ref_noise = rel_mse(&ra, &rb, EPS) / 4.0;
-    let measured = rel_mse(&ours, &reference, EPS);
-    let bound = 1.5 * (ours_noise + ref_noise) + 1e-4;
-    let (mo, mr) = (mean_rgb(&ours), mean_rgb(&reference));
-    eprintln!(
-        "{name}: relMSE vs Mitsuba {measured:.3e}; noise ours {ours_noise:.3e} ref {ref_noise:.3e}; bound {bound:.3e}; mean ours {mo:?} ref {mr:?}"
-    );
-    for c in 0..3 {
-        assert!(
-            (mo[c] / mr[c] - 1.0).abs() < 0.02,
-            "{name}: mean channel {c}: ours {} vs Mitsuba {}",
-            mo[c],
-            mr[c]
-        );
-    }
-    assert!(
-        measured < bound,
-        "{name}: relMSE {measured:.3e} exceeds the noise bound {bound:.3e}"
-    );
+    assert_agree_within_noise(&format!("{name} vs Mitsuba"), (&a, &b), (&ra, &rb));
 }
 
 #[test]

@@ -4,12 +4,11 @@
 //! (rare huge samples dominating; docs/ACCURACY.md). Sampling the lamp's triangles by solid angle
 //! (shaders/lights/area.wgsl) bounds the estimator, without clamping anything.
 
+use crate::common::cornell::convergence_slope;
 use crate::common::*;
 use raykin::camera::CameraChoice;
 use raykin::render::{Environment, RenderSettings};
 use std::sync::Arc;
-
-const EPS: f64 = 1e-2;
 
 fn shipped_box() -> Arc<raykin::scene::SceneAsset> {
     let bytes =
@@ -49,32 +48,8 @@ fn shipped_cornell_box_converges_at_the_monte_carlo_rate() {
         seed,
         ..Default::default()
     };
-    let half_a = render(&ctx, &scene, settings(100), &camera, 512);
-    let half_b = render(&ctx, &scene, settings(200), &camera, 512);
-    let reference: Vec<[f32; 3]> = half_a
-        .iter()
-        .zip(&half_b)
-        .map(|(x, y)| [0, 1, 2].map(|c| 0.5 * (x[c] + y[c])))
-        .collect();
-    let reference_noise = rel_mse(&half_a, &half_b, EPS) / 4.0;
-    let mut app =
-        raykin::headless::HeadlessApp::new(ctx.clone(), scene, settings(7), &camera).unwrap();
-    let mut points = Vec::new();
-    let mut done = 0;
-    for spp in [4u32, 8, 16, 32, 64] {
-        app.accumulate(spp - done, 64, |_| {});
-        done = spp;
-        let img = app.radiance();
-        assert_all_finite(&img, "convergence render");
-        let rmse = (rel_mse(&img, &reference, EPS) - reference_noise)
-            .max(1e-12)
-            .sqrt();
-        points.push((spp as f64, rmse));
-    }
-    let slope = log_log_slope(&points);
-    eprintln!(
-        "shipped box: rel RMSE vs spp {points:?}, slope {slope:.3}, reference noise {reference_noise:.2e}"
-    );
+    let (slope, points) = convergence_slope(&ctx, scene, settings, &camera);
+    eprintln!("shipped box: rel RMSE vs spp {points:?}, slope {slope:.3}");
     assert!(
         (slope + 0.5).abs() < 0.1,
         "log-log slope of relative RMSE vs spp is {slope:.3}, expected -0.5 +- 0.1"

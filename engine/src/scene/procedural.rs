@@ -57,18 +57,26 @@ pub fn uv_sphere(radius: f32, segments: u32, rings: u32, material: u32) -> MeshD
 
 /// A square in the XZ plane facing +Y, `size` on a side, centred at the origin.
 pub fn ground_quad(size: f32, material: u32) -> MeshData {
+    horizontal_square("ground".into(), Vec3::ZERO, size, true, material)
+}
+
+/// A square in a horizontal plane, `size` on a side, centred at `centre`, facing +Y (`up`) or -Y: its
+/// triangles wound counter-clockwise seen from that side.
+fn horizontal_square(name: String, centre: Vec3, size: f32, up: bool, material: u32) -> MeshData {
     let h = size * 0.5;
+    let normal = if up { Vec3::Y } else { Vec3::NEG_Y };
     MeshData {
-        name: "ground".into(),
-        positions: vec![
-            Vec3::new(-h, 0.0, -h),
-            Vec3::new(h, 0.0, -h),
-            Vec3::new(h, 0.0, h),
-            Vec3::new(-h, 0.0, h),
-        ],
-        normals: Some(vec![Vec3::Y; 4]),
+        name,
+        positions: [(-h, -h), (h, -h), (h, h), (-h, h)]
+            .map(|(x, z)| centre + Vec3::new(x, 0.0, z))
+            .to_vec(),
+        normals: Some(vec![normal; 4]),
         uv0: Some(vec![Vec2::ZERO, Vec2::X, Vec2::ONE, Vec2::Y]),
-        triangles: vec![[0, 2, 1], [0, 3, 2]],
+        triangles: if up {
+            vec![[0, 2, 1], [0, 3, 2]]
+        } else {
+            vec![[0, 1, 2], [0, 2, 3]]
+        },
         triangle_materials: vec![material; 2],
         primitives: vec![PrimitiveRange {
             vertex_offset: 0,
@@ -132,24 +140,8 @@ pub fn light_field(n: usize) -> SceneAsset {
             ..Default::default()
         });
         meshes.push((
-            MeshData {
-                name: format!("lamp {k}"),
-                positions: vec![
-                    centre + Vec3::new(-h, 0.0, -h),
-                    centre + Vec3::new(-h, 0.0, h),
-                    centre + Vec3::new(h, 0.0, h),
-                    centre + Vec3::new(h, 0.0, -h),
-                ],
-                // Wound to face -Y, towards the floor.
-                triangles: vec![[0, 2, 1], [0, 3, 2]],
-                triangle_materials: vec![material; 2],
-                primitives: vec![PrimitiveRange {
-                    vertex_offset: 0,
-                    vertex_count: 4,
-                    material,
-                }],
-                ..Default::default()
-            },
+            // Facing -Y, towards the floor.
+            horizontal_square(format!("lamp {k}"), centre, 2.0 * h, false, material),
             NodeTransform::default(),
         ));
     }
