@@ -124,11 +124,14 @@ fn temporal_match(g: GSurface, gq: GSurface) -> bool {
 // balance-heuristic MIS weights with confidences (the pairwise weights for one neighbour).
 fn combine_pair(sp: ShadingPoint, c: Reservoir, n: Reservoir, sn: ShadingPoint, unbiased: bool, xi: f32) -> Reservoir {
     // Target functions of both samples at both surfaces. The canonical sample is visible here (or has no
-    // weight); the other was visible at its own surface when it was kept.
+    // weight). The other was visible at its own surface when it was kept, but in last frame's scene: once
+    // something moved, its visibility there may differ in this frame's scene, where `tn_c` is tested. With
+    // unbiased MIS both samples' targets at `sn` must be the same function, or the two weights of a sample
+    // no longer sum to one and W drifts from frame to frame; so `tn_n` is tested as well (one more ray).
     let tc_c = target_at(sp, c.light, c.u, false);
     let tn_c = target_at(sn, c.light, c.u, unbiased);
     let tc_n = target_at(sp, n.light, n.u, unbiased);
-    let tn_n = target_at(sn, n.light, n.u, false);
+    let tn_n = target_at(sn, n.light, n.u, unbiased);
     let mc = c.m * tc_c / max(c.m * tc_c + n.m * tn_c, 1e-30);
     let mn = n.m * tn_n / max(c.m * tc_n + n.m * tn_n, 1e-30);
     var s = empty_resampler();
