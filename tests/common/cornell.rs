@@ -105,14 +105,7 @@ pub fn assert_agree_within_noise(
     eprintln!(
         "{what}: relMSE vs reference {measured:.3e}; noise ours {ours_noise:.3e} ref {ref_noise:.3e}; bound {bound:.3e}; mean ours {mo:?} ref {mr:?}"
     );
-    for c in 0..3 {
-        assert!(
-            (mo[c] / mr[c] - 1.0).abs() < 0.02,
-            "{what}: mean channel {c}: ours {} vs reference {}",
-            mo[c],
-            mr[c]
-        );
-    }
+    super::assert_channel_means_within(what, mo, mr, 0.02);
     assert!(
         measured < bound,
         "{what}: relMSE {measured:.3e} exceeds the noise bound {bound:.3e}"

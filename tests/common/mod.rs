@@ -119,6 +119,18 @@ pub fn mean_rgb(img: &[[f32; 3]]) -> [f64; 3] {
     m.map(|v| v / img.len() as f64)
 }
 
+/// Each channel of `got` within `tolerance` (relative) of `want`; `what` names the comparison.
+pub fn assert_channel_means_within(what: &str, got: [f64; 3], want: [f64; 3], tolerance: f64) {
+    for c in 0..3 {
+        assert!(
+            (got[c] / want[c] - 1.0).abs() < tolerance,
+            "{what}: mean channel {c}: {} vs {} (tolerance {tolerance})",
+            got[c],
+            want[c]
+        );
+    }
+}
+
 /// Least-squares slope of log(y) against log(x).
 pub fn log_log_slope(points: &[(f64, f64)]) -> f64 {
     let n = points.len() as f64;

@@ -242,14 +242,7 @@ fn reprojection_is_exact_and_marks_disocclusions() {
         measured < bound,
         "relMSE {measured:.3e} over the noise bound {bound:.3e}"
     );
-    for c in 0..3 {
-        assert!(
-            (mc[c] / mr[c] - 1.0).abs() < 0.03,
-            "channel {c}: {} vs {}",
-            mc[c],
-            mr[c]
-        );
-    }
+    assert_channel_means_within("carried history vs fresh render", mc, mr, 0.03);
 }
 
 /// The G-buffer's motion vectors of a walking CesiumMan (skinned on whichever backend this adapter uses)
@@ -584,14 +577,7 @@ fn restir_converges_to_nee(
     let e_off = rel_mse(&blocks(&off), &blocks(&reference), EPS);
     let (mo, mf, mr) = (mean_rgb(&on), mean_rgb(&off), mean_rgb(&reference));
     eprintln!("block relMSE: ReSTIR {e_on:.3e}, NEE {e_off:.3e}; means {mo:?} {mf:?} {mr:?}");
-    for c in 0..3 {
-        assert!(
-            (mo[c] / mr[c] - 1.0).abs() < 0.03,
-            "channel {c}: ReSTIR {} vs {}",
-            mo[c],
-            mr[c]
-        );
-    }
+    assert_channel_means_within("ReSTIR vs reference", mo, mr, 0.03);
     assert!(
         e_on < 3.0 * e_off + 2e-4,
         "ReSTIR's block error {e_on:.3e} against NEE's {e_off:.3e}"
