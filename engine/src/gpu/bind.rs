@@ -116,6 +116,15 @@ pub fn storage_buffer(ctx: &GpuContext, label: &str, size: u64) -> wgpu::Buffer 
     })
 }
 
+/// Zeroes every buffer of `buffers` in one submission (new targets, a restarted accumulation).
+pub fn clear_buffers<'a>(ctx: &GpuContext, buffers: impl IntoIterator<Item = &'a wgpu::Buffer>) {
+    let mut encoder = ctx.device.create_command_encoder(&Default::default());
+    for b in buffers {
+        encoder.clear_buffer(b, 0, None);
+    }
+    ctx.queue.submit([encoder.finish()]);
+}
+
 /// A storage buffer holding `bytes`. wgpu rejects empty bindings and ones smaller than one element, so short
 /// data is padded to 128 bytes (larger than any element, an instance being 112).
 pub fn storage_with(ctx: &GpuContext, label: &str, bytes: &[u8]) -> wgpu::Buffer {

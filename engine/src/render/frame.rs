@@ -19,25 +19,21 @@
 //! 8. tonemap.
 //!
 //! Once nothing moves, the still accumulates as above and the display hands over from the last real-time image
-//! to the accumulation ([`encode_handover`]).
+//! to the accumulation (`display::encode_accumulation_display`).
 
 use super::accumulation::Accumulation;
+use super::display::{encode_accumulation_display, tonemap_params};
+use super::frame_constants::{FrameConstants, write_frame_constants};
 use super::gpu_scene::GpuScene;
 use super::host_denoised::HostDenoised;
-use super::layout::{
-    FRAME_HIT_AOV, FRAME_MOMENTS, FRAME_NEE, GpuFrame, LIGHT_DIRECTIONAL, LIGHT_ENVIRONMENT,
-    LIGHT_SUN,
-};
+use super::layout::{LIGHT_DIRECTIONAL, LIGHT_ENVIRONMENT, LIGHT_SUN};
 use super::passes::denoise::{DenoiseInputs, Denoiser};
 use super::passes::gradient::FILTERED;
-use super::passes::handover::{HandoverBuffers, HandoverParams};
-use super::passes::tonemap::{TonemapInput, TonemapParams, TonemapPass};
+use super::passes::tonemap::{TonemapInput, TonemapPass};
 use super::passes::trace::TracePass;
-use super::realtime::{
-    Realtime, RealtimePasses, RealtimeTargets, SceneGroups, Shown, runs as realtime_runs,
-};
+use super::realtime::{Realtime, RealtimePasses, SceneGroups, Shown, runs as realtime_runs};
 use super::scene_bindings::SceneBindings;
-use super::settings::{LightSampler, RenderSettings};
+use super::settings::RenderSettings;
 use super::stats::*;
 use super::view::ViewTargets;
 use crate::camera::CameraView;
@@ -192,85 +188,6 @@ fn handover_weight(settings: &RenderSettings, accumulation: &Accumulation) -> f3
         return 1.0;
     }
     (accumulation.samples as f32 / spp as f32).min(1.0)
-}
-
-/// The accumulation's display transform; during a still's hand-over (`handover` < 1 after a real-time
-/// frame), mixed with the last real-time image first. `host`: an image denoised off the GPU to show instead
-/// of svgf's. True when svgf ran.
-#[allow(clippy::too_many_arguments)]
-fn encode_accumulation_display(
-    ctx: &GpuContext,
-    encoder: &mut wgpu::CommandEncoder,
-    view: &ViewTargets,
-    settings: &RenderSettings,
-    tonemap: &TonemapPass,
-    denoiser: &Denoiser,
-    stats: &FrameStats,
-    realtime: &mut Realtime,
-    handover: Option<f32>,
-    host: Option<&wgpu::Buffer>,
-) -> bool {
-    let mixing = handover.is_some_and(|w| w < 1.0)
-        && realtime.targets.is_some()
-        && realtime.state.shown != Shown::Accumulation;
-    if !mixing {
-        if handover.is_some() {
-            realtime.state.shown = Shown::Accumulation;
-        }
-        return encode_display(ctx, encoder, view, settings, tonemap, denoiser, stats, host);
-    }
-    let weight = handover.unwrap_or(1.0);
-    realtime.state.shown = Shown::Handover;
-    let denoise = settings.shows_denoised() && host.is_none();
-    let accumulated = match host {
-        Some(image) if settings.shows_denoised() => image,
-        _ if denoise => encode_denoise(ctx, encoder, view, settings, denoiser, stats),
-        _ => &view.accum,
-    };
-    let (Some(passes), Some(targets)) = (realtime.passes.as_ref(), realtime.targets.as_ref())
-    else {
-        return encode_display(ctx, encoder, view, settings, tonemap, denoiser, stats, host);
-    };
-    passes.handover.encode(
-        ctx,
-        encoder,
-        &HandoverBuffers {
-            realtime: realtime_image(targets, realtime.spatial_filter.as_ref(), settings),
-            accumulated,
-            output: &targets.handover,
-        },
-        &HandoverParams {
-            width: view.width,
-            height: view.height,
-            weight,
-            _pad: 0,
-        },
-    );
-    tonemap.encode(
-        ctx,
-        encoder,
-        view,
-        TonemapInput::Denoised(&targets.handover),
-        &tonemap_params(view, settings),
-        stats.pass_writes(TONEMAP_PAIR),
-    );
-    denoise
-}
-
-/// The last real-time frame's displayed radiance (in the accumulation's layout): the spatial filter's output,
-/// or the history itself when the filter is off.
-pub fn realtime_image<'t>(
-    targets: &'t RealtimeTargets,
-    spatial_filter: Option<&'t Denoiser>,
-    settings: &RenderSettings,
-) -> &'t wgpu::Buffer {
-    if settings.realtime.spatial {
-        spatial_filter
-            .and_then(Denoiser::output)
-            .unwrap_or(&targets.history.accum)
-    } else {
-        &targets.history.accum
-    }
 }
 
 /// The real-time path's frame: the passes in the order of the module documentation, one submission.
@@ -434,131 +351,4 @@ pub fn encode_realtime_frame(
         stats.last_pass_times = stats.read_pass_times(ctx);
     }
     state.end_frame(camera, &plan);
-}
-
-/// The denoiser pass over the view, timed by the frame's denoise pair; returns its output.
-pub fn encode_denoise<'d>(
-    ctx: &GpuContext,
-    encoder: &mut wgpu::CommandEncoder,
-    view: &ViewTargets,
-    settings: &RenderSettings,
-    denoiser: &'d Denoiser,
-    stats: &FrameStats,
-) -> &'d wgpu::Buffer {
-    let output = denoiser.encode(
-        ctx,
-        encoder,
-        &DenoiseInputs::of(view),
-        &settings.denoise_params,
-        stats.denoise_writes(),
-    );
-    if let Some(t) = &stats.denoise_timestamps {
-        t.resolve(encoder, 1);
-    }
-    output
-}
-
-/// The display transform into the view's `rgba8`, denoising first when the settings ask for it (`host`, an
-/// image denoised off the GPU for this accumulation, stands in for svgf's); true when svgf ran.
-#[allow(clippy::too_many_arguments)]
-pub fn encode_display(
-    ctx: &GpuContext,
-    encoder: &mut wgpu::CommandEncoder,
-    view: &ViewTargets,
-    settings: &RenderSettings,
-    tonemap: &TonemapPass,
-    denoiser: &Denoiser,
-    stats: &FrameStats,
-    host: Option<&wgpu::Buffer>,
-) -> bool {
-    let (input, denoise) = match host {
-        Some(image) if settings.shows_denoised() => (TonemapInput::Denoised(image), false),
-        _ if settings.shows_denoised() => (
-            TonemapInput::Denoised(encode_denoise(
-                ctx, encoder, view, settings, denoiser, stats,
-            )),
-            true,
-        ),
-        _ => (TonemapInput::Accumulation, false),
-    };
-    tonemap.encode(
-        ctx,
-        encoder,
-        view,
-        input,
-        &tonemap_params(view, settings),
-        stats.pass_writes(TONEMAP_PAIR),
-    );
-    denoise
-}
-
-fn tonemap_params(view: &ViewTargets, settings: &RenderSettings) -> TonemapParams {
-    TonemapParams {
-        width: view.width,
-        height: view.height,
-        tonemapper: settings.tonemapper as u32,
-        view: settings.view as u32,
-        exposure_scale: 2f32.powf(settings.exposure),
-        depth_scale: settings.depth_view_scale,
-        _pad: [0; 2],
-    }
-}
-
-/// What varies between dispatches of the same view.
-pub struct FrameConstants {
-    /// Samples per pixel already accumulated (the sample index base of the random streams).
-    pub sample_base: u32,
-    pub spp: u32,
-    pub max_depth: u32,
-    pub keep_denoiser_inputs: bool,
-}
-
-/// Writes the view's per-dispatch constants (`shaders/view.wgsl` `Frame`).
-pub fn write_frame_constants(
-    ctx: &GpuContext,
-    view: &ViewTargets,
-    scene: &GpuScene,
-    settings: &RenderSettings,
-    camera: &CameraView,
-    c: FrameConstants,
-) {
-    let frame = GpuFrame {
-        world_from_camera: camera.world_from_camera.to_cols_array_2d(),
-        tan_half_fov: (camera.yfov * 0.5).tan(),
-        lens_radius: settings.lens.aperture_radius.max(0.0),
-        focus_distance: settings.lens.focus_distance.max(1e-6),
-        light_count: scene.lights.count,
-        width: view.width,
-        height: view.height,
-        sample_base: c.sample_base,
-        spp: c.spp,
-        max_depth: c.max_depth,
-        seed: settings.seed,
-        rr_depth: if settings.russian_roulette {
-            settings.rr_depth
-        } else {
-            u32::MAX
-        },
-        // The primary-hit AOV is written by the first dispatch of an accumulation.
-        flags: if settings.nee { FRAME_NEE } else { 0 }
-            | if view.hit_aov && c.sample_base == 0 {
-                FRAME_HIT_AOV
-            } else {
-                0
-            }
-            | if settings.denoise || c.keep_denoiser_inputs {
-                FRAME_MOMENTS
-            } else {
-                0
-            },
-        infinite_light_first: scene.lights.infinite_first,
-        infinite_light_count: scene.lights.infinite_count,
-        tree_light_count: match settings.light_sampler {
-            LightSampler::Tree => scene.lights.tree_count,
-            LightSampler::Power => 0,
-        },
-        _pad: 0,
-    };
-    ctx.queue
-        .write_buffer(&view.frame, 0, bytemuck::bytes_of(&frame));
 }

@@ -12,8 +12,10 @@
 //! - [`stats`]: GPU pass times; [`layout`]: the structs and constants Rust shares with WGSL; [`settings`].
 
 pub mod accumulation;
+pub mod display;
 pub mod environment;
 pub mod frame;
+pub mod frame_constants;
 pub mod gpu_scene;
 pub mod host_denoised;
 pub mod layout;

@@ -2,7 +2,8 @@
 //! the ray-casting benchmark. Each records its pass, submits and reads the result back (blocking).
 
 use super::accumulation::Accumulation;
-use super::frame::{FrameConstants, encode_denoise, encode_display, write_frame_constants};
+use super::display::{encode_denoise, encode_display};
+use super::frame_constants::{FrameConstants, write_frame_constants};
 use super::gpu_scene::GpuScene;
 use super::host_denoised::HostDenoised;
 use super::passes::OnFirstUse;
@@ -119,7 +120,7 @@ pub fn displayed_radiance(world: &World) -> Vec<[f32; 3]> {
     let realtime = world.resource::<Realtime>();
     let buffer = match (&realtime.targets, realtime.state.shown, runs(settings)) {
         (Some(t), Shown::Realtime, true) => {
-            super::frame::realtime_image(t, realtime.spatial_filter.as_ref(), settings)
+            super::display::realtime_image(t, realtime.spatial_filter.as_ref(), settings)
         }
         (Some(t), Shown::Handover, true) => &t.handover,
         _ => {

@@ -6,7 +6,7 @@
 
 use super::layout::*;
 use crate::gpu::GpuContext;
-use crate::gpu::bind::{storage_buffer, uniform_buffer};
+use crate::gpu::bind::{clear_buffers, storage_buffer, uniform_buffer};
 
 /// A-SVGF: a-trous iterations over the gradient strata (taps 1, 2, 4 strata apart: 15 strata, 45 pixels
 /// across); the `gradient` pass runs them and the `temporal` pass reads their result.
@@ -151,21 +151,19 @@ impl RealtimeTargets {
             handover: storage_buffer(ctx, "handover image", pixels * 16),
             stub: storage_buffer(ctx, "realtime stub", 16),
         };
-        let mut encoder = ctx.device.create_command_encoder(&Default::default());
-        for b in [
-            &targets.gbuffer,
-            &targets.gbuffer_prev,
-            &targets.samples,
-            &targets.stub,
-        ]
-        .into_iter()
-        .chain(targets.history.buffers())
-        .chain(targets.history_prev.buffers())
-        .chain(&targets.gradients)
-        {
-            encoder.clear_buffer(b, 0, None);
-        }
-        ctx.queue.submit([encoder.finish()]);
+        clear_buffers(
+            ctx,
+            [
+                &targets.gbuffer,
+                &targets.gbuffer_prev,
+                &targets.samples,
+                &targets.stub,
+            ]
+            .into_iter()
+            .chain(targets.history.buffers())
+            .chain(targets.history_prev.buffers())
+            .chain(&targets.gradients),
+        );
         targets
     }
 

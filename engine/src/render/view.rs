@@ -3,7 +3,7 @@
 
 use super::layout::{GpuFrame, NONE};
 use crate::gpu::GpuContext;
-use crate::gpu::bind::{storage_buffer, uniform_buffer};
+use crate::gpu::bind::{clear_buffers, storage_buffer, uniform_buffer};
 use bevy_ecs::prelude::Resource;
 
 #[derive(Resource)]
@@ -83,16 +83,15 @@ impl ViewTargets {
 
     /// Zeroes the accumulation: the next dispatch starts a new image.
     pub fn clear(&self, ctx: &GpuContext) {
-        let mut encoder = ctx.device.create_command_encoder(&Default::default());
-        for b in [
-            &self.accum,
-            &self.albedo_depth,
-            &self.normal_hits,
-            &self.moments,
-        ] {
-            encoder.clear_buffer(b, 0, None);
-        }
-        ctx.queue.submit([encoder.finish()]);
+        clear_buffers(
+            ctx,
+            [
+                &self.accum,
+                &self.albedo_depth,
+                &self.normal_hits,
+                &self.moments,
+            ],
+        );
     }
 
     pub fn pixels(&self) -> u64 {
