@@ -1,7 +1,7 @@
 //! GPU (tiny images): the real-time path (issue 13). Reprojection is exact on a static scene under a moving
 //! camera and marks exactly the disoccluded pixels; deformation motion vectors match the CPU's from the posed
 //! vertices of two frames; a still hands over to exactly today's accumulation; NaN/inf never enter history;
-//! resizes and camera cuts reset it; ReSTIR DI converges to the same image as plain next-event estimation and,
+//! resizes, camera cuts, material edits (only that material's pixels) and scene changes reset it; ReSTIR DI converges to the same image as plain next-event estimation and,
 //! on the Cornell box, to Mitsuba 3's.
 
 use crate::common::*;
@@ -464,6 +464,69 @@ fn resize_and_camera_cut_reset_history() {
     assert!(
         app.realtime_history().iter().all(|(_, n)| *n == 1.0),
         "a requested reset"
+    );
+}
+
+/// A material edit drops the history of exactly the pixels that show the edited material (their history was
+/// shaded with the old one) and keeps every other pixel's; a scene change (the viewer builds a new engine for
+/// the new scene on the same device) starts with no history at all.
+#[test]
+fn material_edit_and_scene_change_reset_what_they_invalidate() {
+    let (ctx, _gpu) = gpu();
+    let scene = cornell();
+    const FRAMES: u32 = 4;
+    let settings = realtime(cornell_settings(16, 3), false);
+    let mut app = HeadlessApp::new(
+        ctx.clone(),
+        scene.clone(),
+        settings.clone(),
+        &cornell_camera(0.0),
+    )
+    .expect("uploads");
+    steps(&mut app, FRAMES);
+    // The material at the image's centre (the back wall).
+    let gbuffer = app.realtime_gbuffer();
+    let edited = gbuffer[(8 * 16 + 8) as usize].material;
+    assert_ne!(edited, NONE, "the centre pixel hits the box");
+    app.app
+        .world_mut()
+        .resource_mut::<raykin::scene::Materials>()
+        .0[edited as usize]
+        .base_color = glam::Vec4::new(0.1, 0.2, 0.9, 1.0);
+    steps(&mut app, 1);
+    let gbuffer = app.realtime_gbuffer();
+    let history = app.realtime_history();
+    let (mut of_edited, mut others, mut others_kept) = (0, 0, 0);
+    for (surface, (_, length)) in gbuffer.iter().zip(&history) {
+        if surface.material == edited {
+            of_edited += 1;
+            assert_eq!(
+                *length, 1.0,
+                "a pixel of the edited material keeps its history"
+            );
+        } else if surface.material != NONE {
+            others += 1;
+            others_kept += (*length >= FRAMES as f32) as usize;
+        }
+    }
+    eprintln!(
+        "{of_edited} pixels of the edited material; {others_kept} of {others} others kept their history"
+    );
+    assert!(
+        of_edited > 20 && others > 20,
+        "both kinds of pixel are in view"
+    );
+    // Silhouettes under jitter may shorten a few (docs/ACCURACY.md).
+    assert!(
+        others_kept * 10 >= others * 9,
+        "only {others_kept} of {others} pixels of other materials kept their history"
+    );
+    // A new scene, a new engine: every history starts at one frame.
+    let mut next = HeadlessApp::new(ctx, scene, settings, &cornell_camera(0.0)).expect("uploads");
+    steps(&mut next, 1);
+    assert!(
+        next.realtime_history().iter().all(|(_, n)| *n == 1.0),
+        "a new scene starts without history"
     );
 }
 
