@@ -205,9 +205,9 @@ pub fn encode_realtime_frame(
     deform: Vec<wgpu::CommandBuffer>,
 ) {
     // ReSTIR DI runs when some light is at a finite distance. A scene lit only from infinity (sky, sun,
-    // directional lights) keeps next-event estimation at the first hit: on the H200 the sky-lit crowd
-    // drifted from relMSE 0.10 to 0.39 over 120 frames with ReSTIR on its sky, against 0.014 without, at
-    // 2.8x the frame time (docs/BENCHMARKS.md, 2026-12-02).
+    // directional lights) keeps next-event estimation at the first hit: on the H200's sky-lit crowd ReSTIR
+    // costs 3x the frame time (20.0 against 6.7 ms at 720p) for a worse image (settled relMSE 0.0159 against
+    // 0.0144, FLIP 0.050 against 0.035; docs/BENCHMARKS.md, "The drift's cause").
     let lights = scene
         .lights
         .uploaded
