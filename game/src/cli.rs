@@ -79,9 +79,9 @@ pub struct ViewArgs {
     /// Neither read nor write the settings file.
     #[arg(long)]
     pub no_settings: bool,
-    /// realtime: temporal reuse, ReSTIR DI and a spatial filter while anything moves, plain accumulation
-    /// for stills; accumulate: restart accumulation whenever anything moves (the default, or the settings
-    /// file's mode).
+    /// realtime: temporal reuse with gradients and a spatial filter while anything moves (ReSTIR DI is a
+    /// switch of the Render panel), plain accumulation for stills (the default, or the settings file's mode);
+    /// accumulate: restart accumulation whenever anything moves.
     #[arg(long, value_enum)]
     pub mode: Option<ModeArg>,
 }

@@ -243,6 +243,9 @@ quit
             "--image-size",
             "256x160",
             "--no-vsync",
+            // The accumulation's restarts are what this test follows (the viewer's default is real-time).
+            "--mode",
+            "accumulate",
         ])
         .env("RAYKIN_CONFIG_DIR", &config)
         .env_remove("WAYLAND_DISPLAY");
@@ -360,11 +363,14 @@ fn offscreen_loop_reports_per_pass_times() {
             report.as_os_str(),
             "--script".as_ref(),
             script.as_os_str(),
+            "--mode".as_ref(),
+            "accumulate".as_ref(),
         ],
     );
     let (log, ok) = run_with_limit(command, Duration::from_secs(300));
     assert!(ok, "{log}");
     let r = load_json(&report);
+    assert_eq!(r["mode"], "Accumulate");
     assert_eq!(r["frames"], 12);
     assert_eq!(r["image"], serde_json::json!([48, 30]));
     let warmup = r["warmup_frames"].as_u64().expect("warmup");
@@ -403,6 +409,28 @@ fn offscreen_loop_reports_per_pass_times() {
             .is_some_and(|v| v > 0.0)
     );
     assert!(r["memory"]["rss_kib_end"].as_u64().is_some_and(|v| v > 0));
+}
+
+/// With no settings file and no `--mode`, the viewer plays an animation through the real-time path: its passes
+/// are the ones timed (issue 13: real-time is the default while anything moves).
+#[test]
+fn the_viewer_plays_motion_in_real_time_by_default() {
+    let dir = temp_dir("default-mode");
+    let report = dir.join("report.json");
+    let command = offscreen("48x30", 8, &["--report".as_ref(), report.as_os_str()]);
+    let (log, ok) = run_with_limit(command, Duration::from_secs(300));
+    assert!(ok, "{log}");
+    let r = load_json(&report);
+    assert_eq!(r["mode"], "Realtime");
+    for pass in ["gbuffer", "temporal", "realtime_frame_total"] {
+        let s = &r["gpu_ms"][pass];
+        assert!(
+            s["median"]
+                .as_f64()
+                .is_some_and(|m| m > 0.0 && m.is_finite()),
+            "gpu {pass}: {s}"
+        );
+    }
 }
 
 #[test]

@@ -52,7 +52,7 @@ pub struct SessionOptions {
     pub max_depth: Option<u32>,
     /// How scene files are read (`--scene`, `--allow-external-files`).
     pub load: LoadOptions,
-    /// Real-time or accumulation (default: the settings file's, else accumulation).
+    /// Real-time or accumulation (default: the settings file's, else real-time while anything moves).
     pub mode: Option<raykin::render::RenderMode>,
 }
 

@@ -6,6 +6,8 @@ use serde::{Deserialize, Serialize};
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
 pub enum RenderMode {
     /// Progressive accumulation, restarted whenever anything changes (1 sample per pixel per frame in motion).
+    /// The default of renders, recordings and the bench (each frame converged); the viewer starts in
+    /// `Realtime` (`editor::prefs`).
     #[default]
     Accumulate,
     /// The real-time path while anything moves (G-buffer, ReSTIR DI, temporal accumulation with gradients,
