@@ -394,7 +394,18 @@ fn offscreen_loop_reports_per_pass_times() {
         assert_eq!(s["n"].as_u64(), Some(12 - warmup), "cpu {phase}");
     }
     // lavapipe has timestamp queries: the GPU passes are timed too (a few late readbacks may be missing).
-    for pass in ["trace", "tonemap", "denoise", "ui_and_display"] {
+    assert_gpu_passes_timed(&r, &["trace", "tonemap", "denoise", "ui_and_display"]);
+    assert!(
+        r["rays_per_second_of_trace"]["median"]
+            .as_f64()
+            .is_some_and(|v| v > 0.0)
+    );
+    assert!(r["memory"]["rss_kib_end"].as_u64().is_some_and(|v| v > 0));
+}
+
+/// Each of `passes` has a positive, finite median GPU time in the offscreen report `r`.
+fn assert_gpu_passes_timed(r: &Value, passes: &[&str]) {
+    for pass in passes {
         let s = &r["gpu_ms"][pass];
         assert!(
             s["median"]
@@ -403,12 +414,6 @@ fn offscreen_loop_reports_per_pass_times() {
             "gpu {pass}: {s}"
         );
     }
-    assert!(
-        r["rays_per_second_of_trace"]["median"]
-            .as_f64()
-            .is_some_and(|v| v > 0.0)
-    );
-    assert!(r["memory"]["rss_kib_end"].as_u64().is_some_and(|v| v > 0));
 }
 
 /// With no settings file and no `--mode`, the viewer plays an animation through the real-time path: its passes
@@ -422,15 +427,7 @@ fn the_viewer_plays_motion_in_real_time_by_default() {
     assert!(ok, "{log}");
     let r = load_json(&report);
     assert_eq!(r["mode"], "Realtime");
-    for pass in ["gbuffer", "temporal", "realtime_frame_total"] {
-        let s = &r["gpu_ms"][pass];
-        assert!(
-            s["median"]
-                .as_f64()
-                .is_some_and(|m| m > 0.0 && m.is_finite()),
-            "gpu {pass}: {s}"
-        );
-    }
+    assert_gpu_passes_timed(&r, &["gbuffer", "temporal", "realtime_frame_total"]);
 }
 
 #[test]

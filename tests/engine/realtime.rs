@@ -18,14 +18,9 @@ use std::sync::Arc;
 /// The relMSE denominator's epsilon (as tests/cornell_reference.rs: keeps dark pixels from dominating).
 const EPS: f64 = 1e-2;
 
+/// The Cornell box as the file has it (the accuracy tests' scene).
 fn cornell() -> Arc<SceneAsset> {
-    Arc::new(
-        load_gltf(
-            shared_assets().join("CornellBox/CornellBox.glb"),
-            &LoadOptions::default(),
-        )
-        .expect("CornellBox loads"),
-    )
+    crate::common::cornell::scene()
 }
 
 /// Inside the box near its open front, looking at the back wall: walls fill the image and the blocks stand well
