@@ -1,16 +1,31 @@
-//! The shipped Cornell box (assets/default/CornellBox.glb) converges at the Monte Carlo rate. Its double-sided
-//! lamp hangs 0.9 units under the ceiling: next-event estimation by area sampling gave the ceiling above it a
-//! 1/d^2 singularity, infinite variance and a log-log slope of about -0.95 in relative RMSE against spp
-//! (rare huge samples dominating; docs/ACCURACY.md). Sampling the lamp's triangles by solid angle
-//! (shaders/lights/area.wgsl) bounds the estimator, without clamping anything.
+//! The shipped Cornell box (assets/default/CornellBox.glb) converges at the Monte Carlo rate: its expected
+//! squared error falls as 1/spp (relative RMSE as spp^-0.5).
+//!
+//! Its double-sided lamp hangs 0.9 units under the ceiling. Next-event estimation samples the lamp's triangles
+//! by solid angle (shaders/lights/area.wgsl), so every light sample is bounded however close the shading
+//! point is. What remains heavy-tailed is indirect light: the lamp's upper face lights the 0.9-unit cavity
+//! between lamp and ceiling to ~50x the room's radiance, and the light that leaks out of that slit reaches a
+//! room pixel only through the rare path that enters the slit. The error of a single run is therefore erratic
+//! at low spp (one such sample in a dim pixel doubles it), which is why the rate is measured on the expected
+//! error: the mean over independent runs, pair by pair, of their relative squared difference (2x the
+//! relMSE of one run, without needing a reference). docs/ACCURACY.md has the measurements.
+//!
+//! The full measurement (many runs, long range) runs on a GPU:
+//! `RAYKIN_NEAR_RUNS=256 RAYKIN_NEAR_SIZE=64 RAYKIN_NEAR_SPP=4,16,64,256,1024 <engine test binary> --ignored
+//! near_emitter::expected_error_of_the_shipped_box`.
 
-use crate::common::cornell::convergence_slope;
 use crate::common::*;
 use raykin::camera::CameraChoice;
+use raykin::gpu::GpuContext;
+use raykin::headless::HeadlessApp;
 use raykin::render::{Environment, RenderSettings};
+use raykin::scene::SceneAsset;
 use std::sync::Arc;
 
-fn shipped_box() -> Arc<raykin::scene::SceneAsset> {
+/// The relative-error denominator's epsilon, as in the Cornell reference tests.
+const EPS: f64 = 1e-2;
+
+fn shipped_box() -> Arc<SceneAsset> {
     let bytes =
         std::fs::read(repo_root().join("assets/default/CornellBox.glb")).expect("the shipped box");
     Arc::new(
@@ -24,34 +39,144 @@ fn shipped_box() -> Arc<raykin::scene::SceneAsset> {
     )
 }
 
+fn camera() -> CameraChoice {
+    CameraChoice::LookAt {
+        eye: glam::Vec3::new(-278.0, 273.0, 800.0),
+        target: glam::Vec3::new(-278.0, 273.0, 0.0),
+        yfov: 39.3077f32.to_radians(),
+    }
+}
+
+fn settings(size: u32, seed: u32) -> RenderSettings {
+    RenderSettings {
+        width: size,
+        height: size,
+        max_depth: 8,
+        environment: Environment::Constant([0.0; 3]),
+        seed,
+        ..Default::default()
+    }
+}
+
+fn env_or<T: std::str::FromStr>(name: &str, default: T) -> T {
+    std::env::var(name)
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(default)
+}
+
+/// The expected relMSE of one run at each spp of `spps`, estimated from `runs` independent runs (seeds
+/// `first_seed..`): half the mean over disjoint pairs of their relative squared difference, each pixel's
+/// difference divided by (mean of all runs at the last spp)^2 + EPS.
+fn expected_rel_mse(
+    ctx: &GpuContext,
+    scene: &Arc<SceneAsset>,
+    size: u32,
+    runs: u32,
+    first_seed: u32,
+    spps: &[u32],
+) -> Vec<(f64, f64)> {
+    let images: Vec<Vec<Vec<[f32; 3]>>> = (0..runs)
+        .map(|run| {
+            let mut app = HeadlessApp::new(
+                ctx.clone(),
+                scene.clone(),
+                settings(size, first_seed + run),
+                &camera(),
+            )
+            .expect("the box uploads");
+            let mut done = 0;
+            spps.iter()
+                .map(|&spp| {
+                    app.accumulate(spp - done, 64, |_| {});
+                    done = spp;
+                    let img = app.radiance();
+                    assert_all_finite(&img, "shipped box");
+                    img
+                })
+                .collect()
+        })
+        .collect();
+    let last = spps.len() - 1;
+    let pixels = images[0][last].len();
+    let mut mean = vec![[0.0f64; 3]; pixels];
+    for run in &images {
+        for (m, p) in mean.iter_mut().zip(&run[last]) {
+            for c in 0..3 {
+                m[c] += p[c] as f64 / runs as f64;
+            }
+        }
+    }
+    spps.iter()
+        .enumerate()
+        .map(|(j, &spp)| {
+            let pairs = runs as usize / 2;
+            let mut sum = 0.0;
+            for pair in 0..pairs {
+                let (a, b) = (&images[2 * pair][j], &images[2 * pair + 1][j]);
+                for ((pa, pb), m) in a.iter().zip(b).zip(&mean) {
+                    for c in 0..3 {
+                        let d = pa[c] as f64 - pb[c] as f64;
+                        sum += d * d / (m[c] * m[c] + EPS);
+                    }
+                }
+            }
+            (spp as f64, sum / (pairs * pixels * 3) as f64 / 2.0)
+        })
+        .collect()
+}
+
+/// Slope of log relative RMSE against log spp, and spp x relMSE at each point (constant at the Monte Carlo
+/// rate: the per-sample relative variance).
+fn rate(points: &[(f64, f64)]) -> (f64, Vec<f64>) {
+    let rmse: Vec<(f64, f64)> = points.iter().map(|&(n, v)| (n, v.sqrt())).collect();
+    (
+        log_log_slope(&rmse),
+        points.iter().map(|&(n, v)| n * v).collect(),
+    )
+}
+
+/// CI's measurement (lavapipe, ~30 s): 16 runs of 32x32 pixels, 4..64 spp, slope -0.5 +- 0.25. The margin is
+/// the spread of this statistic at this size: over 32 disjoint seed sets on the H200 it ranged from -0.71 to
+/// -0.34 (the heavy tail above); 256 runs of 64x64 pixels to 1024 spp give -0.502 (docs/ACCURACY.md).
 #[test]
-#[ignore = "fails: slope -0.22 on lavapipe (rare large samples remain; the cause is not found yet, issue 15)"]
-fn shipped_cornell_box_converges_at_the_monte_carlo_rate() {
+fn expected_error_of_the_shipped_box() {
     let (ctx, _gpu) = gpu();
     let scene = shipped_box();
     assert!(
         scene
             .materials
             .iter()
-            .any(|m| m.double_sided && m.emitted_radiance().max_element() > 0.0)
+            .any(|m| m.double_sided && m.emitted_radiance().max_element() > 0.0),
+        "the shipped box's lamp is double-sided"
     );
-    let camera = CameraChoice::LookAt {
-        eye: glam::Vec3::new(-278.0, 273.0, 800.0),
-        target: glam::Vec3::new(-278.0, 273.0, 0.0),
-        yfov: 39.3077f32.to_radians(),
-    };
-    let settings = |seed| RenderSettings {
-        width: 32,
-        height: 32,
-        max_depth: 8,
-        environment: Environment::Constant([0.0; 3]),
-        seed,
-        ..Default::default()
-    };
-    let (slope, points) = convergence_slope(&ctx, scene, settings, &camera);
-    eprintln!("shipped box: rel RMSE vs spp {points:?}, slope {slope:.3}");
+    let runs = env_or("RAYKIN_NEAR_RUNS", 16u32);
+    let size = env_or("RAYKIN_NEAR_SIZE", 32u32);
+    let seed_sets = env_or("RAYKIN_NEAR_SEED_SETS", 1u32);
+    let tolerance = env_or("RAYKIN_NEAR_TOLERANCE", 0.25f64);
+    let spps: Vec<u32> = std::env::var("RAYKIN_NEAR_SPP")
+        .unwrap_or_else(|_| "4,8,16,32,64".into())
+        .split(',')
+        .map(|s| {
+            s.trim()
+                .parse()
+                .expect("RAYKIN_NEAR_SPP: comma-separated spp")
+        })
+        .collect();
+    let mut failures = Vec::new();
+    for set in 0..seed_sets {
+        let first_seed = 1000 + set * runs;
+        let points = expected_rel_mse(&ctx, &scene, size, runs, first_seed, &spps);
+        let (slope, per_sample) = rate(&points);
+        println!(
+            "near_emitter size {size} runs {runs} seeds {first_seed}.. spp {spps:?}: slope {slope:.3}, spp x relMSE {per_sample:.3?}"
+        );
+        if (slope + 0.5).abs() >= tolerance {
+            failures.push((first_seed, slope));
+        }
+    }
     assert!(
-        (slope + 0.5).abs() < 0.1,
-        "log-log slope of relative RMSE vs spp is {slope:.3}, expected -0.5 +- 0.1"
+        failures.is_empty(),
+        "log-log slope of the expected relative RMSE vs spp outside -0.5 +- {tolerance}: {failures:?}"
     );
 }
