@@ -230,6 +230,13 @@ pub struct BenchArgs {
     /// Where skinning, morphing and BVH refit run (see `render --help`).
     #[arg(long, value_enum, default_value_t = DeformArg::Auto)]
     pub deform: DeformArg,
+    /// Error-vs-time part: measure only the curves whose name contains one of these (repeatable; the default
+    /// curve is always measured). Default: every curve.
+    #[arg(long)]
+    pub curve: Vec<String>,
+    /// Error-vs-time part: the largest spp of each curve (a power of two), instead of the suite's.
+    #[arg(long, value_parser = at_least_one())]
+    pub error_max_spp: Option<u32>,
 }
 
 /// `--deform`: where deformable meshes are skinned, morphed and refit.

@@ -115,13 +115,15 @@ pub struct SceneErrors {
     pub ms_to_rel_mse_0_001_extrapolated: bool,
 }
 
-/// Measures every curve of [`CURVES`] on `scene` at `base` settings.
+/// Measures the curves of [`CURVES`] on `scene` at `base` settings: the default and those whose name contains
+/// one of `only` (every curve when `only` is empty).
 pub fn measure(
     ctx: &GpuContext,
     scene: &BenchScene,
     base: &RenderSettings,
     suite: &super::suite::Suite,
     cache: &Path,
+    only: &[String],
 ) -> Result<SceneErrors> {
     let r = reference(ctx, scene, base, suite, cache)?;
     let reference_display = tonemap(&r.mean);
@@ -129,7 +131,10 @@ pub fn measure(
     let (w, h) = (base.width, base.height);
     let mut curves = Vec::new();
     let mut timing_source = "gpu-timestamps";
-    for (index, c) in CURVES.iter().enumerate() {
+    let wanted = |index: usize, c: &Curve| {
+        index == 0 || only.is_empty() || only.iter().any(|o| c.name.contains(o.as_str()))
+    };
+    for (index, c) in CURVES.iter().enumerate().filter(|(i, c)| wanted(*i, c)) {
         let mut settings = base.clone();
         (c.apply)(&mut settings);
         let spf = settings.spp_per_frame.max(1);

@@ -131,7 +131,10 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         );
     }
     let ctx = open_gpu()?;
-    let suite = suite::Suite::new(&args.suite, ctx.info.device_type)?;
+    let mut suite = suite::Suite::new(&args.suite, ctx.info.device_type)?;
+    if let Some(spp) = args.error_max_spp {
+        suite.error_max_spp = spp;
+    }
     let mut scene_names = if args.crowd {
         vec!["crowd".to_string()]
     } else {
@@ -237,7 +240,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         let cache = args.cache.clone();
         for scene in loaded.iter().filter(|s| !s.animated()) {
             eprintln!("raykin bench: {}: error vs time at {w}x{h}", scene.name);
-            let e = error_curves::measure(&ctx, scene, &settings, &suite, &cache)?;
+            let e = error_curves::measure(&ctx, scene, &settings, &suite, &cache, &args.curve)?;
             let file = format!("error-vs-time-{}.png", scene.name);
             chart(&file, &|p| {
                 charts::error_vs_time(
