@@ -377,3 +377,58 @@ fn check_oidn(results: &Value) {
         }
     }
 }
+
+/// `--curve` keeps the default curve and the named ones; `--error-max-spp` sets where each curve stops.
+#[test]
+fn curve_selection_and_error_max_spp() {
+    let out = std::env::temp_dir().join(format!("raykin-bench-curves-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&out);
+    let xdg = std::env::temp_dir().join("raykin-xdg");
+    std::fs::create_dir_all(&xdg).unwrap();
+    let output = std::process::Command::new(env!("CARGO_BIN_EXE_raykin"))
+        .args([
+            "bench",
+            "--suite",
+            "quick",
+            "--parts",
+            "errors",
+            "--scene",
+            "cornell",
+            "--curve",
+            "max depth 2",
+            "--error-max-spp",
+            "8",
+            "--out",
+        ])
+        .arg(&out)
+        .arg("--cache")
+        .arg(out.join("cache"))
+        .arg("--assets")
+        .arg(shared_assets())
+        .env("XDG_RUNTIME_DIR", &xdg)
+        .output()
+        .expect("raykin runs");
+    let log = String::from_utf8_lossy(&output.stderr);
+    assert!(output.status.success(), "raykin bench failed:\n{log}");
+    let results: Value = serde_json::from_str(
+        &std::fs::read_to_string(out.join("results.json")).expect("results.json"),
+    )
+    .expect("valid JSON");
+    let curves = results["error_vs_time"][0]["curves"]
+        .as_array()
+        .expect("curves");
+    let names: Vec<&str> = curves.iter().filter_map(|c| c["name"].as_str()).collect();
+    assert_eq!(names.len(), 2, "{names:?}");
+    assert!(names[0].starts_with("default"), "{names:?}");
+    assert_eq!(names[1], "max depth 2");
+    for c in curves {
+        let spp: Vec<u64> = c["points"]
+            .as_array()
+            .expect("points")
+            .iter()
+            .map(|p| p["spp"].as_u64().expect("spp"))
+            .collect();
+        assert_eq!(spp, [1, 2, 4, 8], "{}", c["name"]);
+    }
+    let _ = std::fs::remove_dir_all(&out);
+}
