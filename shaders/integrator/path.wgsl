@@ -85,6 +85,27 @@ fn escaped_radiance(dir: vec3<f32>, last_vertex: LightSampleContext, bsdf_pdf: f
     return sum;
 }
 
+// The denoisers' albedo and normal follow the path through mirror-like metal (OIDN's rule for delta surfaces,
+// Cycles' denoising albedo), so a reflection's texture edges reach the denoiser: where the path samples the
+// glossy lobe of a surface this smooth (roughness 0.075, Cycles' threshold) and mostly metal, the AOVs become
+// the next surface's, the albedo tinted by the reflectance on the way (Fresnel over the lobe's probability, so
+// the expectation over lobes is that of the BSDF's split). A path that leaves the scene on the way adds albedo
+// 0 and normal 0, as a miss does. At most AOV_MAX_MIRRORS mirrors are followed.
+const AOV_MIRROR_MAX_ALPHA: f32 = 0.005625;
+const AOV_MAX_MIRRORS: u32 = 4u;
+
+fn aov_is_mirror(b: BsdfParams) -> bool {
+    return b.alpha <= AOV_MIRROR_MAX_ALPHA && b.metallic >= 0.5;
+}
+
+// The glossy lobe's reflectance seen from `wo` over the probability of sampling it.
+fn aov_mirror_tint(wo: vec3<f32>, b: BsdfParams) -> vec3<f32> {
+    let fw = pow5(1.0 - clamp(wo.z, 0.0, 1.0));
+    let f_metal = b.base_color + (vec3<f32>(1.0) - b.base_color) * fw;
+    let reflectance = mix(vec3<f32>(0.04 + 0.96 * fw), f_metal, b.metallic);
+    return min(reflectance / max(specular_probability(wo, b), 1e-3), vec3<f32>(1.0));
+}
+
 struct PathResult {
     radiance: vec3<f32>,
     // The part of `radiance` that no surface scattered (exact: the denoiser leaves it alone).
@@ -125,6 +146,12 @@ fn trace_path_from(start: PathStart, forward: vec3<f32>, sampler: Sampler) -> Pa
     var shadow = DirectLight(ray, 0.0, vec3<f32>(0.0));
     var shadow_pending = false;
     var path_alive = true;
+    // Whether the AOVs are following the path through a mirror, with the reflectance gathered on the way.
+    var aov_following = false;
+    var aov_tint = vec3<f32>(1.0);
+    var aov_mirrors = 0u;
+    // Whether the surface being shaded is the one the AOVs show (a mirror there may pass them on).
+    var aov_open = false;
     loop {
         var next = ray;
         var t_max = MISS;
@@ -148,6 +175,10 @@ fn trace_path_from(start: PathStart, forward: vec3<f32>, sampler: Sampler) -> Pa
         if hit.instance == NONE {
             // The lights at infinity are in the light list too: ReSTIR counted them at the first hit.
             if depth == 1u && start.primary_direct_elsewhere { break; }
+            if aov_following {
+                result.albedo = vec3<f32>(0.0);
+                result.normal = vec3<f32>(0.0);
+            }
             let escaped = throughput * escaped_radiance(ray.dir, last_vertex, last_bsdf_pdf, nee);
             result.radiance += escaped;
             if depth == 0u { result.unscattered += escaped; }
@@ -159,12 +190,19 @@ fn trace_path_from(start: PathStart, forward: vec3<f32>, sampler: Sampler) -> Pa
             result.albedo = s.bsdf.base_color;
             result.normal = s.n;
             result.depth = hit.t * dot(ray.dir, forward);
+            aov_open = true;
+        } else if aov_following {
+            result.albedo = aov_tint * s.bsdf.base_color;
+            result.normal = s.n;
+            aov_following = false;
+            aov_open = true;
         }
         // Alpha blending as stochastic coverage: the path passes through with probability 1 - alpha.
         if (s.flags & MATERIAL_ALPHA_BLEND) != 0u && pass_throughs < MAX_PASS_THROUGHS
             && get_1d(sampler, DIM_PASS_THROUGH + depth * MAX_PASS_THROUGHS + pass_throughs) >= s.alpha {
             ray.origin = offset_ray_origin(s.p, -s.ng);
             pass_throughs++;
+            aov_open = false;
             continue;
         }
         if any(s.emission > vec3<f32>(0.0)) && emits_towards_viewer(s) {
@@ -192,6 +230,12 @@ fn trace_path_from(start: PathStart, forward: vec3<f32>, sampler: Sampler) -> Pa
         // below the geometry's would leak light (and a transmission the other way round).
         let transmitted = (bs.flags & BSDF_TRANSMISSION) != 0u;
         path_alive = bs.pdf > 0.0 && (dot(dir, s.ng) > 0.0) != transmitted;
+        if aov_open && path_alive && (bs.flags & BSDF_GLOSSY) != 0u && aov_is_mirror(s.bsdf) && aov_mirrors < AOV_MAX_MIRRORS {
+            aov_following = true;
+            aov_tint *= aov_mirror_tint(wo, s.bsdf);
+            aov_mirrors++;
+        }
+        aov_open = false;
         if path_alive {
             throughput *= bs.weight;
             last_bsdf_pdf = bs.pdf;

@@ -1,6 +1,7 @@
 //! OIDN's inputs from the view's accumulation: mean radiance, and the first-hit albedo and normal as
 //! OIDN documents its auxiliary images (anti-aliased like the colour, albedo in [0, 1], normals averaged but
-//! not renormalised, so an edge pixel's normal is the mean of its sub-pixel normals).
+//! not renormalised, so an edge pixel's normal is the mean of its sub-pixel normals). Through mirror-like metal
+//! the path kernel records the surface the mirror shows instead (shaders/integrator/path.wgsl).
 
 use crate::gpu::GpuContext;
 use crate::render::ViewTargets;
