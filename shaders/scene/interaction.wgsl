@@ -74,7 +74,7 @@ fn resolve_hit(hit: Hit, ray: Ray) -> SurfaceInteraction {
                 // On back faces n was flipped; the bitangent must follow the surface's own orientation.
                 let b = cross(select(-n, n, s.front), t) * sign;
                 let tex = sample_texture(m.normal_texture, texture_uv(m.normal_texture, mesh, tri, w)).xyz * 2.0 - 1.0;
-                let local = vec3<f32>(tex.xy * m.normal_scale, tex.z);
+                let local = vec3<f32>(untransform_tangent_normal(m.normal_texture, tex.xy) * m.normal_scale, tex.z);
                 let mapped = t * local.x + b * local.y + n * local.z;
                 if dot(mapped, mapped) > 1e-12 { n = normalize(mapped); }
             }

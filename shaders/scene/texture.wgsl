@@ -20,8 +20,13 @@ fn texel(info: TextureInfo, x: i32, y: i32) -> vec4<f32> {
     return unpack4x8unorm(texels[info.offset + u32(wy) * info.width + u32(wx)]);
 }
 
-fn sample_texture(texture: u32, uv: vec2<f32>) -> vec4<f32> {
+fn sample_texture(texture: u32, uv_in: vec2<f32>) -> vec4<f32> {
     let info = texture_infos[texture & 0xffffffu];
+    var uv = uv_in;
+    if (info.flags & TEXTURE_TRANSFORMED) != 0u {
+        let h = vec3<f32>(uv_in, 1.0);
+        uv = vec2<f32>(dot(info.uv_u.xyz, h), dot(info.uv_v.xyz, h));
+    }
     let size = vec2<f32>(f32(info.width), f32(info.height));
     let st = uv * size - 0.5;
     if (info.flags & TEXTURE_NEAREST) != 0u {
@@ -34,4 +39,15 @@ fn sample_texture(texture: u32, uv: vec2<f32>) -> vec4<f32> {
     let a = mix(texel(info, p.x, p.y), texel(info, p.x + 1, p.y), f.x);
     let b = mix(texel(info, p.x, p.y + 1), texel(info, p.x + 1, p.y + 1), f.x);
     return mix(a, b, f.y);
+}
+
+// A tangent-space normal sampled through a rotating KHR_texture_transform, turned back into the mesh's tangent
+// frame: the texture's u axis runs along the frame's (cos, -sin) (the rotation applies to UVs whose v axis
+// points down the image, the bitangent up), as three.js and Filament do.
+fn untransform_tangent_normal(texture: u32, xy: vec2<f32>) -> vec2<f32> {
+    let info = texture_infos[texture & 0xffffffu];
+    if (info.flags & TEXTURE_TRANSFORMED) == 0u { return xy; }
+    let c = info.uv_u.w;
+    let s = info.uv_v.w;
+    return vec2<f32>(c * xy.x + s * xy.y, -s * xy.x + c * xy.y);
 }

@@ -29,7 +29,7 @@ struct Material {
     base_color_texture: u32, metallic_roughness_texture: u32, normal_texture: u32, emissive_texture: u32,
 }
 
-struct TextureInfo { offset: u32, width: u32, height: u32, flags: u32 }
+struct TextureInfo { offset: u32, width: u32, height: u32, flags: u32, uv_u: vec4<f32>, uv_v: vec4<f32> }
 
 // One light of any kind (engine/src/render/layout.rs `GpuLight` documents each field per kind).
 struct Light {

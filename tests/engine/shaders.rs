@@ -135,7 +135,12 @@ fn scene_structs_match_wgsl() {
             emissive_texture
         ]
     );
-    same_layout!(l, "TextureInfo", GpuTexture, [offset, width, height, flags]);
+    same_layout!(
+        l,
+        "TextureInfo",
+        GpuTexture,
+        [offset, width, height, flags, uv_u, uv_v]
+    );
     same_layout!(
         l,
         "Light",

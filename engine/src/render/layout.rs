@@ -15,6 +15,8 @@ pub const MATERIAL_ALPHA_MASK: u32 = 2;
 pub const MATERIAL_ALPHA_BLEND: u32 = 4;
 
 pub const TEXTURE_NEAREST: u32 = 1 << 4;
+/// The texture-info entry carries a KHR_texture_transform (its `uv_u`/`uv_v` rows apply to the UVs).
+pub const TEXTURE_TRANSFORMED: u32 = 1 << 5;
 
 /// Set in `GpuMesh::blas_root` when the root indexes the compressed wide node buffer.
 pub const WIDE_BLAS: u32 = 1 << 31;
@@ -91,8 +93,13 @@ pub struct GpuTexture {
     pub offset: u32,
     pub width: u32,
     pub height: u32,
-    /// wrap_s in bits 0..2, wrap_t in bits 2..4 (0 repeat, 1 mirrored, 2 clamp), [`TEXTURE_NEAREST`].
+    /// wrap_s in bits 0..2, wrap_t in bits 2..4 (0 repeat, 1 mirrored, 2 clamp), [`TEXTURE_NEAREST`],
+    /// [`TEXTURE_TRANSFORMED`].
     pub flags: u32,
+    /// With [`TEXTURE_TRANSFORMED`]: `u' = dot(uv_u.xyz, (u, v, 1))`, `v' = dot(uv_v.xyz, (u, v, 1))` (the
+    /// spec's `T * R * S`); `uv_u.w`, `uv_v.w` = cos and sin of the rotation, which turns tangent-space normals.
+    pub uv_u: [f32; 4],
+    pub uv_v: [f32; 4],
 }
 
 pub const LIGHT_TRIANGLE: u32 = 0;
@@ -163,6 +170,7 @@ pub const WGSL_CONSTANTS: &[(&str, u32)] = &[
     ("MATERIAL_ALPHA_MASK", MATERIAL_ALPHA_MASK),
     ("MATERIAL_ALPHA_BLEND", MATERIAL_ALPHA_BLEND),
     ("TEXTURE_NEAREST", TEXTURE_NEAREST),
+    ("TEXTURE_TRANSFORMED", TEXTURE_TRANSFORMED),
     ("WIDE_BLAS", WIDE_BLAS),
     ("FRAME_NEE", FRAME_NEE),
     ("FRAME_HIT_AOV", FRAME_HIT_AOV),

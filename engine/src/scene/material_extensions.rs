@@ -509,7 +509,7 @@ pub(super) fn unrendered_report(materials: &[super::Material]) -> Vec<String> {
             shown.join(", ")
         }
     };
-    let mut lines: Vec<String> = by_extension
+    let lines: Vec<String> = by_extension
         .iter()
         .map(|(name, users)| {
             format!(
@@ -518,16 +518,5 @@ pub(super) fn unrendered_report(materials: &[super::Material]) -> Vec<String> {
             )
         })
         .collect();
-    let transformed: Vec<&str> = materials
-        .iter()
-        .filter(|m| m.texture_slots().iter().any(|t| !t.transform.is_identity()))
-        .map(|m| m.name.as_str())
-        .collect();
-    if !transformed.is_empty() {
-        lines.push(format!(
-            "KHR_texture_transform (materials {}): parsed but not rendered yet; textures are sampled without their transform",
-            list(&transformed)
-        ));
-    }
     lines
 }

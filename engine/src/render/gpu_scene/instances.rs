@@ -100,7 +100,7 @@ impl GpuScene {
         let mut changed = Vec::new();
         let mut emission_changed = false;
         for (i, m) in materials.iter().enumerate().take(self.material_data.len()) {
-            let gpu = gpu_material(m);
+            let gpu = gpu_material(m, &self.texture_slots);
             if gpu == self.material_data[i] {
                 continue;
             }

@@ -153,6 +153,8 @@ pub struct GpuScene {
     pub meshes: wgpu::Buffer,
     pub mesh_slots: Vec<MeshSlot>,
     pub material_data: Vec<GpuMaterial>,
+    /// The texture-info entries of transformed texture slots (what material edits resolve against).
+    pub texture_slots: packing::TextureSlots,
     pub memory: GpuMemory,
     /// The light list's parts and what was last uploaded.
     pub lights: LightList,
@@ -207,11 +209,15 @@ impl GpuScene {
         let mut triangles: Vec<[u32; 4]> = Vec::new();
         let mut slots = Vec::with_capacity(scene.meshes.len());
         let mut emissive_triangles = Vec::with_capacity(scene.meshes.len());
+        let (texels, mut texture_infos, note) =
+            packing::pack_textures(scene, limit.min(ctx.limits.max_buffer_size));
+        notes.extend(note);
+        let texture_slots = packing::TextureSlots::build(&scene.materials, &mut texture_infos);
         let materials: Vec<GpuMaterial> = scene
             .materials
             .iter()
             .chain(std::iter::once(&crate::scene::Material::default()))
-            .map(gpu_material)
+            .map(|m| gpu_material(m, &texture_slots))
             .collect();
         // Meshes build their trees in parallel (obvhs also parallelises within one large mesh).
         let blases: Vec<Blas> = scene
@@ -284,10 +290,6 @@ impl GpuScene {
             });
         }
 
-        let (texels, texture_infos, note) =
-            packing::pack_textures(scene, limit.min(ctx.limits.max_buffer_size));
-        notes.extend(note);
-
         let meshes: Vec<GpuMesh> = slots.iter().map(|s| s.gpu).collect();
         check("BLAS node", (blas_nodes.len() * 64) as u64)?;
         check("wide BLAS node", (wide_nodes.len() * 80) as u64)?;
@@ -299,7 +301,9 @@ impl GpuScene {
             blas_nodes: (blas_nodes.len() * 64 + wide_nodes.len() * 80) as u64,
             triangles: (triangles.len() * 16) as u64,
             vertex_pool: (pool.len() * 4) as u64,
-            materials: (materials.len() * 64 + texture_infos.len() * 16) as u64,
+            materials: (materials.len() * std::mem::size_of::<GpuMaterial>()
+                + texture_infos.len() * std::mem::size_of::<GpuTexture>())
+                as u64,
             texels: (texels.len() * 4) as u64,
             instances_and_tlas: 0,
             lights: 0,
@@ -323,6 +327,7 @@ impl GpuScene {
             meshes: storage(ctx, "meshes", bytemuck::cast_slice(&meshes)),
             mesh_slots: slots,
             material_data: materials,
+            texture_slots,
             memory,
             lights: LightList::default(),
             instance_order: Vec::new(),

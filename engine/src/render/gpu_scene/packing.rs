@@ -2,14 +2,88 @@
 //! emissive-triangle lists and texels.
 
 use crate::render::layout::*;
-use crate::scene::{AlphaMode, MeshData, SceneAsset, Wrap};
+use crate::scene::{AlphaMode, MeshData, SceneAsset, TextureTransform, Wrap};
 use glam::Vec3;
 
-fn texture_slot(t: Option<crate::scene::TextureRef>) -> u32 {
-    t.map_or(NONE, |t| t.texture | (t.tex_coord << 24))
+/// Texture-info entries for transformed texture slots (KHR_texture_transform). Each distinct (texture,
+/// transform) pair that a material uses gets its own entry after the scene's textures: a copy of the texture's
+/// entry with the transform's rows and [`TEXTURE_TRANSFORMED`]. A slot word then names that entry, so a slot
+/// without a transform costs nothing extra and the shader reads one entry either way.
+#[derive(Clone, Debug, Default)]
+pub struct TextureSlots {
+    entries: std::collections::HashMap<(u32, [u32; 8]), u32>,
 }
 
-pub fn gpu_material(m: &crate::scene::Material) -> GpuMaterial {
+fn transform_rows(t: &TextureTransform) -> ([f32; 4], [f32; 4]) {
+    let [a, b, c, d, e, f] = t.affine_rows();
+    let (sin, cos) = t.rotation.sin_cos();
+    ([a, b, c, cos], [d, e, f, sin])
+}
+
+fn transform_key(t: &TextureTransform) -> [u32; 8] {
+    let (u, v) = transform_rows(t);
+    let mut key = [0; 8];
+    for (k, x) in key.iter_mut().zip(u.iter().chain(&v)) {
+        *k = x.to_bits();
+    }
+    key
+}
+
+impl TextureSlots {
+    /// Appends an entry to `infos` for every transformed slot of `materials`' GPU slots.
+    pub fn build(materials: &[crate::scene::Material], infos: &mut Vec<GpuTexture>) -> Self {
+        let mut slots = Self::default();
+        let base_count = infos.len();
+        for m in materials {
+            for t in [
+                m.base_color_texture,
+                m.metallic_roughness_texture,
+                m.normal_texture,
+                m.emissive_texture,
+            ]
+            .into_iter()
+            .flatten()
+            {
+                if t.transform.is_identity() || (t.texture as usize) >= base_count {
+                    continue;
+                }
+                let key = (t.texture, transform_key(&t.transform));
+                if slots.entries.contains_key(&key) {
+                    continue;
+                }
+                let (uv_u, uv_v) = transform_rows(&t.transform);
+                let base = infos[t.texture as usize];
+                slots.entries.insert(key, infos.len() as u32);
+                infos.push(GpuTexture {
+                    flags: base.flags | TEXTURE_TRANSFORMED,
+                    uv_u,
+                    uv_v,
+                    ..base
+                });
+            }
+        }
+        slots
+    }
+
+    /// The GPU slot word of a material's texture reference: its texture-info entry in bits 0..24 and its
+    /// TEXCOORD set in bit 24; [`NONE`] when absent. A transform this table does not hold (a material edited
+    /// after upload) falls back to the untransformed texture.
+    pub fn slot_word(&self, t: Option<crate::scene::TextureRef>) -> u32 {
+        t.map_or(NONE, |t| {
+            let entry = if t.transform.is_identity() {
+                t.texture
+            } else {
+                self.entries
+                    .get(&(t.texture, transform_key(&t.transform)))
+                    .copied()
+                    .unwrap_or(t.texture)
+            };
+            entry | (t.tex_coord << 24)
+        })
+    }
+}
+
+pub fn gpu_material(m: &crate::scene::Material, textures: &TextureSlots) -> GpuMaterial {
     let (cutoff, alpha_flags) = match m.alpha_mode {
         AlphaMode::Opaque => (0.0, 0),
         AlphaMode::Mask(c) => (c, MATERIAL_ALPHA_MASK),
@@ -28,10 +102,10 @@ pub fn gpu_material(m: &crate::scene::Material) -> GpuMaterial {
             } else {
                 0
             },
-        base_color_texture: texture_slot(m.base_color_texture),
-        metallic_roughness_texture: texture_slot(m.metallic_roughness_texture),
-        normal_texture: texture_slot(m.normal_texture),
-        emissive_texture: texture_slot(m.emissive_texture),
+        base_color_texture: textures.slot_word(m.base_color_texture),
+        metallic_roughness_texture: textures.slot_word(m.metallic_roughness_texture),
+        normal_texture: textures.slot_word(m.normal_texture),
+        emissive_texture: textures.slot_word(m.emissive_texture),
     }
 }
 
@@ -167,6 +241,8 @@ pub(super) fn pack_textures(
                 flags: wrap_bits(t.wrap_s)
                     | (wrap_bits(t.wrap_t) << 2)
                     | if t.nearest { TEXTURE_NEAREST } else { 0 },
+                uv_u: [1.0, 0.0, 0.0, 1.0],
+                uv_v: [0.0, 1.0, 0.0, 0.0],
             }
         })
         .collect();
