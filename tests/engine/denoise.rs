@@ -117,8 +117,8 @@ fn flat_region_keeps_its_mean() {
 }
 
 /// No net energy is gained or lost over a whole scene with finite variance (the Cornell box with a
-/// single-sided light) at 16 spp. With the shipped double-sided light (infinite variance next to the
-/// ceiling) the filter, like SVGF, drops part of the fireflies' energy: measured and loosely bounded
+/// single-sided light) at 16 spp. With the shipped double-sided light (heavy-tailed: light leaking from the
+/// cavity above it) the filter, like SVGF, drops part of the fireflies' energy: measured and loosely bounded
 /// (docs/ACCURACY.md).
 #[test]
 fn scene_energy_is_kept() {

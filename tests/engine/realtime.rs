@@ -531,8 +531,8 @@ fn material_edit_and_scene_change_reset_what_they_invalidate() {
 /// of a still (a plain mean over 96 frames) with ReSTIR on and off. Measured 2026-12-02 (third session): block
 /// relMSE against Mitsuba 2.6e-2 with ReSTIR, 1.5e-2 without. Two things no estimator change causes keep the
 /// bound loose. The top 4 rows (the ceiling around the light) are left out of the means: the light hangs under
-/// the ceiling, so next-event estimation there has infinite variance and any finite mean runs low (even a
-/// 768-spp accumulation is 23% below Mitsuba in that band, against 0-1.5% in every other band). And the history
+/// the ceiling, and the light leaking from the cavity above it makes samples there heavy-tailed, so a short mean
+/// runs low (even a 768-spp accumulation is 23% below Mitsuba in that band, against 0-1.5% in every other band). And the history
 /// of a still is biased at edges (docs/ACCURACY.md, "silhouettes under jitter"): one 4x4 block on the short
 /// block's top edge is at 0.33 of the accumulation with ReSTIR on or off. Means within 3% and block error
 /// within 3x NEE's: a bias of several percent (a wrong MIS weight, double-counted light) fails it.

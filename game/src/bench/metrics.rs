@@ -2,7 +2,7 @@
 //! `nv-flip` crate) on the tone-mapped images a user looks at, and relMSE on linear radiance as well.
 //!
 //! Why both relMSEs: on linear radiance a rare very bright sample (a firefly) dominates the error for many
-//! frames, so an estimator with infinite variance (the Cornell box's double-sided light, docs/ACCURACY.md)
+//! frames, so a heavy-tailed estimator (the Cornell box's double-sided light, docs/ACCURACY.md)
 //! gives a curve that jumps up and down; the display transform bounds each pixel, which is what a viewer sees.
 
 /// Epsilon of the relMSE denominator (as in tests/common/cornell.rs): keeps black pixels from dominating.
