@@ -19,23 +19,30 @@ fn finite_positive(v: &Value, what: &str) -> f64 {
     x
 }
 
-#[test]
-fn quick_suite_writes_sane_results_and_charts() {
-    let out = std::env::temp_dir().join(format!("raykin-bench-test-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&out);
+/// `raykin bench --suite quick` into `out` (cache under it, the shared assets) with `args` added: its output.
+fn run_quick_bench(out: &Path, args: &[&str]) -> std::process::Output {
     let xdg = std::env::temp_dir().join("raykin-xdg");
     std::fs::create_dir_all(&xdg).unwrap();
-    let start = std::time::Instant::now();
-    let output = std::process::Command::new(env!("CARGO_BIN_EXE_raykin"))
-        .args(["bench", "--suite", "quick", "--out"])
-        .arg(&out)
+    std::process::Command::new(env!("CARGO_BIN_EXE_raykin"))
+        .args(["bench", "--suite", "quick"])
+        .args(args)
+        .arg("--out")
+        .arg(out)
         .arg("--cache")
         .arg(out.join("cache"))
         .arg("--assets")
         .arg(shared_assets())
         .env("XDG_RUNTIME_DIR", &xdg)
         .output()
-        .expect("raykin runs");
+        .expect("raykin runs")
+}
+
+#[test]
+fn quick_suite_writes_sane_results_and_charts() {
+    let out = std::env::temp_dir().join(format!("raykin-bench-test-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&out);
+    let start = std::time::Instant::now();
+    let output = run_quick_bench(&out, &[]);
     let log = String::from_utf8_lossy(&output.stderr);
     assert!(output.status.success(), "raykin bench failed:\n{log}");
     eprintln!("quick suite: {:.0} s", start.elapsed().as_secs_f64());
@@ -383,13 +390,9 @@ fn check_oidn(results: &Value) {
 fn curve_selection_and_error_max_spp() {
     let out = std::env::temp_dir().join(format!("raykin-bench-curves-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&out);
-    let xdg = std::env::temp_dir().join("raykin-xdg");
-    std::fs::create_dir_all(&xdg).unwrap();
-    let output = std::process::Command::new(env!("CARGO_BIN_EXE_raykin"))
-        .args([
-            "bench",
-            "--suite",
-            "quick",
+    let output = run_quick_bench(
+        &out,
+        &[
             "--parts",
             "errors",
             "--scene",
@@ -398,16 +401,8 @@ fn curve_selection_and_error_max_spp() {
             "max depth 2",
             "--error-max-spp",
             "8",
-            "--out",
-        ])
-        .arg(&out)
-        .arg("--cache")
-        .arg(out.join("cache"))
-        .arg("--assets")
-        .arg(shared_assets())
-        .env("XDG_RUNTIME_DIR", &xdg)
-        .output()
-        .expect("raykin runs");
+        ],
+    );
     let log = String::from_utf8_lossy(&output.stderr);
     assert!(output.status.success(), "raykin bench failed:\n{log}");
     let results: Value = serde_json::from_str(

@@ -131,6 +131,22 @@ pub fn assert_channel_means_within(what: &str, got: [f64; 3], want: [f64; 3], to
     }
 }
 
+/// A quad from four corners, counter-clockwise seen from its front, as two triangles of one material.
+pub fn quad_mesh(corners: [glam::Vec3; 4], material: u32) -> raykin::scene::MeshData {
+    raykin::scene::MeshData {
+        name: "quad".into(),
+        positions: corners.to_vec(),
+        triangles: vec![[0, 1, 2], [0, 2, 3]],
+        triangle_materials: vec![material; 2],
+        primitives: vec![raykin::scene::PrimitiveRange {
+            vertex_offset: 0,
+            vertex_count: 4,
+            material,
+        }],
+        ..Default::default()
+    }
+}
+
 /// Least-squares slope of log(y) against log(x).
 pub fn log_log_slope(points: &[(f64, f64)]) -> f64 {
     let n = points.len() as f64;

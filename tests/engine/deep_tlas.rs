@@ -9,9 +9,7 @@ use raykin::bvh::{FlatBvh, GpuBvhChild, GpuBvhNode};
 use raykin::camera::CameraChoice;
 use raykin::headless::HeadlessApp;
 use raykin::render::{Environment, GpuScene, RenderSettings};
-use raykin::scene::{
-    Material, MeshData, NodeData, NodeTransform, PrimitiveRange, SceneAsset, SceneAssets,
-};
+use raykin::scene::{Material, MeshData, NodeData, NodeTransform, SceneAsset, SceneAssets};
 use std::sync::Arc;
 
 const COLUMNS: usize = 10;
@@ -25,22 +23,16 @@ const HEIGHT: usize = 80;
 fn quad() -> MeshData {
     let h = QUAD * 0.5;
     MeshData {
-        name: "quad".into(),
-        positions: vec![
-            Vec3::new(-h, -h, 0.0),
-            Vec3::new(h, -h, 0.0),
-            Vec3::new(h, h, 0.0),
-            Vec3::new(-h, h, 0.0),
-        ],
         normals: Some(vec![Vec3::Z; 4]),
-        triangles: vec![[0, 1, 2], [0, 2, 3]],
-        triangle_materials: vec![0; 2],
-        primitives: vec![PrimitiveRange {
-            vertex_offset: 0,
-            vertex_count: 4,
-            material: 0,
-        }],
-        ..Default::default()
+        ..crate::common::quad_mesh(
+            [
+                Vec3::new(-h, -h, 0.0),
+                Vec3::new(h, -h, 0.0),
+                Vec3::new(h, h, 0.0),
+                Vec3::new(-h, h, 0.0),
+            ],
+            0,
+        )
     }
 }
 

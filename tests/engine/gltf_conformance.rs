@@ -798,9 +798,7 @@ fn base64_encode(bytes: &[u8]) -> String {
 /// footprint maps to one texel are compared. The identity transform checks the pixel-to-UV mapping itself.
 #[test]
 fn texture_transform_moves_the_texels() {
-    use raykin::scene::{
-        Image, Material, MeshData, PrimitiveRange, Texture, TextureRef, TextureTransform, Wrap,
-    };
+    use raykin::scene::{Image, Material, MeshData, Texture, TextureRef, TextureTransform, Wrap};
     const SIZE: u32 = 32;
     let colours = [
         [1.0f32, 0.0, 0.0],
@@ -821,27 +819,21 @@ fn texture_transform_moves_the_texels() {
         .collect();
     // The quad spans [-1, 1]^2 at z = 0 with u along +x and v down the image (glTF's convention).
     let quad = MeshData {
-        name: "quad".into(),
-        positions: vec![
-            Vec3::new(-1.0, 1.0, 0.0),
-            Vec3::new(-1.0, -1.0, 0.0),
-            Vec3::new(1.0, -1.0, 0.0),
-            Vec3::new(1.0, 1.0, 0.0),
-        ],
         uv0: Some(vec![
             Vec2::new(0.0, 0.0),
             Vec2::new(0.0, 1.0),
             Vec2::new(1.0, 1.0),
             Vec2::new(1.0, 0.0),
         ]),
-        triangles: vec![[0, 1, 2], [0, 2, 3]],
-        triangle_materials: vec![0; 2],
-        primitives: vec![PrimitiveRange {
-            vertex_offset: 0,
-            vertex_count: 4,
-            material: 0,
-        }],
-        ..Default::default()
+        ..quad_mesh(
+            [
+                Vec3::new(-1.0, 1.0, 0.0),
+                Vec3::new(-1.0, -1.0, 0.0),
+                Vec3::new(1.0, -1.0, 0.0),
+                Vec3::new(1.0, 1.0, 0.0),
+            ],
+            0,
+        )
     };
     let render_with = |ctx: &raykin::gpu::GpuContext, transform: TextureTransform| {
         let mut scene = raykin::scene::procedural::scene_from_meshes(

@@ -14,16 +14,12 @@
 //! `RAYKIN_NEAR_RUNS=256 RAYKIN_NEAR_SIZE=64 RAYKIN_NEAR_SPP=4,16,64,256,1024 <engine test binary> --ignored
 //! near_emitter::expected_error_of_the_shipped_box`.
 
+use crate::common::cornell::{self, EPS};
 use crate::common::*;
-use raykin::camera::CameraChoice;
 use raykin::gpu::GpuContext;
 use raykin::headless::HeadlessApp;
-use raykin::render::{Environment, RenderSettings};
 use raykin::scene::SceneAsset;
 use std::sync::Arc;
-
-/// The relative-error denominator's epsilon, as in the Cornell reference tests.
-const EPS: f64 = 1e-2;
 
 fn shipped_box() -> Arc<SceneAsset> {
     let bytes =
@@ -37,25 +33,6 @@ fn shipped_box() -> Arc<SceneAsset> {
         )
         .expect("loads"),
     )
-}
-
-fn camera() -> CameraChoice {
-    CameraChoice::LookAt {
-        eye: glam::Vec3::new(-278.0, 273.0, 800.0),
-        target: glam::Vec3::new(-278.0, 273.0, 0.0),
-        yfov: 39.3077f32.to_radians(),
-    }
-}
-
-fn settings(size: u32, seed: u32) -> RenderSettings {
-    RenderSettings {
-        width: size,
-        height: size,
-        max_depth: 8,
-        environment: Environment::Constant([0.0; 3]),
-        seed,
-        ..Default::default()
-    }
 }
 
 fn env_or<T: std::str::FromStr>(name: &str, default: T) -> T {
@@ -81,8 +58,8 @@ fn expected_rel_mse(
             let mut app = HeadlessApp::new(
                 ctx.clone(),
                 scene.clone(),
-                settings(size, first_seed + run),
-                &camera(),
+                cornell::settings(size, first_seed + run),
+                &cornell::camera(),
             )
             .expect("the box uploads");
             let mut done = 0;
@@ -136,7 +113,7 @@ fn rate(points: &[(f64, f64)]) -> (f64, Vec<f64>) {
     )
 }
 
-/// CI's measurement (lavapipe, ~30 s): 16 runs of 32x32 pixels, 4..64 spp, slope -0.5 +- 0.25. The margin is
+/// CI's measurement (lavapipe, ~45 s): 16 runs of 32x32 pixels, 4..64 spp, slope -0.5 +- 0.25. The margin is
 /// the spread of this statistic at this size: over 32 disjoint seed sets on the H200 it ranged from -0.71 to
 /// -0.34 (the heavy tail above); 256 runs of 64x64 pixels to 1024 spp give -0.502 (docs/ACCURACY.md).
 #[test]

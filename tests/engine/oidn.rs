@@ -358,29 +358,13 @@ fn viewer_denoises_a_still_image_on_its_worker() {
     assert_eq!(displayed, app.display_rgba8());
 }
 
-/// A quad from four corners (counter-clockwise seen from its front).
-fn quad(corners: [glam::Vec3; 4], material: u32) -> raykin::scene::MeshData {
-    raykin::scene::MeshData {
-        name: "quad".into(),
-        positions: corners.to_vec(),
-        triangles: vec![[0, 1, 2], [0, 2, 3]],
-        triangle_materials: vec![material; 2],
-        primitives: vec![raykin::scene::PrimitiveRange {
-            vertex_offset: 0,
-            vertex_count: 4,
-            material,
-        }],
-        ..Default::default()
-    }
-}
-
 /// A floor (metal, `floor_roughness`) in front of a wall whose left half is red and right half green, under a
 /// white sky; the camera looks down at the floor, which shows the wall's lower part mirrored.
 fn mirror_floor_app(ctx: raykin::gpu::GpuContext, floor_roughness: f32) -> HeadlessApp {
     use glam::{Vec3, Vec4};
     use raykin::scene::Material;
     let v = Vec3::new;
-    let floor = quad(
+    let floor = quad_mesh(
         [
             v(-2.0, 0.0, 2.0),
             v(2.0, 0.0, 2.0),
@@ -389,7 +373,7 @@ fn mirror_floor_app(ctx: raykin::gpu::GpuContext, floor_roughness: f32) -> Headl
         ],
         0,
     );
-    let red = quad(
+    let red = quad_mesh(
         [
             v(-2.0, 0.0, -2.0),
             v(0.0, 0.0, -2.0),
@@ -398,7 +382,7 @@ fn mirror_floor_app(ctx: raykin::gpu::GpuContext, floor_roughness: f32) -> Headl
         ],
         1,
     );
-    let green = quad(
+    let green = quad_mesh(
         [
             v(0.0, 0.0, -2.0),
             v(2.0, 0.0, -2.0),

@@ -7,7 +7,7 @@ use glam::Vec3;
 use raykin::camera::CameraChoice;
 use raykin::headless::HeadlessApp;
 use raykin::render::{Environment, RenderSettings, ThinLens};
-use raykin::scene::{Material, MeshData, NodeTransform, PrimitiveRange, SceneAsset};
+use raykin::scene::{Material, MeshData, NodeTransform, SceneAsset};
 use std::sync::Arc;
 
 const SIZE: u32 = 64;
@@ -16,23 +16,15 @@ const YFOV_DEGREES: f32 = 30.0;
 /// A square facing +Z, `side` wide, centred at `center`.
 fn square(center: Vec3, side: f32, material: u32) -> MeshData {
     let h = side * 0.5;
-    MeshData {
-        name: "square".into(),
-        positions: vec![
+    quad_mesh(
+        [
             center + Vec3::new(-h, -h, 0.0),
             center + Vec3::new(h, -h, 0.0),
             center + Vec3::new(h, h, 0.0),
             center + Vec3::new(-h, h, 0.0),
         ],
-        triangles: vec![[0, 1, 2], [0, 2, 3]],
-        triangle_materials: vec![material; 2],
-        primitives: vec![PrimitiveRange {
-            vertex_offset: 0,
-            vertex_count: 4,
-            material,
-        }],
-        ..Default::default()
-    }
+        material,
+    )
 }
 
 fn emitter() -> Material {
