@@ -1,69 +1,185 @@
-// The glTF 2.0 metallic-roughness BSDF (specification, Appendix B), exactly: Lambert diffuse weighted by
-// 1 - F, GGX distribution, height-correlated Smith visibility, Schlick Fresnel, f0 = 0.04 for the dielectric,
-// f0 = baseColor for the metal, alpha = roughness^2. Reflection only: zero when either direction is below the
-// shading horizon. Sampling: a mixture of cosine-weighted diffuse and GGX visible-normal sampling, with the
-// exact mixture pdf.
+// The glTF 2.0 BSDF: the core metallic-roughness model (specification, Appendix B) exactly, with the layering of
+// KHR_materials_ior, _specular and _transmission (their "implementation" sections):
+//   f = mix(dielectric, metal, metallic)
+//   metal      = F_schlick(baseColor) * specular_brdf
+//   dielectric = fresnel_mix(layer = specular_brdf, base = mix(diffuse(baseColor), baseColor * btdf, transmission))
+//   fresnel_mix = weight * F * layer + (1 - weight * max(F)) * base,  F = f0 + (1 - f0) (1 - v.h)^5
+// specular_brdf is GGX with height-correlated Smith visibility, alpha = roughness^2. The BTDF shares that
+// distribution: a refracting microfacet BTDF (Walter et al. 2007) where a volume lies behind the surface, else
+// the thin-walled one (the reflection lobe mirrored through the surface: transmitted rays do not bend).
+// Leaving a volume, the Fresnel term takes the cosine on the outer side, so total internal reflection reflects
+// everything. Sampling picks the glossy reflection, the transmission or the diffuse lobe by their estimated
+// shares and samples GGX visible normals or the cosine; the pdf is the exact mixture.
 
 struct BsdfParams {
     base_color: vec3<f32>,
     metallic: f32,
     alpha: f32,
+    // Share of the dielectric base that is transmitted instead of diffusely reflected.
+    transmission: f32,
+    // Relative index of refraction across the surface seen from wo (far side over near side): the material's
+    // IOR when wo is outside, its inverse inside; exactly 1 for thin-walled transmission.
+    eta: f32,
+    // The dielectric Fresnel's f0 (clamped to 1) and the layer's weight.
+    specular_f0: vec3<f32>,
+    specular_weight: f32,
+}
+
+// The core specification's material: f0 = 0.04 (IOR 1.5), no transmission.
+fn core_bsdf(base_color: vec3<f32>, metallic: f32, alpha: f32) -> BsdfParams {
+    return BsdfParams(base_color, metallic, alpha, 0.0, 1.0, vec3<f32>(0.04), 1.0);
 }
 
 // The lobes this material has (BSDF_* flags): the integrator accepts light from behind the surface only
 // when one of them transmits.
 fn bsdf_flags(p: BsdfParams) -> u32 {
+    if p.transmission > 0.0 && p.metallic < 1.0 {
+        return BSDF_REFLECTION | BSDF_TRANSMISSION | BSDF_DIFFUSE | BSDF_GLOSSY;
+    }
     return BSDF_REFLECTION | BSDF_DIFFUSE | BSDF_GLOSSY;
+}
+
+fn max3(c: vec3<f32>) -> f32 {
+    return max(c.x, max(c.y, c.z));
+}
+
+// The dielectric layer's Fresnel term for a microfacet at cosine `c` with wo: Schlick's, on the cosine of the
+// outer side (the transmitted one when wo is inside a denser volume; 1 beyond the critical angle).
+fn dielectric_fresnel(c: f32, p: BsdfParams) -> vec3<f32> {
+    var cos_outside = c;
+    if p.eta < 1.0 {
+        let sin2_t = (1.0 - c * c) / (p.eta * p.eta);
+        if sin2_t >= 1.0 { return vec3<f32>(1.0); }
+        cos_outside = sqrt(1.0 - sin2_t);
+    }
+    let fw = pow5(1.0 - clamp(cos_outside, 0.0, 1.0));
+    return p.specular_f0 + (vec3<f32>(1.0) - p.specular_f0) * fw;
+}
+
+fn thin_walled(p: BsdfParams) -> bool {
+    return p.eta == 1.0;
+}
+
+// The generalized half vector of a refraction from wo = v to wi = l (Walter et al. 2007), on v's side; zero
+// where no microfacet refracts v into l (both on its front, or a configuration the distribution excludes).
+fn refraction_half_vector(v: vec3<f32>, l: vec3<f32>, eta: f32) -> vec3<f32> {
+    var h = v + eta * l;
+    if dot(h, h) <= 0.0 { return vec3<f32>(0.0); }
+    h = normalize(h);
+    if h.z < 0.0 { h = -h; }
+    if dot(v, h) <= 0.0 || dot(l, h) >= 0.0 { return vec3<f32>(0.0); }
+    return h;
 }
 
 // f(wo, wi), without the cosine.
 fn bsdf_eval(v: vec3<f32>, l: vec3<f32>, p: BsdfParams) -> vec3<f32> {
-    if v.z <= 0.0 || l.z <= 0.0 { return vec3<f32>(0.0); }
-    let h = normalize(v + l);
-    let vh = abs(dot(v, h));
+    if v.z <= 0.0 { return vec3<f32>(0.0); }
     let a2 = p.alpha * p.alpha;
-    let spec = smith_visibility(l.z, v.z, a2) * ggx_d(h, a2);
-    let fw = pow5(1.0 - vh);
-    let f_dielectric = 0.04 + 0.96 * fw;
-    let f_metal = p.base_color + (vec3<f32>(1.0) - p.base_color) * fw;
-    let dielectric = (1.0 - f_dielectric) * p.base_color * INV_PI + vec3<f32>(f_dielectric * spec);
-    let metal = f_metal * spec;
-    return mix(dielectric, metal, p.metallic);
+    if l.z > 0.0 {
+        let h = normalize(v + l);
+        let vh = abs(dot(v, h));
+        let spec = smith_visibility(l.z, v.z, a2) * ggx_d(h, a2);
+        let f_dielectric = dielectric_fresnel(vh, p);
+        let base_weight = 1.0 - p.specular_weight * max3(f_dielectric);
+        let diffuse = base_weight * (1.0 - p.transmission) * p.base_color * INV_PI;
+        let dielectric = diffuse + p.specular_weight * f_dielectric * spec;
+        let f_metal = p.base_color + (vec3<f32>(1.0) - p.base_color) * pow5(1.0 - vh);
+        return mix(dielectric, f_metal * spec, p.metallic);
+    }
+    if l.z < 0.0 && (bsdf_flags(p) & BSDF_TRANSMISSION) != 0u {
+        let tint = (1.0 - p.metallic) * p.transmission * p.base_color;
+        if thin_walled(p) {
+            let mirrored = vec3<f32>(l.xy, -l.z);
+            let h = normalize(v + mirrored);
+            let f = dielectric_fresnel(dot(v, h), p);
+            let spec = smith_visibility(mirrored.z, v.z, a2) * ggx_d(h, a2);
+            return tint * (1.0 - p.specular_weight * max3(f)) * spec;
+        }
+        let h = refraction_half_vector(v, l, p.eta);
+        if h.z == 0.0 { return vec3<f32>(0.0); }
+        let vh = dot(v, h);
+        let lh = dot(l, h);
+        let f = dielectric_fresnel(vh, p);
+        let denom = lh + vh / p.eta;
+        let g2 = smith_visibility(-l.z, v.z, a2) * 4.0 * (-l.z) * v.z;
+        // Radiance is scaled by 1 / eta^2 crossing into the denser side (and back).
+        let btdf = ggx_d(h, a2) * g2 * abs(lh * vh / (l.z * v.z * denom * denom)) / (p.eta * p.eta);
+        return tint * (1.0 - p.specular_weight * max3(f)) * btdf;
+    }
+    return vec3<f32>(0.0);
 }
 
-// Probability of sampling the specular lobe: its estimated share of the reflected energy.
-fn specular_probability(v: vec3<f32>, p: BsdfParams) -> f32 {
+// Probabilities of sampling the glossy reflection, the transmission and the diffuse lobe: their estimated
+// shares of the scattered energy. Every lobe that can be non-zero keeps some probability.
+fn lobe_probabilities(v: vec3<f32>, p: BsdfParams) -> vec3<f32> {
     let fw = pow5(1.0 - clamp(v.z, 0.0, 1.0));
-    let f_dielectric = 0.04 + 0.96 * fw;
+    let f_dielectric = dielectric_fresnel(v.z, p);
     let f_metal = luminance(p.base_color + (vec3<f32>(1.0) - p.base_color) * fw);
-    let spec = mix(f_dielectric, f_metal, p.metallic);
-    let diffuse = (1.0 - p.metallic) * (1.0 - f_dielectric) * luminance(p.base_color);
-    if diffuse <= 0.0 { return 1.0; }
-    return clamp(spec / (spec + diffuse), 0.1, 0.9);
+    let spec = mix(p.specular_weight * luminance(f_dielectric), f_metal, p.metallic);
+    let base = (1.0 - p.metallic) * (1.0 - p.specular_weight * max3(f_dielectric)) * luminance(p.base_color);
+    if (bsdf_flags(p) & BSDF_TRANSMISSION) == 0u {
+        if base <= 0.0 { return vec3<f32>(1.0, 0.0, 0.0); }
+        let ps = clamp(spec / (spec + base), 0.1, 0.9);
+        return vec3<f32>(ps, 0.0, 1.0 - ps);
+    }
+    let ps = clamp(spec / max(spec + base, 1e-6), 0.1, 0.9);
+    return vec3<f32>(ps, (1.0 - ps) * p.transmission, (1.0 - ps) * (1.0 - p.transmission));
+}
+
+// Probability of sampling the glossy reflection lobe (the mirror AOVs' tint divides by it).
+fn specular_probability(v: vec3<f32>, p: BsdfParams) -> f32 {
+    return lobe_probabilities(v, p).x;
 }
 
 fn bsdf_pdf(v: vec3<f32>, l: vec3<f32>, p: BsdfParams) -> f32 {
-    if v.z <= 0.0 || l.z <= 0.0 { return 0.0; }
-    let ps = specular_probability(v, p);
-    let spec_pdf = ggx_reflection_pdf(v, l, p.alpha * p.alpha);
-    return ps * spec_pdf + (1.0 - ps) * l.z * INV_PI;
+    if v.z <= 0.0 { return 0.0; }
+    let a2 = p.alpha * p.alpha;
+    let probs = lobe_probabilities(v, p);
+    if l.z > 0.0 {
+        return probs.x * ggx_reflection_pdf(v, l, a2) + probs.z * l.z * INV_PI;
+    }
+    if l.z < 0.0 && probs.y > 0.0 {
+        if thin_walled(p) {
+            return probs.y * ggx_reflection_pdf(v, vec3<f32>(l.xy, -l.z), a2);
+        }
+        let h = refraction_half_vector(v, l, p.eta);
+        if h.z == 0.0 { return 0.0; }
+        let vh = dot(v, h);
+        let lh = dot(l, h);
+        let denom = lh + vh / p.eta;
+        // Visible-normal density times the refraction's Jacobian |l.h| / (l.h + v.h / eta)^2.
+        return probs.y * smith_g1(v.z, a2) * ggx_d(h, a2) * vh / v.z * abs(lh) / (denom * denom);
+    }
+    return 0.0;
 }
 
 // Samples wi: `u_lobe` picks the lobe, `u` the direction within it.
 fn bsdf_sample(v: vec3<f32>, p: BsdfParams, u_lobe: f32, u: vec2<f32>) -> BsdfSample {
+    let probs = lobe_probabilities(v, p);
     var l: vec3<f32>;
     var flags: u32;
-    if u_lobe < specular_probability(v, p) {
+    if u_lobe < probs.x {
         let h = sample_vndf(v, p.alpha, u);
         l = reflect(-v, h);
         flags = BSDF_REFLECTION | BSDF_GLOSSY;
+    } else if u_lobe < probs.x + probs.y {
+        let h = sample_vndf(v, p.alpha, u);
+        if thin_walled(p) {
+            let r = reflect(-v, h);
+            l = vec3<f32>(r.xy, -r.z);
+        } else {
+            // WGSL's refract takes the near side's index over the far side's; zero on total internal reflection.
+            l = refract(-v, h, 1.0 / p.eta);
+        }
+        flags = BSDF_TRANSMISSION | BSDF_GLOSSY;
     } else {
         l = sample_cosine_hemisphere(u);
         flags = BSDF_REFLECTION | BSDF_DIFFUSE;
     }
+    let transmitted = (flags & BSDF_TRANSMISSION) != 0u;
     let pdf = bsdf_pdf(v, l, p);
-    if l.z <= 0.0 || pdf <= 0.0 {
+    if (l.z > 0.0) == transmitted || l.z == 0.0 || pdf <= 0.0 {
         return BsdfSample(l, vec3<f32>(0.0), 0.0, 0u);
     }
-    return BsdfSample(l, bsdf_eval(v, l, p) * l.z / pdf, pdf, flags);
+    return BsdfSample(l, bsdf_eval(v, l, p) * abs(l.z) / pdf, pdf, flags);
 }

@@ -38,7 +38,9 @@ struct DirectLight {
 // Next-event estimation at `s`: one light picked by the light sampler, one sample on it, weighed against BSDF
 // sampling (delta lights take no weight). The shadow ray is returned, not traced, so that the path loop traces
 // every ray at one call site (a smaller kernel).
-fn sample_direct(s: SurfaceInteraction, wo: vec3<f32>, tbn: mat3x3<f32>, sampler: Sampler, dims: u32) -> DirectLight {
+// `medium` is what absorbs along the path's current segment; a shadow ray through a refracting surface crosses
+// into the medium behind it, and its light is attenuated over its length.
+fn sample_direct(s: SurfaceInteraction, wo: vec3<f32>, tbn: mat3x3<f32>, sampler: Sampler, dims: u32, medium: vec3<f32>) -> DirectLight {
     let none = DirectLight(Ray(vec3<f32>(0.0), vec3<f32>(0.0, 0.0, 1.0)), 0.0, vec3<f32>(0.0));
     let ctx = LightSampleContext(s.p, s.ng);
     let choice = light_sampler_sample_at(ctx, get_1d(sampler, dims + DIM_LIGHT_CHOICE));
@@ -56,7 +58,9 @@ fn sample_direct(s: SurfaceInteraction, wo: vec3<f32>, tbn: mat3x3<f32>, sampler
     let weight = select(power_heuristic(pdf_light, bsdf_pdf(wo, wi, s.bsdf)), 1.0, ls.delta);
     // Stop the shadow ray just short of the light so it cannot hit the light itself.
     let t_max = select(ls.distance * (1.0 - 1e-4), MISS, ls.distance >= MISS);
-    return DirectLight(Ray(origin, ls.wi), t_max, f * abs(wi.z) * ls.li * weight / pdf_light);
+    let shadow_medium = select(medium, medium_after_transmission(s, medium), behind);
+    let absorbed = transmittance(shadow_medium, min(ls.distance, MISS));
+    return DirectLight(Ray(origin, ls.wi), t_max, f * abs(wi.z) * ls.li * absorbed * weight / pdf_light);
 }
 
 // Density with which next-event estimation from `last_vertex` would have produced the emissive hit `hit` at
@@ -154,6 +158,8 @@ fn trace_path_from(start: PathStart, forward: vec3<f32>, sampler: Sampler) -> Pa
     var shadow_pending = false;
     var path_alive = true;
     var aov = 0u;
+    // Absorption per unit length of the volume the path ray travels in (KHR_materials_volume); 0 in the open.
+    var medium = vec3<f32>(0.0);
     loop {
         var next = ray;
         var t_max = MISS;
@@ -174,6 +180,7 @@ fn trace_path_from(start: PathStart, forward: vec3<f32>, sampler: Sampler) -> Pa
             if path_alive { continue; }
             break;
         }
+        if any(medium > vec3<f32>(0.0)) { throughput *= transmittance(medium, hit.t); }
         if hit.instance == NONE {
             // The lights at infinity are in the light list too: ReSTIR counted them at the first hit.
             if depth == 1u && start.primary_direct_elsewhere { break; }
@@ -221,7 +228,7 @@ fn trace_path_from(start: PathStart, forward: vec3<f32>, sampler: Sampler) -> Pa
         let tbn = basis(s.n);
         let wo = -ray.dir * tbn;
         if nee && !(depth == 0u && start.primary_direct_elsewhere) {
-            shadow = sample_direct(s, wo, tbn, sampler, dims);
+            shadow = sample_direct(s, wo, tbn, sampler, dims, medium);
             shadow.contribution *= throughput;
             shadow_pending = any(shadow.contribution != vec3<f32>(0.0));
         }
@@ -253,6 +260,7 @@ fn trace_path_from(start: PathStart, forward: vec3<f32>, sampler: Sampler) -> Pa
                 }
             }
             ray = Ray(offset_ray_origin(s.p, select(s.ng, -s.ng, transmitted)), dir);
+            if transmitted { medium = medium_after_transmission(s, medium); }
             last_vertex = LightSampleContext(s.p, s.ng);
         }
         if !path_alive && !shadow_pending { break; }

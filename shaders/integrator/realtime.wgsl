@@ -13,10 +13,19 @@ fn gsurface_first_hit(g: GSurface, origin: vec3<f32>) -> Hit {
     return Hit(distance(origin, g.position), instance_of_object(g.object), g.triangle, g.bary);
 }
 
-// A G-buffer surface seen from `eye` (the camera of the frame that wrote it).
+// A G-buffer surface seen from `eye` (the camera of the frame that wrote it). The packed BSDF holds the core
+// parameters; the extension lobes take the material's factors (their textures are not applied here, and the
+// surface is taken as seen from outside).
 fn gsurface_shading_point(g: GSurface, eye: vec3<f32>) -> ShadingPoint {
-    return ShadingPoint(g.position, oct_decode(g.geometric), oct_decode(g.normal), normalize(eye - g.position),
-        unpack_bsdf(g.bsdf));
+    var bsdf = unpack_bsdf(g.bsdf);
+    if g.material != NONE {
+        let m = materials[g.material];
+        bsdf.transmission = m.transmission;
+        bsdf.eta = m.refraction_ior;
+        bsdf.specular_f0 = min(m.specular_f0, vec3<f32>(1.0));
+        bsdf.specular_weight = m.specular_weight;
+    }
+    return ShadingPoint(g.position, oct_decode(g.geometric), oct_decode(g.normal), normalize(eye - g.position), bsdf);
 }
 
 fn surface_shading_point(s: SurfaceInteraction, ray: Ray) -> ShadingPoint {

@@ -42,5 +42,5 @@ fn pack_bsdf(p: BsdfParams) -> vec2<u32> {
 
 fn unpack_bsdf(w: vec2<u32>) -> BsdfParams {
     let c = unpack4x8unorm(w.x);
-    return BsdfParams(c.rgb, c.a, bitcast<f32>(w.y));
+    return core_bsdf(c.rgb, c.a, bitcast<f32>(w.y));
 }

@@ -27,6 +27,9 @@ struct Material {
     emissive: vec3<f32>, metallic: f32,
     roughness: f32, alpha_cutoff: f32, normal_scale: f32, flags: u32,
     base_color_texture: u32, metallic_roughness_texture: u32, normal_texture: u32, emissive_texture: u32,
+    specular_f0: vec3<f32>, specular_weight: f32,
+    attenuation: vec3<f32>, refraction_ior: f32,
+    transmission: f32, transmission_texture: u32, specular_texture: u32, specular_color_texture: u32,
 }
 
 struct TextureInfo { offset: u32, width: u32, height: u32, flags: u32, uv_u: vec4<f32>, uv_v: vec4<f32> }

@@ -299,6 +299,28 @@ fn check_save(source: PathBuf) {
     materials[0].double_sided = !materials[0].double_sided;
     let had_texture = materials[0].base_color_texture.is_some();
     materials[0].base_color_texture = None;
+    // The extensions the inspector edits: added where the file has none, written back as edited.
+    for (i, m) in materials.iter_mut().enumerate().take(2) {
+        use raykin::scene::material_extensions::{Specular, Transmission, Volume};
+        m.extensions.ior = 1.7;
+        m.extensions.transmission = Some(Transmission {
+            factor: 0.8,
+            texture: None,
+        });
+        // An infinite attenuation distance ("none") must not come back as JSON null.
+        m.extensions.volume = Some(Volume {
+            thickness: 0.5,
+            thickness_texture: None,
+            attenuation_distance: if i == 0 { 2.5 } else { f32::INFINITY },
+            attenuation_color: Vec3::new(0.9, 0.6, 0.3),
+        });
+        m.extensions.specular = Some(Specular {
+            factor: 0.6,
+            texture: None,
+            color: Vec3::new(1.0, 0.5, 0.25),
+            color_texture: None,
+        });
+    }
     let bytes = std::fs::read(&source).expect("read");
     let dir = temp_dir(&source.file_stem().unwrap().to_string_lossy());
     for ext in ["gltf", "glb"] {

@@ -29,4 +29,5 @@ mod reliability;
 mod shaders;
 mod skinned_image;
 mod thin_lens;
+mod transmission;
 mod traversal;

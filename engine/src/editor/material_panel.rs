@@ -128,6 +128,7 @@ fn edit(ui: &mut egui::Ui, m: &mut Material, original: &Material) {
                 ui.end_row();
             }
         });
+    edit_dielectric(ui, m);
     // Textures can be switched off (and back on) where the file has them.
     let slots: [(&str, TextureSlot, Option<TextureRef>); 4] = [
         (
@@ -161,4 +162,96 @@ fn edit(ui: &mut egui::Ui, m: &mut Material, original: &Material) {
             *field = on.then_some(file_value);
         }
     }
+}
+
+/// KHR_materials_ior, _transmission, _volume and _specular: the dielectric layer and what lies behind it.
+/// Setting a value on a material without the extension adds it (Save as writes it).
+fn edit_dielectric(ui: &mut egui::Ui, m: &mut Material) {
+    use crate::scene::material_extensions::{Specular, Transmission, Volume};
+    use glam::Vec3;
+    let e = &mut m.extensions;
+    egui::CollapsingHeader::new("transmission, IOR, specular")
+        .default_open(e.transmission.is_some())
+        .show(ui, |ui| {
+            egui::Grid::new("dielectric params")
+                .num_columns(2)
+                .show(ui, |ui| {
+                    ui.label("IOR");
+                    // 0 is the schema's "f0 = 1" value: shown, not clamped away.
+                    ui.add(
+                        egui::DragValue::new(&mut e.ior)
+                            .speed(0.01)
+                            .range(1.0..=5.0)
+                            .clamp_existing_to_range(false),
+                    );
+                    ui.end_row();
+                    ui.label("transmission");
+                    let mut t = e.transmission.as_ref().map_or(0.0, |t| t.factor);
+                    if ui.add(egui::Slider::new(&mut t, 0.0..=1.0)).changed() {
+                        e.transmission
+                            .get_or_insert(Transmission {
+                                factor: 0.0,
+                                texture: None,
+                            })
+                            .factor = t;
+                    }
+                    ui.end_row();
+                    ui.label("volume behind (refracts)");
+                    let mut volume = e.volume.as_ref().is_some_and(|v| v.thickness > 0.0);
+                    if ui.checkbox(&mut volume, "").changed() {
+                        let v = e.volume.get_or_insert(Volume {
+                            thickness: 0.0,
+                            thickness_texture: None,
+                            attenuation_distance: f32::INFINITY,
+                            attenuation_color: Vec3::ONE,
+                        });
+                        v.thickness = if volume { v.thickness.max(1.0) } else { 0.0 };
+                    }
+                    ui.end_row();
+                    if let Some(v) = e.volume.as_mut().filter(|v| v.thickness > 0.0) {
+                        ui.label("attenuation colour");
+                        let mut c = v.attenuation_color.to_array();
+                        if ui.color_edit_button_rgb(&mut c).changed() {
+                            v.attenuation_color = c.into();
+                        }
+                        ui.end_row();
+                        ui.label("attenuation distance");
+                        ui.horizontal(|ui| {
+                            let mut absorbs = v.attenuation_distance.is_finite();
+                            if ui.checkbox(&mut absorbs, "").changed() {
+                                v.attenuation_distance = if absorbs { 1.0 } else { f32::INFINITY };
+                            }
+                            if absorbs {
+                                ui.add(
+                                    egui::DragValue::new(&mut v.attenuation_distance)
+                                        .speed(0.01)
+                                        .range(1.0e-4..=1.0e6),
+                                );
+                            }
+                        });
+                        ui.end_row();
+                    }
+                    let had_specular = e.specular.is_some();
+                    let specular = e.specular.get_or_insert(Specular {
+                        factor: 1.0,
+                        texture: None,
+                        color: Vec3::ONE,
+                        color_texture: None,
+                    });
+                    let before = specular.clone();
+                    ui.label("specular");
+                    ui.add(egui::Slider::new(&mut specular.factor, 0.0..=1.0));
+                    ui.end_row();
+                    ui.label("specular colour");
+                    let mut c = specular.color.to_array();
+                    if ui.color_edit_button_rgb(&mut c).changed() {
+                        specular.color = c.into();
+                    }
+                    ui.end_row();
+                    // Only an edit adds the extension (its defaults are the core specification's).
+                    if !had_specular && *specular == before {
+                        e.specular = None;
+                    }
+                });
+        });
 }

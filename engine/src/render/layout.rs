@@ -84,6 +84,22 @@ pub struct GpuMaterial {
     pub metallic_roughness_texture: u32,
     pub normal_texture: u32,
     pub emissive_texture: u32,
+    /// The dielectric Fresnel's f0 before the texture: `((ior - 1) / (ior + 1))^2` times the specular colour
+    /// (KHR_materials_ior, KHR_materials_specular); the shader multiplies the colour texture in and clamps to 1.
+    pub specular_f0: [f32; 3],
+    /// KHR_materials_specular's factor: the dielectric layer's weight (its f90).
+    pub specular_weight: f32,
+    /// Absorption coefficient per world unit of the medium behind the surface (KHR_materials_volume's
+    /// `-ln(attenuationColor) / attenuationDistance`); 0 without a volume.
+    pub attenuation: [f32; 3],
+    /// The index of refraction that bends transmitted rays; 1 for thin-walled transmission (no volume, or
+    /// thickness 0), where transmitted rays go on without bending.
+    pub refraction_ior: f32,
+    /// KHR_materials_transmission's factor.
+    pub transmission: f32,
+    pub transmission_texture: u32,
+    pub specular_texture: u32,
+    pub specular_color_texture: u32,
 }
 
 #[repr(C)]

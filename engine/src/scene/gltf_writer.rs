@@ -95,6 +95,11 @@ pub fn save_edited(
     }
     for (json_material, edited) in root.materials.iter_mut().zip(materials) {
         apply_material(json_material, edited);
+        for name in apply_rendered_extensions(json_material, edited) {
+            if !root.extensions_used.iter().any(|e| e == name) {
+                root.extensions_used.push(name.into());
+            }
+        }
     }
     if materials.iter().any(|m| m.emissive_strength != 1.0)
         && !root
@@ -265,6 +270,70 @@ fn apply_material(j: &mut json::Material, m: &Material) {
     j.alpha_mode = json::validation::Checked::Valid(mode);
     j.alpha_cutoff = cutoff;
     j.double_sided = m.double_sided;
+}
+
+/// Writes the material extensions the renderer shades with (and the inspector edits) over the JSON material:
+/// IOR, transmission, volume and specular, added, changed or removed as the material has them. Texture
+/// references the editor turned off are removed. Returns the names of those in use.
+fn apply_rendered_extensions(j: &mut json::Material, m: &Material) -> Vec<&'static str> {
+    use json::extensions::material as ext;
+    let e = &m.extensions;
+    let x = j.extensions.get_or_insert_with(Default::default);
+    let mut used = Vec::new();
+    if e.ior != 1.5 || x.ior.is_some() {
+        x.ior.get_or_insert_with(Default::default).ior = ext::IndexOfRefraction(e.ior);
+        used.push("KHR_materials_ior");
+    }
+    x.transmission = e.transmission.as_ref().map(|t| {
+        let mut out = x.transmission.take().unwrap_or_default();
+        out.transmission_factor = ext::TransmissionFactor(t.factor);
+        if t.texture.is_none() {
+            out.transmission_texture = None;
+        }
+        used.push("KHR_materials_transmission");
+        out
+    });
+    x.specular = e.specular.as_ref().map(|s| {
+        let mut out = x.specular.take().unwrap_or_default();
+        out.specular_factor = ext::SpecularFactor(s.factor);
+        out.specular_color_factor = ext::SpecularColorFactor(s.color.to_array());
+        if s.texture.is_none() {
+            out.specular_texture = None;
+        }
+        if s.color_texture.is_none() {
+            out.specular_color_texture = None;
+        }
+        used.push("KHR_materials_specular");
+        out
+    });
+    // Written as plain JSON: the typed struct would write an infinite attenuation distance ("none") as null.
+    let typed = x.volume.take();
+    x.others.remove("KHR_materials_volume");
+    if let Some(v) = &e.volume {
+        let mut out = typed.unwrap_or_default();
+        out.thickness_factor = ext::ThicknessFactor(v.thickness);
+        out.attenuation_color = ext::AttenuationColor(v.attenuation_color.to_array());
+        out.attenuation_distance = ext::AttenuationDistance(v.attenuation_distance);
+        if v.thickness_texture.is_none() {
+            out.thickness_texture = None;
+        }
+        if let Ok(serde_json::Value::Object(mut object)) = serde_json::to_value(&out) {
+            if !v.attenuation_distance.is_finite() {
+                object.remove("attenuationDistance");
+            }
+            x.others.insert(
+                "KHR_materials_volume".into(),
+                serde_json::Value::Object(object),
+            );
+            used.push("KHR_materials_volume");
+        }
+    }
+    let empty =
+        serde_json::to_value(&*x).is_ok_and(|v| v.as_object().is_some_and(|o| o.is_empty()));
+    if empty {
+        j.extensions = None;
+    }
+    used
 }
 
 /// Where the original buffers and images are read from.

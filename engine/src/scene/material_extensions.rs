@@ -1,7 +1,7 @@
 //! The KHR material extensions beyond metallic-roughness, as data: parsed from the file, validated (values
 //! outside their schema range are clamped with a note), carried on [`super::Material`] for the renderer.
-//! The renderer does not shade with them yet; [`unrendered_report`] names every one a file uses so nothing
-//! is silently dropped. Where the gltf crate has typed support (ior, transmission, volume, specular, unlit)
+//! The renderer shades with those in [`RENDERED`]; [`unrendered_report`] names every other one a file uses so
+//! nothing is silently dropped. Where the gltf crate has typed support (ior, transmission, volume, specular, unlit)
 //! it is used; the others are read from the extension's JSON.
 
 use super::{TextureRef, TextureTransform};
@@ -488,12 +488,25 @@ pub(super) fn read(m: &gltf::Material, r: &mut SlotResolver) -> MaterialExtensio
     out
 }
 
-/// One line per material extension (and per non-identity texture transform) that the file uses but the
-/// renderer does not shade with yet, naming the materials, so nothing is dropped silently.
+/// The material extensions the renderer shades with (`shaders/bsdf/gltf.wgsl`).
+pub const RENDERED: &[&str] = &[
+    "KHR_materials_ior",
+    "KHR_materials_specular",
+    "KHR_materials_transmission",
+    "KHR_materials_volume",
+];
+
+/// One line per material extension that the file uses but the renderer does not shade with yet, naming the
+/// materials, so nothing is dropped silently.
 pub(super) fn unrendered_report(materials: &[super::Material]) -> Vec<String> {
     let mut by_extension: Vec<(&'static str, Vec<&str>)> = Vec::new();
     for m in materials {
-        for name in m.extensions.in_use() {
+        for name in m
+            .extensions
+            .in_use()
+            .into_iter()
+            .filter(|n| !RENDERED.contains(n))
+        {
             match by_extension.iter_mut().find(|(n, _)| *n == name) {
                 Some((_, list)) => list.push(&m.name),
                 None => by_extension.push((name, vec![&m.name])),

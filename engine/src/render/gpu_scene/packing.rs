@@ -35,15 +35,7 @@ impl TextureSlots {
         let mut slots = Self::default();
         let base_count = infos.len();
         for m in materials {
-            for t in [
-                m.base_color_texture,
-                m.metallic_roughness_texture,
-                m.normal_texture,
-                m.emissive_texture,
-            ]
-            .into_iter()
-            .flatten()
-            {
+            for t in gpu_texture_slots(m).into_iter().flatten() {
                 if t.transform.is_identity() || (t.texture as usize) >= base_count {
                     continue;
                 }
@@ -83,12 +75,69 @@ impl TextureSlots {
     }
 }
 
+/// Every texture slot the shader samples: the core four, then transmission, specular and specular colour.
+fn gpu_texture_slots(m: &crate::scene::Material) -> [Option<crate::scene::TextureRef>; 7] {
+    let e = &m.extensions;
+    [
+        m.base_color_texture,
+        m.metallic_roughness_texture,
+        m.normal_texture,
+        m.emissive_texture,
+        e.transmission.as_ref().and_then(|t| t.texture),
+        e.specular.as_ref().and_then(|s| s.texture),
+        e.specular.as_ref().and_then(|s| s.color_texture),
+    ]
+}
+
+/// Relative IORs closer to 1 than this bend rays too little to matter but would make the refraction's
+/// half vector degenerate: such surfaces transmit like thin walls (straight through when smooth).
+const MIN_REFRACTION: f32 = 1e-3;
+
+/// The extension lobes' GPU parameters (KHR_materials_ior, specular, transmission, volume): dielectric f0
+/// colour and weight, absorption coefficient, the IOR that bends rays and the transmission factor.
+fn gpu_extension_factors(m: &crate::scene::Material) -> ([f32; 3], f32, [f32; 3], f32, f32) {
+    let e = &m.extensions;
+    // In f64 so that the default IOR 1.5 gives exactly the core specification's 0.04.
+    let ior = e.ior as f64;
+    let f0 = (((ior - 1.0) / (ior + 1.0)).powi(2)) as f32;
+    let (weight, color) = e
+        .specular
+        .as_ref()
+        .map_or((1.0, Vec3::ONE), |s| (s.factor, s.color));
+    let transmission = e.transmission.as_ref().map_or(0.0, |t| t.factor);
+    // A volume needs a transmissive surface; thickness 0 (or no volume) is thin-walled.
+    let volume = e
+        .volume
+        .as_ref()
+        .filter(|v| v.thickness > 0.0 && e.transmission.is_some());
+    let refraction_ior = match volume {
+        Some(_) if e.ior >= 1.0 + MIN_REFRACTION => e.ior,
+        _ => 1.0,
+    };
+    let attenuation = volume
+        .filter(|v| v.attenuation_distance.is_finite())
+        .map_or(Vec3::ZERO, |v| {
+            // A black channel absorbs everything within a few distances instead of at once (no inf * 0).
+            -v.attenuation_color.max(Vec3::splat(1e-6)).map(f32::ln) / v.attenuation_distance
+        });
+    (
+        (f0 * color).to_array(),
+        weight,
+        attenuation.to_array(),
+        refraction_ior,
+        transmission,
+    )
+}
+
 pub fn gpu_material(m: &crate::scene::Material, textures: &TextureSlots) -> GpuMaterial {
     let (cutoff, alpha_flags) = match m.alpha_mode {
         AlphaMode::Opaque => (0.0, 0),
         AlphaMode::Mask(c) => (c, MATERIAL_ALPHA_MASK),
         AlphaMode::Blend => (0.0, MATERIAL_ALPHA_BLEND),
     };
+    let (specular_f0, specular_weight, attenuation, refraction_ior, transmission) =
+        gpu_extension_factors(m);
+    let slots = gpu_texture_slots(m);
     GpuMaterial {
         base_color: m.base_color.to_array(),
         emissive: m.emitted_radiance().to_array(),
@@ -106,6 +155,14 @@ pub fn gpu_material(m: &crate::scene::Material, textures: &TextureSlots) -> GpuM
         metallic_roughness_texture: textures.slot_word(m.metallic_roughness_texture),
         normal_texture: textures.slot_word(m.normal_texture),
         emissive_texture: textures.slot_word(m.emissive_texture),
+        specular_f0,
+        specular_weight,
+        attenuation,
+        refraction_ior,
+        transmission,
+        transmission_texture: textures.slot_word(slots[4]),
+        specular_texture: textures.slot_word(slots[5]),
+        specular_color_texture: textures.slot_word(slots[6]),
     }
 }
 
