@@ -15,25 +15,57 @@ struct BsdfParams {
     base_color: vec3<f32>,
     metallic: f32,
     alpha: f32,
-    // Share of the dielectric base that is transmitted instead of diffusely reflected.
-    transmission: f32,
-    // Relative index of refraction across the surface seen from wo (far side over near side): the material's
-    // IOR when wo is outside, its inverse inside; exactly 1 for thin-walled transmission.
-    eta: f32,
-    // The dielectric Fresnel's f0 (clamped to 1) and the layer's weight.
-    specular_f0: vec3<f32>,
-    specular_weight: f32,
+    // The extension lobes' parameters, packed (the path loop's registers are what limits its speed; unpacked
+    // they made every scene 12-38% slower on the H200): see `pack_lobes`.
+    lobes: vec2<u32>,
 }
 
-// The core specification's material: f0 = 0.04 (IOR 1.5), no transmission.
+// x: the dielectric f0 per channel, clamped to 1, as round(sqrt(f0) * 1020) in 10 bits each (0.04 is exact);
+// y: transmission (unorm, bits 0-7), the specular layer's weight (unorm, bits 8-14), wo inside the volume
+// (bit 15), the IOR that bends transmitted rays (f16, bits 16-31; exactly 1 for thin-walled transmission).
+const LOBE_F0_SCALE: f32 = 1020.0;
+const LOBE_INSIDE: u32 = 0x8000u;
+
+fn pack_lobes(f0: vec3<f32>, weight: f32, transmission: f32, ior: f32, inside: bool) -> vec2<u32> {
+    let q = vec3<u32>(round(sqrt(clamp(f0, vec3<f32>(0.0), vec3<f32>(1.0))) * LOBE_F0_SCALE));
+    let x = q.x | (q.y << 10u) | (q.z << 20u);
+    let t = u32(round(clamp(transmission, 0.0, 1.0) * 255.0));
+    let w = u32(round(clamp(weight, 0.0, 1.0) * 127.0));
+    let y = t | (w << 8u) | select(0u, LOBE_INSIDE, inside) | (pack2x16float(vec2<f32>(ior, 0.0)) << 16u);
+    return vec2<u32>(x, y);
+}
+
+// The core specification's material: f0 = 0.04 (IOR 1.5), weight 1, no transmission.
+const CORE_LOBES: vec2<u32> = vec2<u32>(204u | (204u << 10u) | (204u << 20u), (127u << 8u) | (0x3c00u << 16u));
+
 fn core_bsdf(base_color: vec3<f32>, metallic: f32, alpha: f32) -> BsdfParams {
-    return BsdfParams(base_color, metallic, alpha, 0.0, 1.0, vec3<f32>(0.04), 1.0);
+    return BsdfParams(base_color, metallic, alpha, CORE_LOBES);
+}
+
+fn lobe_f0(p: BsdfParams) -> vec3<f32> {
+    let q = vec3<f32>(vec3<u32>(p.lobes.x, p.lobes.x >> 10u, p.lobes.x >> 20u) & vec3<u32>(0x3ffu)) / LOBE_F0_SCALE;
+    return q * q;
+}
+
+fn lobe_transmission(p: BsdfParams) -> f32 {
+    return f32(p.lobes.y & 0xffu) / 255.0;
+}
+
+fn lobe_weight(p: BsdfParams) -> f32 {
+    return f32((p.lobes.y >> 8u) & 0x7fu) / 127.0;
+}
+
+// Relative index of refraction across the surface seen from wo (far side over near side): the IOR when wo is
+// outside, its inverse inside; exactly 1 for thin-walled transmission.
+fn lobe_eta(p: BsdfParams) -> f32 {
+    let ior = unpack2x16float(p.lobes.y >> 16u).x;
+    return select(ior, 1.0 / ior, (p.lobes.y & LOBE_INSIDE) != 0u);
 }
 
 // The lobes this material has (BSDF_* flags): the integrator accepts light from behind the surface only
 // when one of them transmits.
 fn bsdf_flags(p: BsdfParams) -> u32 {
-    if p.transmission > 0.0 && p.metallic < 1.0 {
+    if lobe_transmission(p) > 0.0 && p.metallic < 1.0 {
         return BSDF_REFLECTION | BSDF_TRANSMISSION | BSDF_DIFFUSE | BSDF_GLOSSY;
     }
     return BSDF_REFLECTION | BSDF_DIFFUSE | BSDF_GLOSSY;
@@ -47,17 +79,19 @@ fn max3(c: vec3<f32>) -> f32 {
 // outer side (the transmitted one when wo is inside a denser volume; 1 beyond the critical angle).
 fn dielectric_fresnel(c: f32, p: BsdfParams) -> vec3<f32> {
     var cos_outside = c;
-    if p.eta < 1.0 {
-        let sin2_t = (1.0 - c * c) / (p.eta * p.eta);
+    let eta = lobe_eta(p);
+    if eta < 1.0 {
+        let sin2_t = (1.0 - c * c) / (eta * eta);
         if sin2_t >= 1.0 { return vec3<f32>(1.0); }
         cos_outside = sqrt(1.0 - sin2_t);
     }
     let fw = pow5(1.0 - clamp(cos_outside, 0.0, 1.0));
-    return p.specular_f0 + (vec3<f32>(1.0) - p.specular_f0) * fw;
+    let f0 = lobe_f0(p);
+    return f0 + (vec3<f32>(1.0) - f0) * fw;
 }
 
 fn thin_walled(p: BsdfParams) -> bool {
-    return p.eta == 1.0;
+    return (p.lobes.y >> 16u) == 0x3c00u;
 }
 
 // The generalized half vector of a refraction from wo = v to wi = l (Walter et al. 2007), on v's side; zero
@@ -80,31 +114,32 @@ fn bsdf_eval(v: vec3<f32>, l: vec3<f32>, p: BsdfParams) -> vec3<f32> {
         let vh = abs(dot(v, h));
         let spec = smith_visibility(l.z, v.z, a2) * ggx_d(h, a2);
         let f_dielectric = dielectric_fresnel(vh, p);
-        let base_weight = 1.0 - p.specular_weight * max3(f_dielectric);
-        let diffuse = base_weight * (1.0 - p.transmission) * p.base_color * INV_PI;
-        let dielectric = diffuse + p.specular_weight * f_dielectric * spec;
+        let base_weight = 1.0 - lobe_weight(p) * max3(f_dielectric);
+        let diffuse = base_weight * (1.0 - lobe_transmission(p)) * p.base_color * INV_PI;
+        let dielectric = diffuse + lobe_weight(p) * f_dielectric * spec;
         let f_metal = p.base_color + (vec3<f32>(1.0) - p.base_color) * pow5(1.0 - vh);
         return mix(dielectric, f_metal * spec, p.metallic);
     }
     if l.z < 0.0 && (bsdf_flags(p) & BSDF_TRANSMISSION) != 0u {
-        let tint = (1.0 - p.metallic) * p.transmission * p.base_color;
+        let tint = (1.0 - p.metallic) * lobe_transmission(p) * p.base_color;
         if thin_walled(p) {
             let mirrored = vec3<f32>(l.xy, -l.z);
             let h = normalize(v + mirrored);
             let f = dielectric_fresnel(dot(v, h), p);
             let spec = smith_visibility(mirrored.z, v.z, a2) * ggx_d(h, a2);
-            return tint * (1.0 - p.specular_weight * max3(f)) * spec;
+            return tint * (1.0 - lobe_weight(p) * max3(f)) * spec;
         }
-        let h = refraction_half_vector(v, l, p.eta);
+        let eta = lobe_eta(p);
+        let h = refraction_half_vector(v, l, eta);
         if h.z == 0.0 { return vec3<f32>(0.0); }
         let vh = dot(v, h);
         let lh = dot(l, h);
         let f = dielectric_fresnel(vh, p);
-        let denom = lh + vh / p.eta;
+        let denom = lh + vh / eta;
         let g2 = smith_visibility(-l.z, v.z, a2) * 4.0 * (-l.z) * v.z;
         // Radiance is scaled by 1 / eta^2 crossing into the denser side (and back).
-        let btdf = ggx_d(h, a2) * g2 * abs(lh * vh / (l.z * v.z * denom * denom)) / (p.eta * p.eta);
-        return tint * (1.0 - p.specular_weight * max3(f)) * btdf;
+        let btdf = ggx_d(h, a2) * g2 * abs(lh * vh / (l.z * v.z * denom * denom)) / (eta * eta);
+        return tint * (1.0 - lobe_weight(p) * max3(f)) * btdf;
     }
     return vec3<f32>(0.0);
 }
@@ -115,15 +150,15 @@ fn lobe_probabilities(v: vec3<f32>, p: BsdfParams) -> vec3<f32> {
     let fw = pow5(1.0 - clamp(v.z, 0.0, 1.0));
     let f_dielectric = dielectric_fresnel(v.z, p);
     let f_metal = luminance(p.base_color + (vec3<f32>(1.0) - p.base_color) * fw);
-    let spec = mix(p.specular_weight * luminance(f_dielectric), f_metal, p.metallic);
-    let base = (1.0 - p.metallic) * (1.0 - p.specular_weight * max3(f_dielectric)) * luminance(p.base_color);
+    let spec = mix(lobe_weight(p) * luminance(f_dielectric), f_metal, p.metallic);
+    let base = (1.0 - p.metallic) * (1.0 - lobe_weight(p) * max3(f_dielectric)) * luminance(p.base_color);
     if (bsdf_flags(p) & BSDF_TRANSMISSION) == 0u {
         if base <= 0.0 { return vec3<f32>(1.0, 0.0, 0.0); }
         let ps = clamp(spec / (spec + base), 0.1, 0.9);
         return vec3<f32>(ps, 0.0, 1.0 - ps);
     }
     let ps = clamp(spec / max(spec + base, 1e-6), 0.1, 0.9);
-    return vec3<f32>(ps, (1.0 - ps) * p.transmission, (1.0 - ps) * (1.0 - p.transmission));
+    return vec3<f32>(ps, (1.0 - ps) * lobe_transmission(p), (1.0 - ps) * (1.0 - lobe_transmission(p)));
 }
 
 // Probability of sampling the glossy reflection lobe (the mirror AOVs' tint divides by it).
@@ -133,8 +168,12 @@ fn specular_probability(v: vec3<f32>, p: BsdfParams) -> f32 {
 
 fn bsdf_pdf(v: vec3<f32>, l: vec3<f32>, p: BsdfParams) -> f32 {
     if v.z <= 0.0 { return 0.0; }
+    return mixture_pdf(v, l, p, lobe_probabilities(v, p));
+}
+
+// The density of sampling `l` from `v` with lobe probabilities `probs` (v above the horizon).
+fn mixture_pdf(v: vec3<f32>, l: vec3<f32>, p: BsdfParams, probs: vec3<f32>) -> f32 {
     let a2 = p.alpha * p.alpha;
-    let probs = lobe_probabilities(v, p);
     if l.z > 0.0 {
         return probs.x * ggx_reflection_pdf(v, l, a2) + probs.z * l.z * INV_PI;
     }
@@ -142,11 +181,12 @@ fn bsdf_pdf(v: vec3<f32>, l: vec3<f32>, p: BsdfParams) -> f32 {
         if thin_walled(p) {
             return probs.y * ggx_reflection_pdf(v, vec3<f32>(l.xy, -l.z), a2);
         }
-        let h = refraction_half_vector(v, l, p.eta);
+        let eta = lobe_eta(p);
+        let h = refraction_half_vector(v, l, eta);
         if h.z == 0.0 { return 0.0; }
         let vh = dot(v, h);
         let lh = dot(l, h);
-        let denom = lh + vh / p.eta;
+        let denom = lh + vh / eta;
         // Visible-normal density times the refraction's Jacobian |l.h| / (l.h + v.h / eta)^2.
         return probs.y * smith_g1(v.z, a2) * ggx_d(h, a2) * vh / v.z * abs(lh) / (denom * denom);
     }
@@ -162,14 +202,15 @@ fn bsdf_sample(v: vec3<f32>, p: BsdfParams, u_lobe: f32, u: vec2<f32>) -> BsdfSa
         let h = sample_vndf(v, p.alpha, u);
         l = reflect(-v, h);
         flags = BSDF_REFLECTION | BSDF_GLOSSY;
-    } else if u_lobe < probs.x + probs.y {
+    } else if (bsdf_flags(p) & BSDF_TRANSMISSION) != 0u && u_lobe < probs.x + probs.y {
+        // (The flag test folds away in kernels without transmission.)
         let h = sample_vndf(v, p.alpha, u);
         if thin_walled(p) {
             let r = reflect(-v, h);
             l = vec3<f32>(r.xy, -r.z);
         } else {
             // WGSL's refract takes the near side's index over the far side's; zero on total internal reflection.
-            l = refract(-v, h, 1.0 / p.eta);
+            l = refract(-v, h, 1.0 / lobe_eta(p));
         }
         flags = BSDF_TRANSMISSION | BSDF_GLOSSY;
     } else {
@@ -177,7 +218,7 @@ fn bsdf_sample(v: vec3<f32>, p: BsdfParams, u_lobe: f32, u: vec2<f32>) -> BsdfSa
         flags = BSDF_REFLECTION | BSDF_DIFFUSE;
     }
     let transmitted = (flags & BSDF_TRANSMISSION) != 0u;
-    let pdf = bsdf_pdf(v, l, p);
+    let pdf = select(0.0, mixture_pdf(v, l, p, probs), v.z > 0.0);
     if (l.z > 0.0) == transmitted || l.z == 0.0 || pdf <= 0.0 {
         return BsdfSample(l, vec3<f32>(0.0), 0.0, 0u);
     }

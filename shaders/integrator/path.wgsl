@@ -38,9 +38,9 @@ struct DirectLight {
 // Next-event estimation at `s`: one light picked by the light sampler, one sample on it, weighed against BSDF
 // sampling (delta lights take no weight). The shadow ray is returned, not traced, so that the path loop traces
 // every ray at one call site (a smaller kernel).
-// `medium` is what absorbs along the path's current segment; a shadow ray through a refracting surface crosses
-// into the medium behind it, and its light is attenuated over its length.
-fn sample_direct(s: SurfaceInteraction, wo: vec3<f32>, tbn: mat3x3<f32>, sampler: Sampler, dims: u32, medium: vec3<f32>) -> DirectLight {
+// `medium` is the volume the path is in; a shadow ray through a refracting surface crosses into the one behind
+// it, and its light is attenuated over its length.
+fn sample_direct(s: SurfaceInteraction, wo: vec3<f32>, tbn: mat3x3<f32>, sampler: Sampler, dims: u32, medium: u32) -> DirectLight {
     let none = DirectLight(Ray(vec3<f32>(0.0), vec3<f32>(0.0, 0.0, 1.0)), 0.0, vec3<f32>(0.0));
     let ctx = LightSampleContext(s.p, s.ng);
     let choice = light_sampler_sample_at(ctx, get_1d(sampler, dims + DIM_LIGHT_CHOICE));
@@ -58,7 +58,8 @@ fn sample_direct(s: SurfaceInteraction, wo: vec3<f32>, tbn: mat3x3<f32>, sampler
     let weight = select(power_heuristic(pdf_light, bsdf_pdf(wo, wi, s.bsdf)), 1.0, ls.delta);
     // Stop the shadow ray just short of the light so it cannot hit the light itself.
     let t_max = select(ls.distance * (1.0 - 1e-4), MISS, ls.distance >= MISS);
-    let shadow_medium = select(medium, medium_after_transmission(s, medium), behind);
+    var shadow_medium = medium;
+    if behind { shadow_medium = medium_after_transmission(s, medium); }
     let absorbed = transmittance(shadow_medium, min(ls.distance, MISS));
     return DirectLight(Ray(origin, ls.wi), t_max, f * abs(wi.z) * ls.li * absorbed * weight / pdf_light);
 }
@@ -158,8 +159,8 @@ fn trace_path_from(start: PathStart, forward: vec3<f32>, sampler: Sampler) -> Pa
     var shadow_pending = false;
     var path_alive = true;
     var aov = 0u;
-    // Absorption per unit length of the volume the path ray travels in (KHR_materials_volume); 0 in the open.
-    var medium = vec3<f32>(0.0);
+    // The volume the path ray travels in (KHR_materials_volume), named by its material; NONE in the open.
+    var medium = NONE;
     loop {
         var next = ray;
         var t_max = MISS;
@@ -180,7 +181,7 @@ fn trace_path_from(start: PathStart, forward: vec3<f32>, sampler: Sampler) -> Pa
             if path_alive { continue; }
             break;
         }
-        if any(medium > vec3<f32>(0.0)) { throughput *= transmittance(medium, hit.t); }
+        if medium != NONE { throughput *= transmittance(medium, hit.t); }
         if hit.instance == NONE {
             // The lights at infinity are in the light list too: ReSTIR counted them at the first hit.
             if depth == 1u && start.primary_direct_elsewhere { break; }

@@ -18,12 +18,9 @@ fn gsurface_first_hit(g: GSurface, origin: vec3<f32>) -> Hit {
 // surface is taken as seen from outside).
 fn gsurface_shading_point(g: GSurface, eye: vec3<f32>) -> ShadingPoint {
     var bsdf = unpack_bsdf(g.bsdf);
-    if g.material != NONE {
+    if MATERIAL_LOBES != 0u && g.material != NONE {
         let m = materials[g.material];
-        bsdf.transmission = m.transmission;
-        bsdf.eta = m.refraction_ior;
-        bsdf.specular_f0 = min(m.specular_f0, vec3<f32>(1.0));
-        bsdf.specular_weight = m.specular_weight;
+        bsdf.lobes = pack_lobes(m.specular_f0, m.specular_weight, m.transmission, m.refraction_ior, false);
     }
     return ShadingPoint(g.position, oct_decode(g.geometric), oct_decode(g.normal), normalize(eye - g.position), bsdf);
 }

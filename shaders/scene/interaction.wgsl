@@ -2,6 +2,10 @@
 // shading normals (normal map applied) facing the incoming ray, the material's BSDF parameters at the point
 // (textures and vertex colours applied), coverage alpha and emission.
 
+// Which extension lobes the kernel shades with (engine/src/render/material_lobes.rs, a pipeline constant): 0 the
+// core BSDF only, 1 the extensions' factors, 2 factors and textures. Kernels built without it shade everything.
+override MATERIAL_LOBES: u32 = 2u;
+
 struct SurfaceInteraction {
     p: vec3<f32>,
     ng: vec3<f32>,      // geometric normal, facing the incoming ray
@@ -91,8 +95,8 @@ fn resolve_hit(hit: Hit, ray: Ray) -> SurfaceInteraction {
         emission *= srgb_to_linear(sample_texture(m.emissive_texture, texture_uv(m.emissive_texture, mesh, tri, w)).rgb);
     }
     s.emission = emission;
-    s.bsdf = with_material_extensions(core_bsdf(base.rgb, clamp(metallic, 0.0, 1.0), max(roughness * roughness, MIN_ALPHA)),
-        m, mesh, tri, w, s.front);
+    s.bsdf = core_bsdf(base.rgb, clamp(metallic, 0.0, 1.0), max(roughness * roughness, MIN_ALPHA));
+    if MATERIAL_LOBES != 0u { s.bsdf = with_material_extensions(s.bsdf, m, mesh, tri, w, s.front); }
     s.alpha = base.a;
     s.flags = m.flags;
     return s;
@@ -105,38 +109,36 @@ fn emits_towards_viewer(s: SurfaceInteraction) -> bool {
 // KHR_materials_ior, _specular and _transmission on top of the core BSDF (textures applied). Crossing a
 // refracting surface from its front enters the volume behind it.
 fn with_material_extensions(core: BsdfParams, m: Material, mesh: Mesh, tri: vec4<u32>, w: vec3<f32>, front: bool) -> BsdfParams {
-    var b = core;
     var transmission = m.transmission;
-    if m.transmission_texture != NONE && transmission > 0.0 {
+    let textured = MATERIAL_LOBES >= 2u;
+    if textured && m.transmission_texture != NONE && transmission > 0.0 {
         transmission *= sample_texture(m.transmission_texture, texture_uv(m.transmission_texture, mesh, tri, w)).r;
     }
-    b.transmission = clamp(transmission, 0.0, 1.0);
-    b.eta = select(1.0 / m.refraction_ior, m.refraction_ior, front);
     var f0 = m.specular_f0;
-    if m.specular_color_texture != NONE {
+    if textured && m.specular_color_texture != NONE {
         f0 *= srgb_to_linear(sample_texture(m.specular_color_texture, texture_uv(m.specular_color_texture, mesh, tri, w)).rgb);
     }
-    b.specular_f0 = min(f0, vec3<f32>(1.0));
     var weight = m.specular_weight;
-    if m.specular_texture != NONE {
+    if textured && m.specular_texture != NONE {
         weight *= sample_texture(m.specular_texture, texture_uv(m.specular_texture, mesh, tri, w)).a;
     }
-    b.specular_weight = weight;
+    var b = core;
+    b.lobes = pack_lobes(f0, weight, transmission, m.refraction_ior, !front);
     return b;
 }
 
-// The medium a ray enters when it is transmitted through `s` (absorption per unit length; 0 = none): the
-// material's volume entering through the front, nothing leaving through the back. Thin walls change nothing
-// (a volume of IOR 1 transmits like a thin wall but still bounds its medium). Nested volumes are not tracked:
-// leaving an inner one returns to no medium (less absorption, never more energy).
-fn medium_after_transmission(s: SurfaceInteraction, medium: vec3<f32>) -> vec3<f32> {
-    let attenuation = materials[s.material].attenuation;
-    if thin_walled(s.bsdf) && all(attenuation == vec3<f32>(0.0)) { return medium; }
-    return select(vec3<f32>(0.0), attenuation, s.front);
+// The volume a ray is in after it is transmitted through `s`, named by its material (NONE: none): the
+// material's own entering through the front, none leaving through the back. Thin walls change nothing (a
+// volume of IOR 1 transmits like a thin wall but still bounds its medium). Nested volumes are not tracked:
+// leaving an inner one returns to none (less absorption, never more energy).
+fn medium_after_transmission(s: SurfaceInteraction, medium: u32) -> u32 {
+    if thin_walled(s.bsdf) && all(materials[s.material].attenuation == vec3<f32>(0.0)) { return medium; }
+    return select(NONE, s.material, s.front);
 }
 
-// Beer-Lambert transmittance over `t` in a medium absorbing `sigma` per unit length (t may be MISS: a ray
-// that leaves the scene inside an absorbing medium carries nothing).
-fn transmittance(sigma: vec3<f32>, t: f32) -> vec3<f32> {
-    return exp(-sigma * t);
+// Beer-Lambert transmittance over `t` inside the volume of material `medium` (NONE: none; t may be MISS: a
+// ray that leaves the scene inside an absorbing volume carries nothing).
+fn transmittance(medium: u32, t: f32) -> vec3<f32> {
+    if medium == NONE { return vec3<f32>(1.0); }
+    return exp(-materials[medium].attenuation * t);
 }

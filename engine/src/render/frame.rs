@@ -27,6 +27,7 @@ use super::frame_constants::{FrameConstants, write_frame_constants};
 use super::gpu_scene::GpuScene;
 use super::host_denoised::HostDenoised;
 use super::layout::{LIGHT_DIRECTIONAL, LIGHT_ENVIRONMENT, LIGHT_SUN};
+use super::material_lobes::MaterialLobes;
 use super::passes::denoise::{DenoiseInputs, Denoiser};
 use super::passes::gradient::FILTERED;
 use super::passes::tonemap::{TonemapInput, TonemapPass};
@@ -138,7 +139,7 @@ pub fn render_frame(
             keep_denoiser_inputs: accumulation.keep_denoiser_inputs,
         },
     );
-    trace.prepare(&ctx, &view);
+    trace.prepare(&ctx, &view, MaterialLobes::of(&scene.material_data));
     let mut encoder = ctx.device.create_command_encoder(&Default::default());
     trace.encode(
         &mut encoder,
@@ -294,6 +295,7 @@ pub fn encode_realtime_frame(
     }
     passes.trace.encode(
         ctx,
+        MaterialLobes::of(&scene.material_data),
         &mut encoder,
         &groups,
         view,

@@ -19,6 +19,7 @@ pub mod frame_constants;
 pub mod gpu_scene;
 pub mod host_denoised;
 pub mod layout;
+pub mod material_lobes;
 pub mod passes;
 pub mod picking;
 pub mod queries;

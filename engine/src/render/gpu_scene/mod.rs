@@ -11,7 +11,7 @@ mod packing;
 
 pub use instances::{InstanceInput, InstanceMap, transform_box};
 pub use lights::LightList;
-pub use packing::{gpu_material, luminance};
+pub use packing::{TextureSlots, gpu_material, luminance};
 
 use super::layout::*;
 use crate::bvh::{Blas, MeshBvh, StaticLayout};

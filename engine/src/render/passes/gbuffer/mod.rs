@@ -4,6 +4,7 @@
 
 use crate::gpu::GpuContext;
 use crate::gpu::bind::{Binding, CachedGroup, bind_group, compute_layout};
+use crate::render::material_lobes::{LobeKernels, MaterialLobes};
 use crate::render::realtime_targets::{RealtimeTargets, SceneGroups};
 use crate::render::shaders::{ShaderModule, compose};
 use crate::render::view::ViewTargets;
@@ -42,13 +43,16 @@ impl GBufferPass {
             "gbuffer",
             &[Uniform, Uniform, ReadWrite, ReadWrite, ReadWrite],
         );
-        let pipeline = crate::gpu::compute_pipeline(
+        // The G-buffer keeps only the core BSDF parameters (`pack_bsdf`): its kernel skips the extension lobes.
+        let pipeline = LobeKernels::new(
             &ctx.device,
             "gbuffer",
             compose(&KERNEL),
             &[Some(scene_layout), Some(&layout), Some(motion_layout)],
             "write_gbuffer",
-        );
+        )
+        .get(&ctx.device, MaterialLobes::Core)
+        .clone();
         Self {
             pipeline,
             layout,

@@ -4,6 +4,7 @@
 
 use crate::gpu::GpuContext;
 use crate::gpu::bind::{Binding, CachedGroup, bind_group, compute_layout};
+use crate::render::material_lobes::{LobeKernels, MaterialLobes};
 use crate::render::realtime_targets::{RealtimeTargets, SceneGroups};
 use crate::render::shaders::{ShaderModule, compose};
 use crate::render::view::ViewTargets;
@@ -22,7 +23,7 @@ pub const KERNEL: ShaderModule = ShaderModule {
 };
 
 pub struct RealtimeTracePass {
-    pipeline: wgpu::ComputePipeline,
+    kernels: LobeKernels,
     layout: wgpu::BindGroupLayout,
     group: CachedGroup<(u64, u64)>,
 }
@@ -42,7 +43,7 @@ impl RealtimeTracePass {
                 Uniform, Uniform, Read, Read, ReadWrite, ReadWrite, ReadWrite,
             ],
         );
-        let pipeline = crate::gpu::compute_pipeline(
+        let kernels = LobeKernels::new(
             &ctx.device,
             "realtime trace",
             compose(&KERNEL),
@@ -50,15 +51,18 @@ impl RealtimeTracePass {
             "trace_realtime",
         );
         Self {
-            pipeline,
+            kernels,
             layout,
             group: CachedGroup::default(),
         }
     }
 
+    /// Records the pass with the kernel for the lobes the scene's materials use (compiled the first time).
+    #[allow(clippy::too_many_arguments)]
     pub fn encode(
         &mut self,
         ctx: &GpuContext,
+        lobes: MaterialLobes,
         encoder: &mut wgpu::CommandEncoder,
         groups: &SceneGroups,
         view: &ViewTargets,
@@ -89,7 +93,7 @@ impl RealtimeTracePass {
                 )
             });
         let mut pass = groups.begin_pass(encoder, "realtime trace", group, timestamp_writes);
-        pass.set_pipeline(&self.pipeline);
+        pass.set_pipeline(self.kernels.get(&ctx.device, lobes));
         let (x, y) = view.workgroups();
         pass.dispatch_workgroups(x, y, 1);
     }

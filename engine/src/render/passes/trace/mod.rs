@@ -3,6 +3,7 @@
 
 use crate::gpu::GpuContext;
 use crate::gpu::bind::{Binding, CachedGroup, bind_group, compute_layout};
+use crate::render::material_lobes::{LobeKernels, MaterialLobes};
 use crate::render::shaders::{ShaderModule, compose};
 use crate::render::view::ViewTargets;
 use bevy_ecs::prelude::Resource;
@@ -22,7 +23,8 @@ pub const KERNEL: ShaderModule = ShaderModule {
 
 #[derive(Resource)]
 pub struct TracePass {
-    pipeline: wgpu::ComputePipeline,
+    kernels: LobeKernels,
+    lobes: MaterialLobes,
     view_layout: wgpu::BindGroupLayout,
     view_group: CachedGroup<u64>,
 }
@@ -38,7 +40,7 @@ impl TracePass {
                 Uniform, ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite,
             ],
         );
-        let pipeline = crate::gpu::compute_pipeline(
+        let kernels = LobeKernels::new(
             &ctx.device,
             "path trace",
             compose(&KERNEL),
@@ -46,14 +48,18 @@ impl TracePass {
             "trace_pixels",
         );
         Self {
-            pipeline,
+            kernels,
+            lobes: MaterialLobes::Core,
             view_layout,
             view_group: CachedGroup::default(),
         }
     }
 
-    /// Binds the view's targets (again only when they were replaced).
-    pub fn prepare(&mut self, ctx: &GpuContext, view: &ViewTargets) {
+    /// Binds the view's targets (again only when they were replaced) and picks the kernel for the lobes the
+    /// scene's materials use (compiling it the first time).
+    pub fn prepare(&mut self, ctx: &GpuContext, view: &ViewTargets, lobes: MaterialLobes) {
+        self.kernels.get(&ctx.device, lobes);
+        self.lobes = lobes;
         let layout = &self.view_layout;
         self.view_group.get_or_make(view.generation, || {
             bind_group(
@@ -91,7 +97,11 @@ impl TracePass {
             label: Some("path trace"),
             timestamp_writes,
         });
-        pass.set_pipeline(&self.pipeline);
+        pass.set_pipeline(
+            self.kernels
+                .compiled(self.lobes)
+                .expect("TracePass::prepare compiled this kernel"),
+        );
         pass.set_bind_group(0, scene, &[]);
         pass.set_bind_group(1, group, &[]);
         let (x, y) = view.workgroups();
