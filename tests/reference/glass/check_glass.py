@@ -107,8 +107,8 @@ def check_sampling():
     check('refraction weight = base_color / eta^2', err < 1e-5, 'max relative error %.2e' % err)
     err = np.abs(beta[t] - eta[t]).max()
     check('refraction eta', err < 1e-6, 'max error %.2e' % err)
-    check('TIR: reflection with pdf 1, weight 1', (np.abs(pdf[tir] - 1) < 1e-6).all() and (np.abs(w[tir] - 1) < 1e-6).all(),
-          '%d cases' % tir.sum())
+    tir_ok = (np.abs(pdf[tir] - 1) < 1e-6).all() and (np.abs(w[tir] - 1) < 1e-6).all()
+    check('TIR: reflection with pdf 1, weight 1', tir_ok, '%d cases' % tir.sum())
 
     # Physics, independent of the transcription.
     wt, wit = wo[t], wi[t]
