@@ -15,6 +15,7 @@ mod deep_tlas;
 mod denoise;
 mod editor;
 mod furnace;
+mod glass_reference;
 mod gltf_conformance;
 mod gpu_deform;
 mod light_sampling;
