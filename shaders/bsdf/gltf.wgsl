@@ -11,6 +11,11 @@
 // everything. Sampling picks the glossy reflection, the transmission or the diffuse lobe by their estimated
 // shares and samples GGX visible normals or the cosine; the pdf is the exact mixture.
 
+// Which extension lobes the kernel shades with (engine/src/render/material_lobes.rs, a pipeline constant): 0 the
+// core BSDF only, 1 the extensions' factors, 2 factors and textures. Kernels built without it shade everything.
+// At 0 the accessors below return the core values as constants, so the extension code folds away.
+override MATERIAL_LOBES: u32 = 2u;
+
 struct BsdfParams {
     base_color: vec3<f32>,
     metallic: f32,
@@ -43,21 +48,25 @@ fn core_bsdf(base_color: vec3<f32>, metallic: f32, alpha: f32) -> BsdfParams {
 }
 
 fn lobe_f0(p: BsdfParams) -> vec3<f32> {
+    if MATERIAL_LOBES == 0u { return vec3<f32>(0.04); }
     let q = vec3<f32>(vec3<u32>(p.lobes.x, p.lobes.x >> 10u, p.lobes.x >> 20u) & vec3<u32>(0x3ffu)) / LOBE_F0_SCALE;
     return q * q;
 }
 
 fn lobe_transmission(p: BsdfParams) -> f32 {
+    if MATERIAL_LOBES == 0u { return 0.0; }
     return f32(p.lobes.y & 0xffu) / 255.0;
 }
 
 fn lobe_weight(p: BsdfParams) -> f32 {
+    if MATERIAL_LOBES == 0u { return 1.0; }
     return f32((p.lobes.y >> 8u) & 0x7fu) / 127.0;
 }
 
 // Relative index of refraction across the surface seen from wo (far side over near side): the IOR when wo is
 // outside, its inverse inside; exactly 1 for thin-walled transmission.
 fn lobe_eta(p: BsdfParams) -> f32 {
+    if MATERIAL_LOBES == 0u { return 1.5; }
     let ior = unpack2x16float(p.lobes.y >> 16u).x;
     return select(ior, 1.0 / ior, (p.lobes.y & LOBE_INSIDE) != 0u);
 }
@@ -65,7 +74,7 @@ fn lobe_eta(p: BsdfParams) -> f32 {
 // The lobes this material has (BSDF_* flags): the integrator accepts light from behind the surface only
 // when one of them transmits.
 fn bsdf_flags(p: BsdfParams) -> u32 {
-    if lobe_transmission(p) > 0.0 && p.metallic < 1.0 {
+    if MATERIAL_LOBES != 0u && lobe_transmission(p) > 0.0 && p.metallic < 1.0 {
         return BSDF_REFLECTION | BSDF_TRANSMISSION | BSDF_DIFFUSE | BSDF_GLOSSY;
     }
     return BSDF_REFLECTION | BSDF_DIFFUSE | BSDF_GLOSSY;
@@ -91,6 +100,7 @@ fn dielectric_fresnel(c: f32, p: BsdfParams) -> vec3<f32> {
 }
 
 fn thin_walled(p: BsdfParams) -> bool {
+    if MATERIAL_LOBES == 0u { return false; }
     return (p.lobes.y >> 16u) == 0x3c00u;
 }
 

@@ -2,10 +2,6 @@
 // shading normals (normal map applied) facing the incoming ray, the material's BSDF parameters at the point
 // (textures and vertex colours applied), coverage alpha and emission.
 
-// Which extension lobes the kernel shades with (engine/src/render/material_lobes.rs, a pipeline constant): 0 the
-// core BSDF only, 1 the extensions' factors, 2 factors and textures. Kernels built without it shade everything.
-override MATERIAL_LOBES: u32 = 2u;
-
 struct SurfaceInteraction {
     p: vec3<f32>,
     ng: vec3<f32>,      // geometric normal, facing the incoming ray
