@@ -112,6 +112,9 @@ pub struct LoadArgs {
     /// for trusted files.
     #[arg(long)]
     pub allow_external_files: bool,
+    /// Show the file's KHR_materials_variants variant NAME instead of its own materials.
+    #[arg(long, value_name = "NAME")]
+    pub variant: Option<String>,
 }
 
 impl LoadArgs {
@@ -119,6 +122,7 @@ impl LoadArgs {
         raykin::scene::LoadOptions {
             scene: self.scene_index,
             allow_external_files: self.allow_external_files,
+            variant: self.variant.clone(),
             ..Default::default()
         }
     }

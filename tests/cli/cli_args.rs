@@ -126,6 +126,27 @@ fn a_missing_camera_names_the_file_and_its_cameras() {
 }
 
 #[test]
+fn an_unknown_variant_names_the_file_and_its_variants() {
+    let variants = repo_root().join("assets/conformance/Authored/MaterialVariants.gltf");
+    let out = raykin(&[
+        &"render",
+        &variants,
+        &"--out",
+        &scratch("never-variant.png"),
+        &"--variant",
+        &"green",
+    ]);
+    refused(
+        &out,
+        &[
+            "MaterialVariants.gltf",
+            "no material variant is called `green`",
+            "`red`, `blue`",
+        ],
+    );
+}
+
+#[test]
 fn an_image_over_the_adapters_limits_is_a_clear_error() {
     let out = raykin(&[
         &"render",

@@ -574,6 +574,15 @@ fn variants_select_materials_by_name() {
         Err(SceneError::UnknownVariant { .. })
     ));
     assert_eq!(scene.active_variant, None);
+    // The loader picks one by name (`--variant`), or refuses an unknown name naming the file.
+    let options = |v: &str| raykin::scene::LoadOptions {
+        variant: Some(v.into()),
+        ..Default::default()
+    };
+    let blue = raykin::scene::load_gltf(&path, &options("blue")).unwrap();
+    assert_eq!(materials(&blue), [2, 2]);
+    let err = raykin::scene::load_gltf(&path, &options("green")).unwrap_err();
+    assert!(matches!(err, SceneError::UnknownVariant { .. }), "{err}");
 }
 
 #[test]

@@ -23,6 +23,9 @@ pub struct LoadOptions {
     pub scene: Option<usize>,
     /// Let URIs name files outside the scene's folder (`--allow-external-files`, for trusted files).
     pub allow_external_files: bool,
+    /// The KHR_materials_variants variant to show (`--variant NAME`); `None`: the file's own materials. An
+    /// unknown name is [`SceneError::UnknownVariant`], which lists the file's variants.
+    pub variant: Option<String>,
 }
 
 impl LoadOptions {
@@ -65,13 +68,19 @@ pub fn load_gltf_slice(
     options: &LoadOptions,
 ) -> Result<SceneAsset, SceneError> {
     // The gltf crate and image decoders are not ours: a panic inside them must still become an error.
-    crate::panic_guard::catch(|| Loader::new(bytes, base_dir, name, options).and_then(Loader::load))
-        .unwrap_or_else(|message| {
-            Err(SceneError::Internal {
-                path: name.to_path_buf(),
-                message,
-            })
+    let mut scene = crate::panic_guard::catch(|| {
+        Loader::new(bytes, base_dir, name, options).and_then(Loader::load)
+    })
+    .unwrap_or_else(|message| {
+        Err(SceneError::Internal {
+            path: name.to_path_buf(),
+            message,
         })
+    })?;
+    if let Some(variant) = &options.variant {
+        scene.select_variant(Some(variant))?;
+    }
+    Ok(scene)
 }
 
 struct Loader<'a> {

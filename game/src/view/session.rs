@@ -187,9 +187,11 @@ impl Session {
     /// Loads `path` in place of the current scene; on failure the current scene stays and the editor shows why.
     pub fn open(&mut self, path: &Path) -> Result<(), String> {
         let source = SceneSource::File(path.to_path_buf());
-        // A file opened from the window is a new scene: the command line's --scene was for the first one.
+        // A file opened from the window is a new scene: the command line's --scene and --variant were for the
+        // first one.
         let options = LoadOptions {
             scene: None,
+            variant: None,
             ..self.options.load.clone()
         };
         let result = load(&source, &options)
