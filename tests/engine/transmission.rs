@@ -77,40 +77,72 @@ fn closed_box(h: Vec3, material: u32) -> Vec<MeshData> {
     ]
 }
 
-/// What the camera sees straight through `meshes` (material 0) onto an emitter of radiance 1 behind them,
-/// in the dark: the mean over a 16x16 image whose rays all cross the glass within 5 degrees of its normal.
-fn seen_through(meshes: Vec<MeshData>, material: Material, spp: u32) -> [f64; 3] {
+/// How a test scene is rendered: 16x16, no Russian roulette, a constant environment, a camera looking at the
+/// origin.
+struct Shot {
+    max_depth: u32,
+    environment: f32,
+    seed: u32,
+    eye: Vec3,
+    yfov_deg: f32,
+}
+
+/// `meshes` (untransformed) with `materials`, rendered at `spp` as `shot` says; every pixel must be finite.
+fn shoot(
+    what: &str,
+    meshes: Vec<MeshData>,
+    materials: Vec<Material>,
+    shot: Shot,
+    spp: u32,
+) -> Vec<[f32; 3]> {
     let (ctx, _gpu) = gpu();
-    let mut all: Vec<(MeshData, NodeTransform)> = meshes
+    let meshes = meshes
         .into_iter()
         .map(|m| (m, NodeTransform::default()))
         .collect();
-    all.push((
-        face(Vec3::new(0.0, 0.0, -3.0), Vec3::X * 10.0, Vec3::Y * 10.0, 1),
-        NodeTransform::default(),
-    ));
-    let scene = Arc::new(procedural::scene_from_meshes(
-        "slab",
-        all,
-        vec![material, emitter()],
-    ));
+    let scene = Arc::new(procedural::scene_from_meshes(what, meshes, materials));
     let settings = RenderSettings {
         width: SIZE,
         height: SIZE,
-        max_depth: 12,
-        environment: Environment::Constant([0.0; 3]),
+        max_depth: shot.max_depth,
+        environment: Environment::Constant([shot.environment; 3]),
         russian_roulette: false,
-        seed: 5,
+        seed: shot.seed,
         ..Default::default()
     };
     let camera = CameraChoice::LookAt {
-        eye: Vec3::new(0.0, 0.0, 6.0),
+        eye: shot.eye,
         target: Vec3::ZERO,
-        yfov: 10f32.to_radians(),
+        yfov: shot.yfov_deg.to_radians(),
     };
     let image = render(&ctx, &scene, settings, &camera, spp);
-    assert_all_finite(&image, "glass seen through");
-    mean_rgb(&image)
+    assert_all_finite(&image, what);
+    image
+}
+
+/// What the camera sees straight through `meshes` (material 0) onto an emitter of radiance 1 behind them,
+/// in the dark: the mean over a 16x16 image whose rays all cross the glass within 5 degrees of its normal.
+fn seen_through(mut meshes: Vec<MeshData>, material: Material, spp: u32) -> [f64; 3] {
+    meshes.push(face(
+        Vec3::new(0.0, 0.0, -3.0),
+        Vec3::X * 10.0,
+        Vec3::Y * 10.0,
+        1,
+    ));
+    let shot = Shot {
+        max_depth: 12,
+        environment: 0.0,
+        seed: 5,
+        eye: Vec3::new(0.0, 0.0, 6.0),
+        yfov_deg: 10.0,
+    };
+    mean_rgb(&shoot(
+        "glass seen through",
+        meshes,
+        vec![material, emitter()],
+        shot,
+        spp,
+    ))
 }
 
 fn slab() -> Vec<MeshData> {
@@ -177,38 +209,18 @@ fn thin_wall_transmits_once_without_bending() {
 /// Mean over the pixels that see the sphere (radius 1, 4 units away, 32-degree field) of a glass sphere in a
 /// white furnace; `inner` adds a second glass sphere of half the radius inside it.
 fn furnace_mean(material: Material, inner: bool, spp: u32) -> [f64; 3] {
-    let (ctx, _gpu) = gpu();
-    let mut meshes = vec![(
-        procedural::uv_sphere(1.0, 128, 64, 0),
-        NodeTransform::default(),
-    )];
+    let mut meshes = vec![procedural::uv_sphere(1.0, 128, 64, 0)];
     if inner {
-        meshes.push((
-            procedural::uv_sphere(0.5, 64, 32, 0),
-            NodeTransform::default(),
-        ));
+        meshes.push(procedural::uv_sphere(0.5, 64, 32, 0));
     }
-    let scene = Arc::new(procedural::scene_from_meshes(
-        "furnace",
-        meshes,
-        vec![material],
-    ));
-    let settings = RenderSettings {
-        width: SIZE,
-        height: SIZE,
+    let shot = Shot {
         max_depth: 32,
-        environment: Environment::Constant([1.0; 3]),
-        russian_roulette: false,
+        environment: 1.0,
         seed: 9,
-        ..Default::default()
-    };
-    let camera = CameraChoice::LookAt {
         eye: Vec3::new(0.0, 0.0, 4.0),
-        target: Vec3::ZERO,
-        yfov: 32f32.to_radians(),
+        yfov_deg: 32.0,
     };
-    let image = render(&ctx, &scene, settings, &camera, spp);
-    assert_all_finite(&image, "glass furnace");
+    let image = shoot("glass furnace", meshes, vec![material], shot, spp);
     // Pixels whose centre ray meets the sphere well inside its silhouette.
     let tan = (16f64.to_radians()).tan();
     let inside: Vec<[f32; 3]> = (0..SIZE * SIZE)
@@ -233,7 +245,7 @@ fn smooth_glass_is_invisible_in_a_white_furnace() {
     // light wrongly but still splits it into R + T = 1): no energy leaks or appears.
     let got = furnace_mean(clear, true, 64);
     assert_channel_means_within("nested glass spheres", got, [1.0; 3], 0.02);
-    // Thin-walled and IOR 1 glass too.
+    // Thin-walled glass too.
     let got = furnace_mean(glass(1.5, 0.0), false, 32);
     assert_channel_means_within("thin-walled sphere", got, [1.0; 3], 0.02);
 }
@@ -292,32 +304,18 @@ fn quadrature_of_a_smooth_interface_is_fresnel() {
 
 #[test]
 fn rough_interface_albedo_matches_quadrature() {
-    let (ctx, _gpu) = gpu();
     for (roughness, view_deg) in [(0.3f32, 0.0f32), (0.3, 60.0), (1.0, 0.0), (1.0, 60.0)] {
         let plane = face(Vec3::ZERO, Vec3::X * 1e3, Vec3::Y * 1e3, 0);
         let material = glass_volume(1.5, roughness, Vec3::ONE, f32::INFINITY);
-        let scene = Arc::new(procedural::scene_from_meshes(
-            "interface",
-            vec![(plane, NodeTransform::default())],
-            vec![material],
-        ));
-        let settings = RenderSettings {
-            width: SIZE,
-            height: SIZE,
-            max_depth: 4,
-            environment: Environment::Constant([1.0; 3]),
-            russian_roulette: false,
-            seed: 3,
-            ..Default::default()
-        };
         let view = view_deg.to_radians();
-        let camera = CameraChoice::LookAt {
+        let shot = Shot {
+            max_depth: 4,
+            environment: 1.0,
+            seed: 3,
             eye: Vec3::new(view.sin(), 0.0, view.cos()) * 5.0,
-            target: Vec3::ZERO,
-            yfov: 1f32.to_radians(),
+            yfov_deg: 1.0,
         };
-        let image = render(&ctx, &scene, settings, &camera, 64);
-        assert_all_finite(&image, "rough interface");
+        let image = shoot("rough interface", vec![plane], vec![material], shot, 64);
         let want = rough_interface_albedo((view as f64).cos(), roughness as f64, 1.5);
         eprintln!(
             "roughness {roughness} at {view_deg} deg: {:?} vs quadrature {want:.4}",

@@ -165,23 +165,53 @@ pub(crate) fn compute_pipelines<const N: usize>(
     layouts: &[Option<&wgpu::BindGroupLayout>],
     entries: [&str; N],
 ) -> [wgpu::ComputePipeline; N] {
-    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some(label),
-        source: wgpu::ShaderSource::Wgsl(source.into()),
-    });
-    let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-        label: Some(label),
-        bind_group_layouts: layouts,
-        immediate_size: 0,
-    });
-    entries.map(|entry| {
+    let module = ComputeModule::new(device, label, source, layouts);
+    entries.map(|entry| module.pipeline(device, if N == 1 { label } else { entry }, entry, &[]))
+}
+
+/// One parsed WGSL module and its pipeline layout, from which pipelines are compiled: per entry point, and per
+/// set of values of its pipeline-overridable constants.
+pub(crate) struct ComputeModule {
+    module: wgpu::ShaderModule,
+    layout: wgpu::PipelineLayout,
+}
+
+impl ComputeModule {
+    pub fn new(
+        device: &wgpu::Device,
+        label: &str,
+        source: String,
+        layouts: &[Option<&wgpu::BindGroupLayout>],
+    ) -> Self {
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some(label),
+            source: wgpu::ShaderSource::Wgsl(source.into()),
+        });
+        let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some(label),
+            bind_group_layouts: layouts,
+            immediate_size: 0,
+        });
+        Self { module, layout }
+    }
+
+    pub fn pipeline(
+        &self,
+        device: &wgpu::Device,
+        label: &str,
+        entry: &str,
+        constants: &[(&str, f64)],
+    ) -> wgpu::ComputePipeline {
         device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some(if N == 1 { label } else { entry }),
-            layout: Some(&layout),
-            module: &module,
+            label: Some(label),
+            layout: Some(&self.layout),
+            module: &self.module,
             entry_point: Some(entry),
-            compilation_options: Default::default(),
+            compilation_options: wgpu::PipelineCompilationOptions {
+                constants,
+                ..Default::default()
+            },
             cache: None,
         })
-    })
+    }
 }

@@ -6,6 +6,7 @@
 
 use super::gpu_scene::{TextureSlots, gpu_material};
 use super::layout::{GpuMaterial, NONE};
+use crate::gpu::ComputeModule;
 
 /// What the materials need, least first; the WGSL constant's values.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord)]
@@ -20,7 +21,10 @@ pub enum MaterialLobes {
 }
 
 impl MaterialLobes {
-    const ALL: [Self; 3] = [Self::Core, Self::Factors, Self::Textured];
+    /// The pipeline constants that compile a kernel of the WGSL library for this choice.
+    pub fn constants(self) -> [(&'static str, f64); 1] {
+        [("MATERIAL_LOBES", self as u32 as f64)]
+    }
 
     /// The least the materials need.
     pub fn of(materials: &[GpuMaterial]) -> Self {
@@ -54,8 +58,7 @@ impl MaterialLobes {
 pub struct LobeKernels {
     label: &'static str,
     entry: &'static str,
-    module: wgpu::ShaderModule,
-    layout: wgpu::PipelineLayout,
+    module: ComputeModule,
     pipelines: [Option<wgpu::ComputePipeline>; 3],
 }
 
@@ -67,52 +70,25 @@ impl LobeKernels {
         layouts: &[Option<&wgpu::BindGroupLayout>],
         entry: &'static str,
     ) -> Self {
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some(label),
-            source: wgpu::ShaderSource::Wgsl(source.into()),
-        });
-        let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some(label),
-            bind_group_layouts: layouts,
-            immediate_size: 0,
-        });
         Self {
             label,
             entry,
-            module,
-            layout,
+            module: ComputeModule::new(device, label, source, layouts),
             pipelines: Default::default(),
         }
     }
 
     /// The kernel for `lobes`, compiled now if it has not been.
     pub fn get(&mut self, device: &wgpu::Device, lobes: MaterialLobes) -> &wgpu::ComputePipeline {
-        let i = Self::index(lobes);
-        self.pipelines[i].get_or_insert_with(|| {
-            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(self.label),
-                layout: Some(&self.layout),
-                module: &self.module,
-                entry_point: Some(self.entry),
-                compilation_options: wgpu::PipelineCompilationOptions {
-                    constants: &[("MATERIAL_LOBES", lobes as u32 as f64)],
-                    ..Default::default()
-                },
-                cache: None,
-            })
+        self.pipelines[lobes as usize].get_or_insert_with(|| {
+            self.module
+                .pipeline(device, self.label, self.entry, &lobes.constants())
         })
     }
 
     /// The kernel for `lobes` if [`Self::get`] compiled it.
     pub fn compiled(&self, lobes: MaterialLobes) -> Option<&wgpu::ComputePipeline> {
-        self.pipelines[Self::index(lobes)].as_ref()
-    }
-
-    fn index(lobes: MaterialLobes) -> usize {
-        MaterialLobes::ALL
-            .iter()
-            .position(|&l| l == lobes)
-            .unwrap_or(2)
+        self.pipelines[lobes as usize].as_ref()
     }
 }
 

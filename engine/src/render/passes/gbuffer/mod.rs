@@ -2,9 +2,10 @@
 //! vectors from the previous camera, placements and deformed positions (`gbuffer.wgsl`). It moves each
 //! pixel's previous surface to the previous-frame G-buffer as it writes the new one.
 
+use crate::gpu::ComputeModule;
 use crate::gpu::GpuContext;
 use crate::gpu::bind::{Binding, CachedGroup, bind_group, compute_layout};
-use crate::render::material_lobes::{LobeKernels, MaterialLobes};
+use crate::render::material_lobes::MaterialLobes;
 use crate::render::realtime_targets::{RealtimeTargets, SceneGroups};
 use crate::render::shaders::{ShaderModule, compose};
 use crate::render::view::ViewTargets;
@@ -44,15 +45,18 @@ impl GBufferPass {
             &[Uniform, Uniform, ReadWrite, ReadWrite, ReadWrite],
         );
         // The G-buffer keeps only the core BSDF parameters (`pack_bsdf`): its kernel skips the extension lobes.
-        let pipeline = LobeKernels::new(
+        let pipeline = ComputeModule::new(
             &ctx.device,
             "gbuffer",
             compose(&KERNEL),
             &[Some(scene_layout), Some(&layout), Some(motion_layout)],
-            "write_gbuffer",
         )
-        .get(&ctx.device, MaterialLobes::Core)
-        .clone();
+        .pipeline(
+            &ctx.device,
+            "gbuffer",
+            "write_gbuffer",
+            &MaterialLobes::Core.constants(),
+        );
         Self {
             pipeline,
             layout,
