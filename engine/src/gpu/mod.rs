@@ -26,7 +26,21 @@ pub enum GpuError {
         adapter: String,
         source: wgpu::RequestDeviceError,
     },
+    #[error(
+        "the GPU adapter `{adapter}` ({backend}) binds {available} storage buffers per shader stage; the path \
+         tracer needs {MIN_STORAGE_BUFFERS_PER_STAGE}. Install a Vulkan driver (Debian: mesa-vulkan-drivers) \
+         or pick another adapter with WGPU_ADAPTER_NAME"
+    )]
+    TooFewStorageBuffers {
+        adapter: String,
+        backend: String,
+        available: u32,
+    },
 }
+
+/// Storage buffers the path-trace kernel binds in one stage. Below this (wgpu's GL backend offers 16) pipeline
+/// creation would panic deep in the first frame; refusing the adapter here names the cause instead.
+pub const MIN_STORAGE_BUFFERS_PER_STAGE: u32 = 20;
 
 /// The device and queue every GPU pass uses, plus what the adapter can do.
 #[derive(Resource, Clone)]
@@ -75,6 +89,13 @@ impl GpuContext {
             | wgpu::Features::SUBGROUP;
         let features = adapter.features() & wanted;
         let limits = adapter.limits();
+        if limits.max_storage_buffers_per_shader_stage < MIN_STORAGE_BUFFERS_PER_STAGE {
+            return Err(GpuError::TooFewStorageBuffers {
+                adapter: info.name.clone(),
+                backend: format!("{:?}", info.backend),
+                available: limits.max_storage_buffers_per_shader_stage,
+            });
+        }
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("raykin"),
             required_features: features,
