@@ -26,15 +26,19 @@ fn trace(ray: Ray, t_max: f32, any_hit: bool) -> Hit {
         let n = tlas_nodes[node];
         let ta = hit_child(n.a, ray.origin, inv_d, hit.t);
         let tb = hit_child(n.b, ray.origin, inv_d, hit.t);
-        if n.a.count > 0u && ta < MISS {
-            for (var i = 0u; i < n.a.count; i++) {
-                if trace_blas(n.a.index + i, ray, &hit, any_hit) && any_hit { return hit; }
+        // Both leaf children's instances through one call site: the compiled kernel holds a copy of the BLAS
+        // traversal per call (drivers inline every function), and CPU drivers spend seconds compiling each copy.
+        // Child a is tested against the distance at node entry, b against the closest hit after a's instances.
+        // (A loop over the two children around a loop over each one's instances computed wrong hits on lavapipe.)
+        let count_a = select(0u, n.a.count, ta < MISS);
+        let total = count_a + n.b.count;
+        for (var k = 0u; k < total; k++) {
+            var instance = n.a.index + k;
+            if k >= count_a {
+                if k == count_a && !(tb < hit.t) { break; }
+                instance = n.b.index + (k - count_a);
             }
-        }
-        if n.b.count > 0u && tb < hit.t {
-            for (var i = 0u; i < n.b.count; i++) {
-                if trace_blas(n.b.index + i, ray, &hit, any_hit) && any_hit { return hit; }
-            }
+            if trace_blas(instance, ray, &hit, any_hit) && any_hit { return hit; }
         }
         // An interior child that is not the EMPTY placeholder of a one-leaf tree (index NONE): the slab test
         // cannot reject EMPTY's inverted box for rays that start inside [-1, 1]^3 (min/max swap per axis).

@@ -8,7 +8,7 @@ use crate::common::*;
 use glam::Vec3;
 use raykin::camera::CameraChoice;
 use raykin::gpu::GpuContext;
-use raykin::gpu::bind::{Binding, bind_group, compute_layout, storage_buffer, uniform_buffer};
+use raykin::gpu::bind::{Binding, bind_group, compute_layout, params_buffer, storage_buffer};
 use raykin::headless::HeadlessApp;
 use raykin::render::shaders::{ShaderModule, compose};
 use raykin::render::{Environment, GpuScene, RenderSettings, ViewTargets};
@@ -16,7 +16,7 @@ use std::sync::Arc;
 
 const PROBE: &str = r#"
 struct Probe { p: vec3<f32>, light: u32, n: vec3<f32>, count: u32, grid_w: u32, grid_h: u32, seed: u32, _pad: u32 }
-@group(1) @binding(1) var<uniform> probe: Probe;
+@group(1) @binding(1) var<storage, read> probe: Probe;
 @group(1) @binding(2) var<storage, read_write> out: array<vec4<f32>>;
 
 // Sample i: (wi, pdf), (luminance of li, pdf of wi again, distance, 0).
@@ -116,16 +116,16 @@ fn run_probe(
     let layout = compute_layout(
         ctx,
         "probe",
-        &[Binding::Uniform, Binding::Uniform, Binding::ReadWrite],
+        &[Binding::Read, Binding::Read, Binding::ReadWrite],
     );
     let pipeline = raykin::gpu::compute_pipeline(
-        &ctx.device,
+        ctx,
         "light probe",
         compose(&KERNEL),
         &[Some(&bindings.layout), Some(&layout)],
         entry,
     );
-    let uniform = uniform_buffer(ctx, "probe", std::mem::size_of::<Probe>());
+    let uniform = params_buffer(ctx, "probe", std::mem::size_of::<Probe>());
     ctx.queue
         .write_buffer(&uniform, 0, bytemuck::bytes_of(&probe));
     let out = storage_buffer(ctx, "probe out", (out_len * 16) as u64);

@@ -666,3 +666,24 @@ fn restir_converges_to_nee(
         "ReSTIR's block error {e_on:.3e} against NEE's {e_off:.3e}"
     );
 }
+
+/// The adapter check at start-up (`MIN_STORAGE_BUFFERS_PER_STAGE`) asks for exactly the storage buffers the
+/// engine's kernels bind: every real-time stage and the accumulating path tracer compiled here, the most any of
+/// them binds in its stage is the constant (more would fail pipeline creation on a small adapter; fewer would
+/// refuse adapters that can run raykin).
+#[test]
+fn the_adapter_check_asks_for_what_the_kernels_bind() {
+    let (ctx, _gpu) = gpu();
+    let mut settings = realtime(cornell_settings(8, 1), true);
+    settings.realtime.spatial = true;
+    settings.realtime.gradients = true;
+    let mut app =
+        HeadlessApp::new(ctx.clone(), cornell(), settings, &cornell_camera(0.0)).expect("uploads");
+    steps(&mut app, 2);
+    app.settings_mut().mode = RenderMode::Accumulate;
+    steps(&mut app, 1);
+    assert_eq!(
+        ctx.pipelines.most_storage_buffers_per_stage(),
+        raykin::gpu::MIN_STORAGE_BUFFERS_PER_STAGE
+    );
+}

@@ -22,6 +22,33 @@ fn all_wgsl_kernels_validate() {
     }
 }
 
+/// Compute kernels take their parameters from storage buffers, never from uniforms: lavapipe specialises a kernel
+/// on the values of uniforms that decide branches or loop counts and compiles it again (seconds to minutes on a
+/// CPU) for each new image size, depth or sample count. Only the window's render pipeline reads a uniform.
+#[test]
+fn compute_kernels_read_no_uniforms() {
+    let mut compute = 0;
+    for (name, source) in passes::all_kernels() {
+        let module = naga::front::wgsl::parse_str(&source).expect("parses (see above)");
+        if !module
+            .entry_points
+            .iter()
+            .any(|e| e.stage == naga::ShaderStage::Compute)
+        {
+            continue;
+        }
+        compute += 1;
+        for (_, global) in module.global_variables.iter() {
+            assert!(
+                global.space != naga::AddressSpace::Uniform,
+                "{name}.wgsl: `{}` is a uniform; bind parameters as `var<storage, read>`",
+                global.name.as_deref().unwrap_or("?")
+            );
+        }
+    }
+    assert!(compute >= 13, "only {compute} compute kernels found");
+}
+
 /// Size and member offsets (by name) of each named struct of a WGSL module.
 struct WgslLayouts {
     module: naga::Module,
@@ -191,7 +218,7 @@ fn scene_structs_match_wgsl() {
 }
 
 #[test]
-fn pass_uniforms_match_wgsl() {
+fn pass_parameters_match_wgsl() {
     use passes::denoise::DenoisePassParams;
     use passes::display::DisplayParams;
     use passes::tonemap::TonemapParams;

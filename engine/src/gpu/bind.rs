@@ -40,11 +40,8 @@ pub fn layout_for(
     bindings: &[Binding],
     stages: wgpu::ShaderStages,
 ) -> wgpu::BindGroupLayout {
-    ctx.device
-        .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some(label),
-            entries: &layout_entries(bindings, stages),
-        })
+    ctx.pipelines
+        .bind_group_layout(label, &layout_entries(bindings, stages))
 }
 
 /// Layout entries with `bindings[i]` at binding `i`, visible to `stages`.
@@ -94,7 +91,21 @@ pub fn bind_group(
     })
 }
 
-/// A uniform buffer of `size` bytes, written with `queue.write_buffer`.
+/// A buffer of a compute pass's parameters (`size` bytes, written with `queue.write_buffer`), bound as
+/// [`Binding::Read`] (`var<storage, read>` in WGSL). Compute kernels never read parameters from uniform buffers:
+/// lavapipe specialises a kernel on the values of uniforms that decide branches and loop counts, compiling it
+/// again (seconds to minutes on a CPU) for every new image size, depth or sample count; storage buffers are
+/// never specialised.
+pub fn params_buffer(ctx: &GpuContext, label: &str, size: usize) -> wgpu::Buffer {
+    ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size: size as u64,
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    })
+}
+
+/// A uniform buffer of `size` bytes, written with `queue.write_buffer` (the window's render pipeline).
 pub fn uniform_buffer(ctx: &GpuContext, label: &str, size: usize) -> wgpu::Buffer {
     ctx.device.create_buffer(&wgpu::BufferDescriptor {
         label: Some(label),

@@ -2,9 +2,11 @@
 
 pub mod bind;
 pub mod limits;
+mod pipeline_cache;
 pub mod readback;
 mod timestamps;
 
+pub use pipeline_cache::PipelineCache;
 pub use timestamps::PassTimestamps;
 
 use bevy_ecs::prelude::Resource;
@@ -27,8 +29,8 @@ pub enum GpuError {
         source: wgpu::RequestDeviceError,
     },
     #[error(
-        "the GPU adapter `{adapter}` ({backend}) binds {available} storage buffers per shader stage; the path \
-         tracer needs {MIN_STORAGE_BUFFERS_PER_STAGE}. Install a Vulkan driver (Debian: mesa-vulkan-drivers) \
+        "the GPU adapter `{adapter}` ({backend}) binds {available} storage buffers per shader stage; raykin's \
+         kernels need {MIN_STORAGE_BUFFERS_PER_STAGE}. Install a Vulkan driver (Debian: mesa-vulkan-drivers) \
          or pick another adapter with WGPU_ADAPTER_NAME"
     )]
     TooFewStorageBuffers {
@@ -38,9 +40,10 @@ pub enum GpuError {
     },
 }
 
-/// Storage buffers the path-trace kernel binds in one stage. Below this (wgpu's GL backend offers 16) pipeline
-/// creation would panic deep in the first frame; refusing the adapter here names the cause instead.
-pub const MIN_STORAGE_BUFFERS_PER_STAGE: u32 = 20;
+/// The most storage buffers one of raykin's kernels binds in its stage (ReSTIR DI's: scene 14, its own 8, motion
+/// 5). Below this (wgpu's GL backend offers 16) pipeline creation would panic deep in the first frame; refusing
+/// the adapter here names the cause instead. A test compiles every kernel and checks the figure.
+pub const MIN_STORAGE_BUFFERS_PER_STAGE: u32 = 27;
 
 /// The device and queue every GPU pass uses, plus what the adapter can do.
 #[derive(Resource, Clone)]
@@ -51,6 +54,8 @@ pub struct GpuContext {
     pub info: wgpu::AdapterInfo,
     pub limits: wgpu::Limits,
     pub features: wgpu::Features,
+    /// Kernels and bind-group layouts compiled on this device, shared by every renderer.
+    pub pipelines: PipelineCache,
 }
 
 impl GpuContext {
@@ -107,6 +112,7 @@ impl GpuContext {
             source,
         })?;
         Ok(Self {
+            pipelines: PipelineCache::new(device.clone()),
             device,
             queue,
             adapter: Arc::new(adapter),
@@ -168,71 +174,58 @@ impl GpuContext {
 /// A compute pipeline from one WGSL module and its bind group layouts; `label` names the module, layout and
 /// pipeline. Public for kernels outside the renderer's passes (tests probing the WGSL library).
 pub fn compute_pipeline(
-    device: &wgpu::Device,
+    ctx: &GpuContext,
     label: &str,
     source: String,
     layouts: &[Option<&wgpu::BindGroupLayout>],
     entry: &str,
 ) -> wgpu::ComputePipeline {
-    let [pipeline] = compute_pipelines(device, label, source, layouts, [entry]);
+    let [pipeline] = compute_pipelines(ctx, label, source, layouts, [entry]);
     pipeline
 }
 
-/// One pipeline per entry point of one module, compiled once, over the same layouts.
+/// One pipeline per entry point of one module, over the same layouts.
 pub(crate) fn compute_pipelines<const N: usize>(
-    device: &wgpu::Device,
+    ctx: &GpuContext,
     label: &str,
     source: String,
     layouts: &[Option<&wgpu::BindGroupLayout>],
     entries: [&str; N],
 ) -> [wgpu::ComputePipeline; N] {
-    let module = ComputeModule::new(device, label, source, layouts);
-    entries.map(|entry| module.pipeline(device, if N == 1 { label } else { entry }, entry, &[]))
+    let module = ComputeModule::new(ctx, source, layouts);
+    entries.map(|entry| module.pipeline(if N == 1 { label } else { entry }, entry, &[]))
 }
 
-/// One parsed WGSL module and its pipeline layout, from which pipelines are compiled: per entry point, and per
-/// set of values of its pipeline-overridable constants.
+/// One WGSL module over its bind group layouts, from which pipelines are compiled: per entry point, and per
+/// set of values of its pipeline-overridable constants. Compiled pipelines come from (and go to) the device's
+/// [`PipelineCache`].
 pub(crate) struct ComputeModule {
-    module: wgpu::ShaderModule,
-    layout: wgpu::PipelineLayout,
+    cache: PipelineCache,
+    source: Arc<str>,
+    layouts: Vec<Option<wgpu::BindGroupLayout>>,
 }
 
 impl ComputeModule {
     pub fn new(
-        device: &wgpu::Device,
-        label: &str,
+        ctx: &GpuContext,
         source: String,
         layouts: &[Option<&wgpu::BindGroupLayout>],
     ) -> Self {
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some(label),
-            source: wgpu::ShaderSource::Wgsl(source.into()),
-        });
-        let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some(label),
-            bind_group_layouts: layouts,
-            immediate_size: 0,
-        });
-        Self { module, layout }
+        Self {
+            cache: ctx.pipelines.clone(),
+            source: source.into(),
+            layouts: layouts.iter().map(|l| l.cloned()).collect(),
+        }
     }
 
     pub fn pipeline(
         &self,
-        device: &wgpu::Device,
         label: &str,
         entry: &str,
         constants: &[(&str, f64)],
     ) -> wgpu::ComputePipeline {
-        device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some(label),
-            layout: Some(&self.layout),
-            module: &self.module,
-            entry_point: Some(entry),
-            compilation_options: wgpu::PipelineCompilationOptions {
-                constants,
-                ..Default::default()
-            },
-            cache: None,
-        })
+        let layouts: Vec<_> = self.layouts.iter().map(Option::as_ref).collect();
+        self.cache
+            .compute_pipeline(label, &self.source, &layouts, entry, constants)
     }
 }

@@ -230,7 +230,7 @@ impl GpuDeformer {
             groups_x: x,
             _pad: [0; 2],
         };
-        let params_buffer = crate::gpu::bind::uniform_buffer(
+        let params_buffer = crate::gpu::bind::params_buffer(
             ctx,
             "deform params",
             std::mem::size_of::<DeformParams>(),

@@ -64,7 +64,7 @@ pub struct LobeKernels {
 
 impl LobeKernels {
     pub fn new(
-        device: &wgpu::Device,
+        ctx: &crate::gpu::GpuContext,
         label: &'static str,
         source: String,
         layouts: &[Option<&wgpu::BindGroupLayout>],
@@ -73,16 +73,16 @@ impl LobeKernels {
         Self {
             label,
             entry,
-            module: ComputeModule::new(device, label, source, layouts),
+            module: ComputeModule::new(ctx, source, layouts),
             pipelines: Default::default(),
         }
     }
 
     /// The kernel for `lobes`, compiled now if it has not been.
-    pub fn get(&mut self, device: &wgpu::Device, lobes: MaterialLobes) -> &wgpu::ComputePipeline {
+    pub fn get(&mut self, lobes: MaterialLobes) -> &wgpu::ComputePipeline {
         self.pipelines[lobes as usize].get_or_insert_with(|| {
             self.module
-                .pipeline(device, self.label, self.entry, &lobes.constants())
+                .pipeline(self.label, self.entry, &lobes.constants())
         })
     }
 

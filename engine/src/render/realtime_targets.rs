@@ -6,7 +6,7 @@
 
 use super::layout::*;
 use crate::gpu::GpuContext;
-use crate::gpu::bind::{clear_buffers, storage_buffer, uniform_buffer};
+use crate::gpu::bind::{clear_buffers, params_buffer, storage_buffer};
 
 /// A-SVGF: a-trous iterations over the gradient strata (taps 1, 2, 4 strata apart: 15 strata, 45 pixels
 /// across); the `gradient` pass runs them and the `temporal` pass reads their result.
@@ -130,7 +130,7 @@ impl RealtimeTargets {
             width,
             height,
             generation: next_generation(),
-            uniform: uniform_buffer(
+            uniform: params_buffer(
                 ctx,
                 "realtime frame",
                 std::mem::size_of::<GpuRealtimeFrame>(),

@@ -3,7 +3,7 @@
 
 use super::layout::{GpuFrame, NONE};
 use crate::gpu::GpuContext;
-use crate::gpu::bind::{clear_buffers, storage_buffer, uniform_buffer};
+use crate::gpu::bind::{clear_buffers, params_buffer, storage_buffer};
 use bevy_ecs::prelude::Resource;
 
 #[derive(Resource)]
@@ -45,7 +45,7 @@ impl ViewTargets {
         let view = Self {
             width,
             height,
-            frame: uniform_buffer(ctx, "frame", std::mem::size_of::<GpuFrame>()),
+            frame: params_buffer(ctx, "frame", std::mem::size_of::<GpuFrame>()),
             accum: storage_buffer(ctx, "accum", pixels * 16),
             albedo_depth: storage_buffer(ctx, "aov albedo", pixels * 16),
             normal_hits: storage_buffer(ctx, "aov normal", pixels * 16),

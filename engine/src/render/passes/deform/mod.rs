@@ -47,10 +47,10 @@ impl DeformPass {
         let layout = compute_layout(
             ctx,
             "deform",
-            &[Read, Read, Read, Read, Read, ReadWrite, Uniform],
+            &[Read, Read, Read, Read, Read, ReadWrite, Read],
         );
         let pipeline = crate::gpu::compute_pipeline(
-            &ctx.device,
+            ctx,
             "deform",
             compose(&KERNEL),
             &[Some(&layout)],

@@ -95,7 +95,7 @@ impl Denoiser {
             binding: 8,
             visibility: wgpu::ShaderStages::COMPUTE,
             ty: wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Uniform,
+                ty: wgpu::BufferBindingType::Storage { read_only: true },
                 has_dynamic_offset: true,
                 min_binding_size: wgpu::BufferSize::new(
                     std::mem::size_of::<DenoisePassParams>() as u64
@@ -103,35 +103,15 @@ impl Denoiser {
             },
             count: None,
         });
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("denoise"),
-            entries: &entries,
-        });
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("denoise"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("denoise"),
-            source: wgpu::ShaderSource::Wgsl(compose(&KERNEL).into()),
-        });
-        let pipeline = |entry: &str| {
-            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(entry),
-                layout: Some(&pipeline_layout),
-                module: &module,
-                entry_point: Some(entry),
-                compilation_options: Default::default(),
-                cache: None,
-            })
-        };
+        let layout = ctx.pipelines.bind_group_layout("denoise", &entries);
+        let module = crate::gpu::ComputeModule::new(ctx, compose(&KERNEL), &[Some(&layout)]);
+        let pipeline = |entry: &str| module.pipeline(entry, entry, &[]);
         let params_stride = (std::mem::size_of::<DenoisePassParams>() as u64)
-            .next_multiple_of(ctx.limits.min_uniform_buffer_offset_alignment as u64);
+            .next_multiple_of(ctx.limits.min_storage_buffer_offset_alignment as u64);
         let params = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("denoise params"),
             size: params_stride * (2 + DenoiseParams::MAX_ITERATIONS as u64),
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
         Self {

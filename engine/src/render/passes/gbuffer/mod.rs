@@ -42,21 +42,15 @@ impl GBufferPass {
         let layout = compute_layout(
             ctx,
             "gbuffer",
-            &[Uniform, Uniform, ReadWrite, ReadWrite, ReadWrite],
+            &[Read, Read, ReadWrite, ReadWrite, ReadWrite],
         );
         // The G-buffer keeps only the core BSDF parameters (`pack_bsdf`): its kernel skips the extension lobes.
         let pipeline = ComputeModule::new(
-            &ctx.device,
-            "gbuffer",
+            ctx,
             compose(&KERNEL),
             &[Some(scene_layout), Some(&layout), Some(motion_layout)],
         )
-        .pipeline(
-            &ctx.device,
-            "gbuffer",
-            "write_gbuffer",
-            &MaterialLobes::Core.constants(),
-        );
+        .pipeline("gbuffer", "write_gbuffer", &MaterialLobes::Core.constants());
         Self {
             pipeline,
             layout,

@@ -3,7 +3,7 @@
 //! without the real-time path.
 
 use crate::gpu::GpuContext;
-use crate::gpu::bind::{Binding, bind_group, compute_layout, uniform_buffer};
+use crate::gpu::bind::{Binding, bind_group, compute_layout, params_buffer};
 use crate::render::shaders::{ShaderModule, compose};
 use bytemuck::{Pod, Zeroable};
 
@@ -40,9 +40,9 @@ pub struct HandoverBuffers<'a> {
 impl HandoverPass {
     pub fn new(ctx: &GpuContext) -> Self {
         use Binding::*;
-        let layout = compute_layout(ctx, "handover", &[Read, Read, ReadWrite, Uniform]);
+        let layout = compute_layout(ctx, "handover", &[Read, Read, ReadWrite, Read]);
         let pipeline = crate::gpu::compute_pipeline(
-            &ctx.device,
+            ctx,
             "handover",
             compose(&KERNEL),
             &[Some(&layout)],
@@ -51,7 +51,7 @@ impl HandoverPass {
         Self {
             pipeline,
             layout,
-            params: uniform_buffer(
+            params: params_buffer(
                 ctx,
                 "handover params",
                 std::mem::size_of::<HandoverParams>(),

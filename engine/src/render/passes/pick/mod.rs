@@ -22,9 +22,9 @@ pub struct PickPass {
 
 impl PickPass {
     pub fn new(ctx: &GpuContext, scene_layout: &wgpu::BindGroupLayout) -> Self {
-        let view_layout = compute_layout(ctx, "pick", &[Binding::Uniform, Binding::ReadWrite]);
+        let view_layout = compute_layout(ctx, "pick", &[Binding::Read, Binding::ReadWrite]);
         let pipeline = crate::gpu::compute_pipeline(
-            &ctx.device,
+            ctx,
             "pick",
             compose(&KERNEL),
             &[Some(scene_layout), Some(&view_layout)],

@@ -29,9 +29,9 @@ impl RaycastPass {
     pub fn new(ctx: &GpuContext, scene_layout: &wgpu::BindGroupLayout) -> Self {
         use Binding::*;
         // frame, hit distances, ray counter
-        let view_layout = compute_layout(ctx, "raycast", &[Uniform, ReadWrite, ReadWrite]);
+        let view_layout = compute_layout(ctx, "raycast", &[Read, ReadWrite, ReadWrite]);
         let pipeline = crate::gpu::compute_pipeline(
-            &ctx.device,
+            ctx,
             "raycast",
             compose(&KERNEL),
             &[Some(scene_layout), Some(&view_layout)],

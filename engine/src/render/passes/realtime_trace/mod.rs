@@ -39,12 +39,10 @@ impl RealtimeTracePass {
         let layout = compute_layout(
             ctx,
             "realtime trace",
-            &[
-                Uniform, Uniform, Read, Read, ReadWrite, ReadWrite, ReadWrite,
-            ],
+            &[Read, Read, Read, Read, ReadWrite, ReadWrite, ReadWrite],
         );
         let kernels = LobeKernels::new(
-            &ctx.device,
+            ctx,
             "realtime trace",
             compose(&KERNEL),
             &[Some(scene_layout), Some(&layout), Some(motion_layout)],
@@ -93,7 +91,7 @@ impl RealtimeTracePass {
                 )
             });
         let mut pass = groups.begin_pass(encoder, "realtime trace", group, timestamp_writes);
-        pass.set_pipeline(self.kernels.get(&ctx.device, lobes));
+        pass.set_pipeline(self.kernels.get(lobes));
         let (x, y) = view.workgroups();
         pass.dispatch_workgroups(x, y, 1);
     }

@@ -55,13 +55,8 @@ impl RefitPass {
             "refit",
             &[ReadWrite, Read, Read, Read, Read, Read, Read, ReadWrite],
         );
-        let pipeline = crate::gpu::compute_pipeline(
-            &ctx.device,
-            "refit",
-            compose(&KERNEL),
-            &[Some(&layout)],
-            "refit",
-        );
+        let pipeline =
+            crate::gpu::compute_pipeline(ctx, "refit", compose(&KERNEL), &[Some(&layout)], "refit");
         Self { pipeline, layout }
     }
 

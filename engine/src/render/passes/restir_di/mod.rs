@@ -41,11 +41,11 @@ impl RestirDiPass {
             ctx,
             "restir di",
             &[
-                Uniform, Uniform, Read, Read, ReadWrite, ReadWrite, ReadWrite, ReadWrite,
+                Read, Read, Read, Read, ReadWrite, ReadWrite, ReadWrite, ReadWrite,
             ],
         );
         let [candidates, spatial] = crate::gpu::compute_pipelines(
-            &ctx.device,
+            ctx,
             "restir di",
             compose(&KERNEL),
             &[Some(scene_layout), Some(&layout), Some(motion_layout)],

@@ -39,12 +39,12 @@ impl TemporalPass {
             ctx,
             "temporal",
             &[
-                Uniform, Uniform, Read, Read, Read, Read, Read, Read, Read, Read, Read, ReadWrite,
+                Read, Read, Read, Read, Read, Read, Read, Read, Read, Read, Read, ReadWrite,
                 ReadWrite, ReadWrite, ReadWrite,
             ],
         );
         let pipeline = crate::gpu::compute_pipeline(
-            &ctx.device,
+            ctx,
             "temporal",
             compose(&KERNEL),
             &[None, Some(&layout)],

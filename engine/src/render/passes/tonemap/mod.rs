@@ -2,7 +2,7 @@
 //! RGBA8 into the view's `rgba8` target; or one of the AOVs for inspection.
 
 use crate::gpu::GpuContext;
-use crate::gpu::bind::{Binding, bind_group, compute_layout, uniform_buffer};
+use crate::gpu::bind::{Binding, bind_group, compute_layout, params_buffer};
 use crate::render::shaders::{ShaderModule, compose};
 use crate::render::view::ViewTargets;
 use bevy_ecs::prelude::Resource;
@@ -60,9 +60,9 @@ impl TonemapPass {
     pub fn new(ctx: &GpuContext) -> Self {
         use Binding::*;
         // radiance, albedo + depth, normal + hits, rgba8 out, params
-        let layout = compute_layout(ctx, "tonemap", &[Read, Read, Read, ReadWrite, Uniform]);
+        let layout = compute_layout(ctx, "tonemap", &[Read, Read, Read, ReadWrite, Read]);
         let pipeline = crate::gpu::compute_pipeline(
-            &ctx.device,
+            ctx,
             "tonemap",
             compose(&KERNEL),
             &[Some(&layout)],
@@ -71,7 +71,7 @@ impl TonemapPass {
         Self {
             pipeline,
             layout,
-            params: uniform_buffer(ctx, "tonemap params", std::mem::size_of::<TonemapParams>()),
+            params: params_buffer(ctx, "tonemap params", std::mem::size_of::<TonemapParams>()),
             groups: Mutex::default(),
         }
     }

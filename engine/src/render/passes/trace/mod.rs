@@ -37,11 +37,11 @@ impl TracePass {
             ctx,
             "trace view",
             &[
-                Uniform, ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite,
+                Read, ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite,
             ],
         );
         let kernels = LobeKernels::new(
-            &ctx.device,
+            ctx,
             "path trace",
             compose(&KERNEL),
             &[Some(scene_layout), Some(&view_layout)],
@@ -58,7 +58,7 @@ impl TracePass {
     /// Binds the view's targets (again only when they were replaced) and picks the kernel for the lobes the
     /// scene's materials use (compiling it the first time).
     pub fn prepare(&mut self, ctx: &GpuContext, view: &ViewTargets, lobes: MaterialLobes) {
-        self.kernels.get(&ctx.device, lobes);
+        self.kernels.get(lobes);
         self.lobes = lobes;
         let layout = &self.view_layout;
         self.view_group.get_or_make(view.generation, || {

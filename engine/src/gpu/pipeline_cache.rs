@@ -1,0 +1,183 @@
+//! Kernels compiled once per device and shared by every renderer on it. Building a pipeline is the costly step
+//! of creating a renderer (about a second for the path tracer on a CPU driver, where the driver compiles it,
+//! before any disk cache of the driver is consulted); a viewer that opens another scene, a bench that renders
+//! several, or a test binary with hundreds of renderers reuses what an earlier renderer compiled.
+//!
+//! Bind-group layouts are shared as well, so that a pipeline built against one renderer's layouts is keyed by
+//! layouts that later renderers receive again (wgpu compares a pipeline's layouts with a bind group's by
+//! identity). Everything is keyed by its full description, source text included: a different kernel or layout is
+//! never mistaken for a cached one. Entries live as long as the device; their number is bounded by the kernels
+//! and pipeline constants the engine has (a few dozen).
+
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex, PoisonError};
+
+#[derive(Clone)]
+pub struct PipelineCache {
+    device: wgpu::Device,
+    entries: Arc<Mutex<Entries>>,
+}
+
+#[derive(Default)]
+struct Entries {
+    bind_group_layouts: HashMap<(String, Vec<wgpu::BindGroupLayoutEntry>), wgpu::BindGroupLayout>,
+    modules: HashMap<ModuleKey, Arc<CompiledModule>>,
+    pipelines: HashMap<PipelineKey, wgpu::ComputePipeline>,
+    compiled: usize,
+    /// Storage buffers in each layout made here, and the most any compiled pipeline binds in its stage.
+    storage_buffers: HashMap<wgpu::BindGroupLayout, u32>,
+    most_storage_buffers: u32,
+}
+
+/// One WGSL source over one set of bind-group layouts.
+#[derive(Clone, PartialEq, Eq, Hash)]
+struct ModuleKey {
+    source: Arc<str>,
+    layouts: Vec<Option<wgpu::BindGroupLayout>>,
+}
+
+#[derive(PartialEq, Eq, Hash)]
+struct PipelineKey {
+    module: ModuleKey,
+    entry: String,
+    /// Pipeline-overridable constants by name, values as f64 bits.
+    constants: Vec<(String, u64)>,
+}
+
+struct CompiledModule {
+    module: wgpu::ShaderModule,
+    layout: wgpu::PipelineLayout,
+}
+
+impl PipelineCache {
+    pub fn new(device: wgpu::Device) -> Self {
+        Self {
+            device,
+            entries: Arc::default(),
+        }
+    }
+
+    fn lock(&self) -> std::sync::MutexGuard<'_, Entries> {
+        // A panic while compiling leaves the maps consistent (entries are inserted whole).
+        self.entries.lock().unwrap_or_else(PoisonError::into_inner)
+    }
+
+    /// The bind-group layout with these entries, created on first request.
+    pub fn bind_group_layout(
+        &self,
+        label: &str,
+        entries: &[wgpu::BindGroupLayoutEntry],
+    ) -> wgpu::BindGroupLayout {
+        let mut cache = self.lock();
+        if let Some(layout) = cache
+            .bind_group_layouts
+            .get(&(label.to_owned(), entries.to_vec()))
+        {
+            return layout.clone();
+        }
+        let layout = self
+            .device
+            .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some(label),
+                entries,
+            });
+        let storage = entries
+            .iter()
+            .filter(|e| {
+                matches!(
+                    e.ty,
+                    wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Storage { .. },
+                        ..
+                    }
+                )
+            })
+            .count() as u32;
+        cache.storage_buffers.insert(layout.clone(), storage);
+        cache
+            .bind_group_layouts
+            .insert((label.to_owned(), entries.to_vec()), layout.clone());
+        layout
+    }
+
+    /// The compute pipeline for `entry` of `source` over `layouts` with `constants`, compiled on first request.
+    /// `label` names the module, layout and pipeline where they are created.
+    pub fn compute_pipeline(
+        &self,
+        label: &str,
+        source: &Arc<str>,
+        layouts: &[Option<&wgpu::BindGroupLayout>],
+        entry: &str,
+        constants: &[(&str, f64)],
+    ) -> wgpu::ComputePipeline {
+        let module_key = ModuleKey {
+            source: source.clone(),
+            layouts: layouts.iter().map(|l| l.cloned()).collect(),
+        };
+        let key = PipelineKey {
+            module: module_key.clone(),
+            entry: entry.to_owned(),
+            constants: constants
+                .iter()
+                .map(|(name, value)| ((*name).to_owned(), value.to_bits()))
+                .collect(),
+        };
+        let mut entries = self.lock();
+        if let Some(pipeline) = entries.pipelines.get(&key) {
+            return pipeline.clone();
+        }
+        let module = entries
+            .modules
+            .entry(module_key)
+            .or_insert_with(|| {
+                Arc::new(CompiledModule {
+                    module: self
+                        .device
+                        .create_shader_module(wgpu::ShaderModuleDescriptor {
+                            label: Some(label),
+                            source: wgpu::ShaderSource::Wgsl(source.as_ref().into()),
+                        }),
+                    layout: self
+                        .device
+                        .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                            label: Some(label),
+                            bind_group_layouts: layouts,
+                            immediate_size: 0,
+                        }),
+                })
+            })
+            .clone();
+        let pipeline = self
+            .device
+            .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(label),
+                layout: Some(&module.layout),
+                module: &module.module,
+                entry_point: Some(entry),
+                compilation_options: wgpu::PipelineCompilationOptions {
+                    constants,
+                    ..Default::default()
+                },
+                cache: None,
+            });
+        entries.compiled += 1;
+        let storage = layouts
+            .iter()
+            .flatten()
+            .map(|l| entries.storage_buffers.get(*l).copied().unwrap_or(0))
+            .sum();
+        entries.most_storage_buffers = entries.most_storage_buffers.max(storage);
+        entries.pipelines.insert(key, pipeline.clone());
+        pipeline
+    }
+
+    /// How many pipelines this cache has compiled (each at most once).
+    pub fn compiled(&self) -> usize {
+        self.lock().compiled
+    }
+
+    /// The most storage buffers one compiled pipeline binds (in its one stage), counting the layouts made here.
+    pub fn most_storage_buffers_per_stage(&self) -> u32 {
+        self.lock().most_storage_buffers
+    }
+}
