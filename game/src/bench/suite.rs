@@ -92,7 +92,7 @@ impl Suite {
                 motion_size: (40, 30),
                 motion_frames: 32,
                 motion_eval_every: 8,
-                motion_reference_spp: 256,
+                motion_reference_spp: 128,
                 motion_lag_window: 8,
                 oidn_sizes: vec![(64, 36)],
                 oidn_repeats: 1,
