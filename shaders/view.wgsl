@@ -13,4 +13,4 @@ struct Frame {
     tree_light_count: u32, _pad0: u32,
 }
 
-@group(1) @binding(0) var<storage, read> frame: Frame;
+@group(1) @binding(0) var<uniform> frame: Frame;

@@ -17,7 +17,7 @@ struct RealtimeFrame {
     depth_tolerance: f32, normal_tolerance: f32, _pad0: u32, _pad1: u32,
 }
 
-@group(1) @binding(1) var<storage, read> realtime: RealtimeFrame;
+@group(1) @binding(1) var<uniform> realtime: RealtimeFrame;
 
 fn realtime_flag(bit: u32) -> bool {
     return (realtime.flags & bit) != 0u;

@@ -20,14 +20,13 @@ fn trace_blas_binary(mesh: Mesh, instance: u32, o: vec3<f32>, d: vec3<f32>, hit:
         let n = blas_nodes[node];
         let ta = hit_child(n.a, o, inv_d, (*hit).t);
         let tb = hit_child(n.b, o, inv_d, (*hit).t);
-        // Both leaves through one call site (one inlined copy of the triangle and alpha tests, as in tlas.wgsl).
-        for (var side = 0u; side < 2u; side++) {
-            let count = select(n.a.count, n.b.count, side == 1u);
-            let first = select(n.a.index, n.b.index, side == 1u);
-            if count > 0u && select(ta < MISS, tb < MISS && tb < (*hit).t, side == 1u) {
-                found = hit_leaf(mesh, instance, first, count, o, d, hit) || found;
-                if found && any_hit { return true; }
-            }
+        if n.a.count > 0u && ta < MISS {
+            found = hit_leaf(mesh, instance, n.a.index, n.a.count, o, d, hit) || found;
+            if found && any_hit { return true; }
+        }
+        if n.b.count > 0u && tb < MISS && tb < (*hit).t {
+            found = hit_leaf(mesh, instance, n.b.index, n.b.count, o, d, hit) || found;
+            if found && any_hit { return true; }
         }
         // An interior child that is not the EMPTY placeholder of a one-leaf tree (index NONE): the slab test
         // cannot reject EMPTY's inverted box for rays that start inside [-1, 1]^3 (min/max swap per axis).

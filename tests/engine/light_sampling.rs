@@ -16,7 +16,7 @@ use std::sync::Arc;
 
 const PROBE: &str = r#"
 struct Probe { p: vec3<f32>, light: u32, n: vec3<f32>, count: u32, grid_w: u32, grid_h: u32, seed: u32, _pad: u32 }
-@group(1) @binding(1) var<storage, read> probe: Probe;
+@group(1) @binding(1) var<uniform> probe: Probe;
 @group(1) @binding(2) var<storage, read_write> out: array<vec4<f32>>;
 
 // Sample i: (wi, pdf), (luminance of li, pdf of wi again, distance, 0).
@@ -116,7 +116,7 @@ fn run_probe(
     let layout = compute_layout(
         ctx,
         "probe",
-        &[Binding::Read, Binding::Read, Binding::ReadWrite],
+        &[Binding::Params, Binding::Params, Binding::ReadWrite],
     );
     let pipeline = raykin::gpu::compute_pipeline(
         ctx,

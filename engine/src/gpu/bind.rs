@@ -12,14 +12,18 @@ pub enum Binding {
     /// A read-write storage buffer.
     ReadWrite,
     Uniform,
+    /// A compute pass's parameters: a uniform buffer on GPUs, a read-only storage buffer on CPU adapters
+    /// ([`GpuContext::params_in_storage`]); written with `queue.write_buffer` into a [`params_buffer`].
+    Params,
 }
 
 impl Binding {
-    fn ty(self) -> wgpu::BufferBindingType {
+    fn ty(self, ctx: &GpuContext) -> wgpu::BufferBindingType {
         match self {
             Self::Read => wgpu::BufferBindingType::Storage { read_only: true },
             Self::ReadWrite => wgpu::BufferBindingType::Storage { read_only: false },
             Self::Uniform => wgpu::BufferBindingType::Uniform,
+            Self::Params => ctx.params_binding_type(),
         }
     }
 }
@@ -41,11 +45,12 @@ pub fn layout_for(
     stages: wgpu::ShaderStages,
 ) -> wgpu::BindGroupLayout {
     ctx.pipelines
-        .bind_group_layout(label, &layout_entries(bindings, stages))
+        .bind_group_layout(label, &layout_entries(ctx, bindings, stages))
 }
 
 /// Layout entries with `bindings[i]` at binding `i`, visible to `stages`.
 pub fn layout_entries(
+    ctx: &GpuContext,
     bindings: &[Binding],
     stages: wgpu::ShaderStages,
 ) -> Vec<wgpu::BindGroupLayoutEntry> {
@@ -56,7 +61,7 @@ pub fn layout_entries(
             binding: i as u32,
             visibility: stages,
             ty: wgpu::BindingType::Buffer {
-                ty: b.ty(),
+                ty: b.ty(ctx),
                 has_dynamic_offset: false,
                 min_binding_size: None,
             },
@@ -92,15 +97,14 @@ pub fn bind_group(
 }
 
 /// A buffer of a compute pass's parameters (`size` bytes, written with `queue.write_buffer`), bound as
-/// [`Binding::Read`] (`var<storage, read>` in WGSL). Compute kernels never read parameters from uniform buffers:
-/// lavapipe specialises a kernel on the values of uniforms that decide branches and loop counts, compiling it
-/// again (seconds to minutes on a CPU) for every new image size, depth or sample count; storage buffers are
-/// never specialised.
+/// [`Binding::Params`]: usable as a uniform (GPUs) and as a storage buffer (CPU adapters).
 pub fn params_buffer(ctx: &GpuContext, label: &str, size: usize) -> wgpu::Buffer {
     ctx.device.create_buffer(&wgpu::BufferDescriptor {
         label: Some(label),
         size: size as u64,
-        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+        usage: wgpu::BufferUsages::UNIFORM
+            | wgpu::BufferUsages::STORAGE
+            | wgpu::BufferUsages::COPY_DST,
         mapped_at_creation: false,
     })
 }

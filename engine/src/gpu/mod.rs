@@ -40,8 +40,8 @@ pub enum GpuError {
     },
 }
 
-/// The most storage buffers one of raykin's kernels binds in its stage (ReSTIR DI's: scene 14, its own 8, motion
-/// 5). Below this (wgpu's GL backend offers 16) pipeline creation would panic deep in the first frame; refusing
+/// The most storage buffers one of raykin's kernels binds in its stage (ReSTIR DI's: scene 14, its own 8 with
+/// its two parameter buffers, motion 5; GPUs bind those two as uniforms). Below this (wgpu's GL backend offers 16) pipeline creation would panic deep in the first frame; refusing
 /// the adapter here names the cause instead. A test compiles every kernel and checks the figure.
 pub const MIN_STORAGE_BUFFERS_PER_STAGE: u32 = 27;
 
@@ -56,6 +56,12 @@ pub struct GpuContext {
     pub features: wgpu::Features,
     /// Kernels and bind-group layouts compiled on this device, shared by every renderer.
     pub pipelines: PipelineCache,
+    /// Compute passes read their parameters (`var<uniform>` in the WGSL, [`bind::Binding::Params`]) from
+    /// read-only storage buffers instead of uniforms: set on CPU adapters. lavapipe specialises a kernel on the
+    /// values of uniforms that decide branches and loop counts and compiles it again (tens of seconds for the path
+    /// tracer) for every new image size, depth or camera; storage buffers are never specialised. GPUs keep
+    /// uniforms (the constant bank): storage parameters made the H200's trace kernel up to 13% slower.
+    pub params_in_storage: bool,
 }
 
 impl GpuContext {
@@ -113,6 +119,7 @@ impl GpuContext {
         })?;
         Ok(Self {
             pipelines: PipelineCache::new(device.clone()),
+            params_in_storage: info.device_type == wgpu::DeviceType::Cpu,
             device,
             queue,
             adapter: Arc::new(adapter),
@@ -132,6 +139,22 @@ impl GpuContext {
             self.info.driver,
             self.info.driver_info
         )
+    }
+
+    /// How a [`bind::Binding::Params`] buffer is bound on this adapter.
+    pub fn params_binding_type(&self) -> wgpu::BufferBindingType {
+        if self.params_in_storage {
+            wgpu::BufferBindingType::Storage { read_only: true }
+        } else {
+            wgpu::BufferBindingType::Uniform
+        }
+    }
+
+    /// The offset alignment of parameter records bound with dynamic offsets (either binding type).
+    pub fn params_offset_alignment(&self) -> u64 {
+        self.limits
+            .min_uniform_buffer_offset_alignment
+            .max(self.limits.min_storage_buffer_offset_alignment) as u64
     }
 
     pub fn supports_timestamps(&self) -> bool {
@@ -196,6 +219,12 @@ pub(crate) fn compute_pipelines<const N: usize>(
     entries.map(|entry| module.pipeline(if N == 1 { label } else { entry }, entry, &[]))
 }
 
+/// `source` with its parameters (`var<uniform>`) read from storage buffers, as kernels run on CPU adapters
+/// ([`GpuContext::params_in_storage`]); the naga test validates both forms of every kernel.
+pub fn params_in_storage(source: &str) -> String {
+    source.replace("var<uniform>", "var<storage, read>")
+}
+
 /// One WGSL module over its bind group layouts, from which pipelines are compiled: per entry point, and per
 /// set of values of its pipeline-overridable constants. Compiled pipelines come from (and go to) the device's
 /// [`PipelineCache`].
@@ -211,6 +240,11 @@ impl ComputeModule {
         source: String,
         layouts: &[Option<&wgpu::BindGroupLayout>],
     ) -> Self {
+        let source = if ctx.params_in_storage {
+            params_in_storage(&source)
+        } else {
+            source
+        };
         Self {
             cache: ctx.pipelines.clone(),
             source: source.into(),

@@ -26,7 +26,7 @@ struct DeformParams { mesh_count: u32, groups_x: u32, _p0: u32, _p1: u32 }
 // Bit 0: the mesh's pose changed this frame (deform it); bit 1: refit only (shaders/refit.wgsl).
 @group(0) @binding(4) var<storage, read> mesh_flags: array<u32>;
 @group(0) @binding(5) var<storage, read_write> vertex_pool: array<u32>;
-@group(0) @binding(6) var<storage, read> params: DeformParams;
+@group(0) @binding(6) var<uniform> params: DeformParams;
 
 fn all_finite(v: vec3<f32>) -> bool {
     return is_finite(v.x) && is_finite(v.y) && is_finite(v.z);

@@ -47,7 +47,7 @@ impl DeformPass {
         let layout = compute_layout(
             ctx,
             "deform",
-            &[Read, Read, Read, Read, Read, ReadWrite, Read],
+            &[Read, Read, Read, Read, Read, ReadWrite, Params],
         );
         let pipeline = crate::gpu::compute_pipeline(
             ctx,

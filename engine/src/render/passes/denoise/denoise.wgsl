@@ -38,7 +38,7 @@ struct Params {
 @group(0) @binding(6) var<storage, read_write> illum_out: array<vec4<f32>>;
 // The result, in the accumulation's layout (rgb sum, count 1) so the tone mapper reads it unchanged.
 @group(0) @binding(7) var<storage, read_write> denoised: array<vec4<f32>>;
-@group(0) @binding(8) var<storage, read> params: Params;
+@group(0) @binding(8) var<uniform> params: Params;
 
 const DIELECTRIC_F0: f32 = 0.04;
 // Darker albedo than this is treated as this: demodulation must not divide by zero, and remodulation uses

@@ -86,6 +86,7 @@ impl Denoiser {
         use Binding::*;
         // accum, albedo + depth, normal + hits, moments, guide, illumination in, out, denoised; params below
         let mut entries = layout_entries(
+            ctx,
             &[
                 Read, Read, Read, Read, ReadWrite, Read, ReadWrite, ReadWrite,
             ],
@@ -95,7 +96,7 @@ impl Denoiser {
             binding: 8,
             visibility: wgpu::ShaderStages::COMPUTE,
             ty: wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Storage { read_only: true },
+                ty: ctx.params_binding_type(),
                 has_dynamic_offset: true,
                 min_binding_size: wgpu::BufferSize::new(
                     std::mem::size_of::<DenoisePassParams>() as u64
@@ -107,11 +108,13 @@ impl Denoiser {
         let module = crate::gpu::ComputeModule::new(ctx, compose(&KERNEL), &[Some(&layout)]);
         let pipeline = |entry: &str| module.pipeline(entry, entry, &[]);
         let params_stride = (std::mem::size_of::<DenoisePassParams>() as u64)
-            .next_multiple_of(ctx.limits.min_storage_buffer_offset_alignment as u64);
+            .next_multiple_of(ctx.params_offset_alignment());
         let params = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("denoise params"),
             size: params_stride * (2 + DenoiseParams::MAX_ITERATIONS as u64),
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            usage: wgpu::BufferUsages::UNIFORM
+                | wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
         Self {

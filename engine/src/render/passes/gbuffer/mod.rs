@@ -42,7 +42,7 @@ impl GBufferPass {
         let layout = compute_layout(
             ctx,
             "gbuffer",
-            &[Read, Read, ReadWrite, ReadWrite, ReadWrite],
+            &[Params, Params, ReadWrite, ReadWrite, ReadWrite],
         );
         // The G-buffer keeps only the core BSDF parameters (`pack_bsdf`): its kernel skips the extension lobes.
         let pipeline = ComputeModule::new(

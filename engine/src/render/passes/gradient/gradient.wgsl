@@ -21,7 +21,7 @@ struct FilterStep {
 @group(1) @binding(4) var<storage, read> gradients_in: array<vec4<f32>>;
 @group(1) @binding(5) var<storage, read_write> gradients_out: array<vec4<f32>>;
 @group(1) @binding(6) var<storage, read_write> ray_counter: array<atomic<u32>>;
-@group(3) @binding(0) var<storage, read> filter_step: FilterStep;
+@group(3) @binding(0) var<uniform> filter_step: FilterStep;
 
 var<workgroup> workgroup_rays: atomic<u32>;
 

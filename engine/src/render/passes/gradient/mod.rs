@@ -54,7 +54,7 @@ impl GradientPass {
         let layout = compute_layout(
             ctx,
             "gradient",
-            &[Read, Read, Read, Read, Read, ReadWrite, ReadWrite],
+            &[Params, Params, Read, Read, Read, ReadWrite, ReadWrite],
         );
         let step_size = std::mem::size_of::<FilterStep>() as u64;
         let step_layout = ctx.pipelines.bind_group_layout(
@@ -63,15 +63,14 @@ impl GradientPass {
                 binding: 0,
                 visibility: wgpu::ShaderStages::COMPUTE,
                 ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Storage { read_only: true },
+                    ty: ctx.params_binding_type(),
                     has_dynamic_offset: true,
                     min_binding_size: wgpu::BufferSize::new(step_size),
                 },
                 count: None,
             }],
         );
-        let stride =
-            step_size.next_multiple_of(ctx.limits.min_storage_buffer_offset_alignment as u64);
+        let stride = step_size.next_multiple_of(ctx.params_offset_alignment());
         let mut bytes = vec![0u8; (stride * FILTER_ITERATIONS as u64) as usize];
         for k in 0..FILTER_ITERATIONS {
             let step = FilterStep {
@@ -84,7 +83,9 @@ impl GradientPass {
         let step_buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("gradient filter steps"),
             size: bytes.len() as u64,
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            usage: wgpu::BufferUsages::UNIFORM
+                | wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
         ctx.queue.write_buffer(&step_buffer, 0, &bytes);

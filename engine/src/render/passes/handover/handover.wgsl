@@ -13,7 +13,7 @@ struct Params {
 @group(0) @binding(0) var<storage, read> realtime_image: array<vec4<f32>>;
 @group(0) @binding(1) var<storage, read> accumulated: array<vec4<f32>>;
 @group(0) @binding(2) var<storage, read_write> blended: array<vec4<f32>>;
-@group(0) @binding(3) var<storage, read> params: Params;
+@group(0) @binding(3) var<uniform> params: Params;
 
 fn mean(v: vec4<f32>) -> vec3<f32> {
     return v.rgb / max(v.w, 1.0);

@@ -40,7 +40,7 @@ pub struct HandoverBuffers<'a> {
 impl HandoverPass {
     pub fn new(ctx: &GpuContext) -> Self {
         use Binding::*;
-        let layout = compute_layout(ctx, "handover", &[Read, Read, ReadWrite, Read]);
+        let layout = compute_layout(ctx, "handover", &[Read, Read, ReadWrite, Params]);
         let pipeline = crate::gpu::compute_pipeline(
             ctx,
             "handover",

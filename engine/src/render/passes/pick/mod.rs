@@ -22,7 +22,7 @@ pub struct PickPass {
 
 impl PickPass {
     pub fn new(ctx: &GpuContext, scene_layout: &wgpu::BindGroupLayout) -> Self {
-        let view_layout = compute_layout(ctx, "pick", &[Binding::Read, Binding::ReadWrite]);
+        let view_layout = compute_layout(ctx, "pick", &[Binding::Params, Binding::ReadWrite]);
         let pipeline = crate::gpu::compute_pipeline(
             ctx,
             "pick",

@@ -29,7 +29,7 @@ impl RaycastPass {
     pub fn new(ctx: &GpuContext, scene_layout: &wgpu::BindGroupLayout) -> Self {
         use Binding::*;
         // frame, hit distances, ray counter
-        let view_layout = compute_layout(ctx, "raycast", &[Read, ReadWrite, ReadWrite]);
+        let view_layout = compute_layout(ctx, "raycast", &[Params, ReadWrite, ReadWrite]);
         let pipeline = crate::gpu::compute_pipeline(
             ctx,
             "raycast",

@@ -39,7 +39,7 @@ impl RealtimeTracePass {
         let layout = compute_layout(
             ctx,
             "realtime trace",
-            &[Read, Read, Read, Read, ReadWrite, ReadWrite, ReadWrite],
+            &[Params, Params, Read, Read, ReadWrite, ReadWrite, ReadWrite],
         );
         let kernels = LobeKernels::new(
             ctx,

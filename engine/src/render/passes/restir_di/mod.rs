@@ -41,7 +41,7 @@ impl RestirDiPass {
             ctx,
             "restir di",
             &[
-                Read, Read, Read, Read, ReadWrite, ReadWrite, ReadWrite, ReadWrite,
+                Params, Params, Read, Read, ReadWrite, ReadWrite, ReadWrite, ReadWrite,
             ],
         );
         let [candidates, spatial] = crate::gpu::compute_pipelines(

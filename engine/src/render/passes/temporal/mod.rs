@@ -39,7 +39,7 @@ impl TemporalPass {
             ctx,
             "temporal",
             &[
-                Read, Read, Read, Read, Read, Read, Read, Read, Read, Read, Read, ReadWrite,
+                Params, Params, Read, Read, Read, Read, Read, Read, Read, Read, Read, ReadWrite,
                 ReadWrite, ReadWrite, ReadWrite,
             ],
         );

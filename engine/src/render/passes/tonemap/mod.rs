@@ -60,7 +60,7 @@ impl TonemapPass {
     pub fn new(ctx: &GpuContext) -> Self {
         use Binding::*;
         // radiance, albedo + depth, normal + hits, rgba8 out, params
-        let layout = compute_layout(ctx, "tonemap", &[Read, Read, Read, ReadWrite, Read]);
+        let layout = compute_layout(ctx, "tonemap", &[Read, Read, Read, ReadWrite, Params]);
         let pipeline = crate::gpu::compute_pipeline(
             ctx,
             "tonemap",

@@ -18,7 +18,7 @@ struct Params {
 @group(0) @binding(1) var<storage, read> aov_albedo_depth: array<vec4<f32>>;
 @group(0) @binding(2) var<storage, read> aov_normal: array<vec4<f32>>;
 @group(0) @binding(3) var<storage, read_write> out_rgba8: array<u32>;
-@group(0) @binding(4) var<storage, read> params: Params;
+@group(0) @binding(4) var<uniform> params: Params;
 
 // ACES filmic fit (Stephen Hill): sRGB -> ACES AP1-ish, RRT+ODT fit, back to sRGB.
 fn aces_fitted(c: vec3<f32>) -> vec3<f32> {

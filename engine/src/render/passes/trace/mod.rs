@@ -37,7 +37,7 @@ impl TracePass {
             ctx,
             "trace view",
             &[
-                Read, ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite,
+                Params, ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite,
             ],
         );
         let kernels = LobeKernels::new(
