@@ -682,6 +682,21 @@ fn the_adapter_check_asks_for_what_the_kernels_bind() {
     steps(&mut app, 2);
     app.settings_mut().mode = RenderMode::Accumulate;
     steps(&mut app, 1);
+    // A second renderer on the same device compiles nothing: every pipeline comes from the device's cache.
+    let compiled = ctx.pipelines.compiled();
+    let mut again = HeadlessApp::new(
+        ctx.clone(),
+        cornell(),
+        app.settings_mut().clone(),
+        &cornell_camera(0.0),
+    )
+    .expect("uploads");
+    steps(&mut again, 1);
+    assert_eq!(
+        ctx.pipelines.compiled(),
+        compiled,
+        "a second renderer compiled kernels again"
+    );
     let most = ctx.pipelines.most_storage_buffers_per_stage();
     if ctx.params_in_storage {
         assert_eq!(most, raykin::gpu::MIN_STORAGE_BUFFERS_PER_STAGE);

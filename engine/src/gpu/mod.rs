@@ -41,8 +41,9 @@ pub enum GpuError {
 }
 
 /// The most storage buffers one of raykin's kernels binds in its stage (ReSTIR DI's: scene 14, its own 8 with
-/// its two parameter buffers, motion 5; GPUs bind those two as uniforms). Below this (wgpu's GL backend offers 16) pipeline creation would panic deep in the first frame; refusing
-/// the adapter here names the cause instead. A test compiles every kernel and checks the figure.
+/// its two parameter buffers, motion 5; GPUs bind those two as uniforms). Below this (wgpu's GL backend offers
+/// 16) pipeline creation would panic deep in the first frame; refusing the adapter here names the cause instead.
+/// A test compiles every kernel and checks the figure.
 pub const MIN_STORAGE_BUFFERS_PER_STAGE: u32 = 27;
 
 /// The device and queue every GPU pass uses, plus what the adapter can do.
