@@ -96,6 +96,25 @@ pub fn bind_group(
     })
 }
 
+/// A compute-visible [`Binding::Params`] entry at `binding` bound with a dynamic offset: one record of `size`
+/// bytes among several in a [`params_buffer`] (their stride is [`GpuContext::params_offset_alignment`]).
+pub fn params_entry_dynamic(
+    ctx: &GpuContext,
+    binding: u32,
+    size: u64,
+) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty: ctx.params_binding_type(),
+            has_dynamic_offset: true,
+            min_binding_size: wgpu::BufferSize::new(size),
+        },
+        count: None,
+    }
+}
+
 /// A buffer of a compute pass's parameters (`size` bytes, written with `queue.write_buffer`), bound as
 /// [`Binding::Params`]: usable as a uniform (GPUs) and as a storage buffer (CPU adapters).
 pub fn params_buffer(ctx: &GpuContext, label: &str, size: usize) -> wgpu::Buffer {

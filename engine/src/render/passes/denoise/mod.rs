@@ -4,7 +4,9 @@
 //! first time it runs at a view size.
 
 use crate::gpu::GpuContext;
-use crate::gpu::bind::{Binding, buffer_entries, layout_entries};
+use crate::gpu::bind::{
+    Binding, buffer_entries, layout_entries, params_buffer, params_entry_dynamic,
+};
 use crate::render::shaders::{ShaderModule, compose};
 use crate::render::view::ViewTargets;
 use bevy_ecs::prelude::Resource;
@@ -82,7 +84,6 @@ const BYTES_PER_PIXEL: u64 = 4 * 16;
 
 impl Denoiser {
     pub fn new(ctx: &GpuContext) -> Self {
-        let device = &ctx.device;
         use Binding::*;
         // accum, albedo + depth, normal + hits, moments, guide, illumination in, out, denoised; params below
         let mut entries = layout_entries(
@@ -92,31 +93,21 @@ impl Denoiser {
             ],
             wgpu::ShaderStages::COMPUTE,
         );
-        entries.push(wgpu::BindGroupLayoutEntry {
-            binding: 8,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::Buffer {
-                ty: ctx.params_binding_type(),
-                has_dynamic_offset: true,
-                min_binding_size: wgpu::BufferSize::new(
-                    std::mem::size_of::<DenoisePassParams>() as u64
-                ),
-            },
-            count: None,
-        });
+        entries.push(params_entry_dynamic(
+            ctx,
+            8,
+            std::mem::size_of::<DenoisePassParams>() as u64,
+        ));
         let layout = ctx.pipelines.bind_group_layout("denoise", &entries);
         let module = crate::gpu::ComputeModule::new(ctx, compose(&KERNEL), &[Some(&layout)]);
         let pipeline = |entry: &str| module.pipeline(entry, entry, &[]);
         let params_stride = (std::mem::size_of::<DenoisePassParams>() as u64)
             .next_multiple_of(ctx.params_offset_alignment());
-        let params = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("denoise params"),
-            size: params_stride * (2 + DenoiseParams::MAX_ITERATIONS as u64),
-            usage: wgpu::BufferUsages::UNIFORM
-                | wgpu::BufferUsages::STORAGE
-                | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
+        let params = params_buffer(
+            ctx,
+            "denoise params",
+            (params_stride * (2 + DenoiseParams::MAX_ITERATIONS as u64)) as usize,
+        );
         Self {
             prepare: pipeline("prepare"),
             variance: pipeline("variance"),

@@ -3,7 +3,7 @@
 //! the strata. The filtered result is in `RealtimeTargets::gradients[FILTERED]`.
 
 use crate::gpu::GpuContext;
-use crate::gpu::bind::{Binding, bind_group, compute_layout};
+use crate::gpu::bind::{Binding, bind_group, compute_layout, params_buffer, params_entry_dynamic};
 use crate::render::realtime_targets::{RealtimeTargets, SceneGroups};
 use crate::render::shaders::{ShaderModule, compose};
 use crate::render::view::ViewTargets;
@@ -59,16 +59,7 @@ impl GradientPass {
         let step_size = std::mem::size_of::<FilterStep>() as u64;
         let step_layout = ctx.pipelines.bind_group_layout(
             "gradient filter step",
-            &[wgpu::BindGroupLayoutEntry {
-                binding: 0,
-                visibility: wgpu::ShaderStages::COMPUTE,
-                ty: wgpu::BindingType::Buffer {
-                    ty: ctx.params_binding_type(),
-                    has_dynamic_offset: true,
-                    min_binding_size: wgpu::BufferSize::new(step_size),
-                },
-                count: None,
-            }],
+            &[params_entry_dynamic(ctx, 0, step_size)],
         );
         let stride = step_size.next_multiple_of(ctx.params_offset_alignment());
         let mut bytes = vec![0u8; (stride * FILTER_ITERATIONS as u64) as usize];
@@ -80,14 +71,7 @@ impl GradientPass {
             bytes[k * stride as usize..][..step_size as usize]
                 .copy_from_slice(bytemuck::bytes_of(&step));
         }
-        let step_buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("gradient filter steps"),
-            size: bytes.len() as u64,
-            usage: wgpu::BufferUsages::UNIFORM
-                | wgpu::BufferUsages::STORAGE
-                | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
+        let step_buffer = params_buffer(ctx, "gradient filter steps", bytes.len());
         ctx.queue.write_buffer(&step_buffer, 0, &bytes);
         let step_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("gradient filter step"),
