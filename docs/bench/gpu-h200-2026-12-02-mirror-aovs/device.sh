@@ -1,18 +1,3 @@
 #!/usr/bin/env bash
 # Device call: trace time of the path kernel before (980b748) and after (476777a: AOVs follow mirrors), alternating twice.
-set -u
-for f in .gl/*.deb; do dpkg -x $f / ; done; ldconfig
-export VK_DRIVER_FILES=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
-(cd rel && xz -dkf raykin.xz && xz -dkf raykin-aov.xz && xz -dkf raykin-aov2.xz && chmod +x raykin raykin-aov raykin-aov2)
-for round in 1 2; do
-  for b in raykin raykin-aov raykin-aov2; do
-    w=$(mktemp -d)
-    rel/$b bench --suite full --parts frames --frames 40 --scene cornell --scene flight-helmet --scene spheres \
-      --assets shared/assets --out "$w" --cache "$w/c" >> "$OUT/bench.log" 2>&1
-    python3 -c "
-import json,sys; r=json.load(open('$w/results.json'))
-for row in r['rows']: print('$b', $round, row.get('scene'), row.get('width'), row.get('height'), row.get('trace_ms_median', row.get('trace_ms')))
-" | tee -a "$OUT/ab.txt"
-
-  done
-done
+SCENES="cornell flight-helmet spheres" exec bash scripts/gpu-ab-frames.sh 2 raykin raykin-aov raykin-aov2

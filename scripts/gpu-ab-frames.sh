@@ -1,0 +1,27 @@
+#!/usr/bin/env bash
+# Same-call A/B of trace time on a device machine: each VARIANT (`binary` or `binary:shader-dir`, the binary under
+# rel/ as rel/NAME.xz, the optional folder given to RAYKIN_SHADER_DIR) runs the bench's frame loop on the bench
+# scenes (SCENES, default "cornell flight-helmet spheres crowd"), variants alternating ROUNDS times. Writes $OUT/bench.log and $OUT/ab.txt (variant, round, scene,
+# width, height, trace ms median) and prints each scene/size/variant mean. Carry .gl and rel; shared/assets holds
+# the scenes. Usage: bash scripts/gpu-ab-frames.sh ROUNDS VARIANT...
+set -u
+rounds=$1; shift
+scenes=()
+for s in ${SCENES:-cornell flight-helmet spheres crowd}; do scenes+=(--scene "$s"); done
+for f in .gl/*.deb; do dpkg -x "$f" / ; done; ldconfig
+export VK_DRIVER_FILES=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
+for v in "$@"; do b=${v%%:*}; (cd rel && xz -dkf "$b.xz" && chmod +x "$b"); done
+for round in $(seq "$rounds"); do
+  for v in "$@"; do
+    b=${v%%:*}; dir=/nonexistent
+    [[ $v == *:* ]] && dir=${v#*:}
+    w=$(mktemp -d)
+    RAYKIN_SHADER_DIR=$dir rel/$b bench --suite full --parts frames --frames 40 "${scenes[@]}" \
+      --assets shared/assets --out "$w" --cache "$w/c" >> "$OUT/bench.log" 2>&1
+    python3 -c "
+import json; r=json.load(open('$w/results.json'))
+for row in r['rows']: print('$v', $round, row.get('scene'), row.get('width'), row.get('height'), row.get('trace_ms_median', row.get('trace_ms')))
+" >> "$OUT/ab.txt"
+  done
+done
+awk '{k=$3" "$4" "$1; s[k]+=$6; n[k]++} END {for (k in s) print k, s[k]/n[k]}' "$OUT/ab.txt" | sort
