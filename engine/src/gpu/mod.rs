@@ -14,10 +14,10 @@ use std::sync::Arc;
 pub use wgpu::DeviceType;
 
 /// What a user with no usable GPU driver should do.
-pub const NO_ADAPTER_HELP: &str = "no GPU adapter found (wgpu saw no Vulkan, Metal, DX12 or GL device). \
+pub const NO_ADAPTER_HELP: &str = "no GPU adapter found (wgpu saw no Vulkan, Metal or DX12 device). \
 On a machine without a GPU install Mesa's software Vulkan driver (lavapipe): \
 `sudo apt-get install -y mesa-vulkan-drivers libvulkan1` on Debian/Ubuntu; \
-with a GPU, install its vendor driver. WGPU_BACKEND=vulkan|gl|metal|dx12 picks a backend.";
+with a GPU, install its vendor driver. WGPU_BACKEND=vulkan|metal|dx12 picks a backend.";
 
 #[derive(Debug, thiserror::Error)]
 pub enum GpuError {
@@ -41,8 +41,9 @@ pub enum GpuError {
 }
 
 /// The most storage buffers one of raykin's kernels binds in its stage (ReSTIR DI's: scene 14, its own 8 with
-/// its two parameter buffers, motion 5; GPUs bind those two as uniforms). Below this (wgpu's GL backend offers
-/// 16) pipeline creation would panic deep in the first frame; refusing the adapter here names the cause instead.
+/// its two parameter buffers, motion 5; GPUs bind those two as uniforms). Below this (a GL driver offers 16, and
+/// wgpu is built without GL for that reason) pipeline creation would panic deep in the first frame; refusing the
+/// adapter here names the cause instead.
 /// A test compiles every kernel and checks the figure.
 pub const MIN_STORAGE_BUFFERS_PER_STAGE: u32 = 27;
 
@@ -68,23 +69,12 @@ pub struct GpuContext {
 impl GpuContext {
     /// Picks the highest-performance adapter (WGPU_BACKEND and WGPU_ADAPTER_NAME are honoured) and opens a
     /// device with the adapter's own limits: the path tracer binds more storage buffers than wgpu's defaults.
+    /// wgpu is built without its GL backend: a GL adapter binds 16 storage buffers per stage, too few for the
+    /// trace kernel ([`MIN_STORAGE_BUFFERS_PER_STAGE`]).
     pub fn new_headless() -> Result<Self, GpuError> {
-        // Vulkan/Metal/DX12 first: probing GL on a headless machine only prints EGL errors. GL is tried when
-        // nothing else exists, and WGPU_BACKEND picks explicitly.
-        let explicit = std::env::var_os("WGPU_BACKEND").is_some();
-        let mut descriptor = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
-        if !explicit {
-            descriptor.backends = wgpu::Backends::PRIMARY;
-        }
-        let instance = wgpu::Instance::new(descriptor);
-        match Self::from_instance(&instance, None) {
-            Err(GpuError::NoAdapter) if !explicit => {
-                let mut gl = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
-                gl.backends = wgpu::Backends::GL;
-                Self::from_instance(&wgpu::Instance::new(gl), None)
-            }
-            other => other,
-        }
+        let instance =
+            wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+        Self::from_instance(&instance, None)
     }
 
     pub fn from_instance(

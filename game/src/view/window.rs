@@ -121,14 +121,10 @@ impl Viewer {
                 )
                 .map_err(|e| WindowUnavailable(format!("cannot create the window: {e}")))?,
         );
-        let explicit_backend = std::env::var_os("WGPU_BACKEND").is_some();
-        let mut descriptor = wgpu::InstanceDescriptor::new_with_display_handle_from_env(Box::new(
-            event_loop.owned_display_handle(),
-        ));
-        if !explicit_backend {
-            descriptor.backends = wgpu::Backends::PRIMARY;
-        }
-        let instance = wgpu::Instance::new(descriptor);
+        let instance =
+            wgpu::Instance::new(wgpu::InstanceDescriptor::new_with_display_handle_from_env(
+                Box::new(event_loop.owned_display_handle()),
+            ));
         let surface = instance.create_surface(window.clone()).map_err(|e| {
             WindowUnavailable(format!(
                 "cannot create a drawing surface for the window: {e}"
