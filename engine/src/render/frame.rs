@@ -103,51 +103,38 @@ pub fn render_frame(
         // A new accumulation (after real-time frames the view still holds an older still's).
         view.clear(&ctx);
     }
-    let handover = realtime_runs(&settings).then(|| handover_weight(&settings, &accumulation));
     // OIDN's image of this accumulation, once one was handed over, replaces svgf's on the display.
     let host = host_denoised.current(&settings, &view, &accumulation);
-    if accumulation.converged() && deform.is_empty() {
-        if accumulation.display_each_frame {
-            let mut encoder = ctx.device.create_command_encoder(&Default::default());
-            encode_accumulation_display(
-                &ctx,
-                &mut encoder,
-                &view,
-                &settings,
-                &tonemap,
-                &denoiser,
-                &stats,
-                &mut realtime,
-                handover,
-                host.as_ref(),
-            );
-            ctx.queue.submit([encoder.finish()]);
-        }
+    // A converged still with nothing deformed traces nothing; the viewer still displays it each frame.
+    let traces = !accumulation.converged() || !deform.is_empty();
+    if !traces && !accumulation.display_each_frame {
         return;
     }
-    let spp = settings.spp_per_frame;
-    write_frame_constants(
-        &ctx,
-        &view,
-        &scene,
-        &settings,
-        &camera,
-        FrameConstants {
-            sample_base: accumulation.samples,
-            spp,
-            max_depth: settings.max_depth,
-            keep_denoiser_inputs: accumulation.keep_denoiser_inputs,
-        },
-    );
-    trace.prepare(&ctx, &view, MaterialLobes::of(&scene.material_data));
     let mut encoder = ctx.device.create_command_encoder(&Default::default());
-    trace.encode(
-        &mut encoder,
-        bindings.group(&ctx, &scene),
-        &view,
-        stats.pass_writes(TRACE_PAIR),
-    );
-    accumulation.samples += spp;
+    if traces {
+        let spp = settings.spp_per_frame;
+        write_frame_constants(
+            &ctx,
+            &view,
+            &scene,
+            &settings,
+            &camera,
+            FrameConstants {
+                sample_base: accumulation.samples,
+                spp,
+                max_depth: settings.max_depth,
+                keep_denoiser_inputs: accumulation.keep_denoiser_inputs,
+            },
+        );
+        trace.prepare(&ctx, &view, MaterialLobes::of(&scene.material_data));
+        trace.encode(
+            &mut encoder,
+            bindings.group(&ctx, &scene),
+            &view,
+            stats.pass_writes(TRACE_PAIR),
+        );
+        accumulation.samples += spp;
+    }
     let handover = realtime_runs(&settings).then(|| handover_weight(&settings, &accumulation));
     let display = accumulation.display_each_frame;
     if !display && handover.is_some() {
@@ -167,6 +154,10 @@ pub fn render_frame(
             handover,
             host.as_ref(),
         );
+    if !traces {
+        ctx.queue.submit([encoder.finish()]);
+        return;
+    }
     if let Some(t) = &stats.timestamps {
         t.resolve(&mut encoder, if display { 2 } else { 1 });
     }
