@@ -28,10 +28,8 @@ fn trace_blas_binary(mesh: Mesh, instance: u32, o: vec3<f32>, d: vec3<f32>, hit:
             found = hit_leaf(mesh, instance, n.b.index, n.b.count, o, d, hit) || found;
             if found && any_hit { return true; }
         }
-        // An interior child that is not the EMPTY placeholder of a one-leaf tree (index NONE): the slab test
-        // cannot reject EMPTY's inverted box for rays that start inside [-1, 1]^3 (min/max swap per axis).
-        let go_a = n.a.count == 0u && n.a.index != NONE && ta < (*hit).t;
-        let go_b = n.b.count == 0u && n.b.index != NONE && tb < (*hit).t;
+        let go_a = n.a.count == 0u && ta < (*hit).t;
+        let go_b = n.b.count == 0u && tb < (*hit).t;
         if go_a && go_b {
             let a_first = ta <= tb;
             if sp < BLAS_STACK_SIZE {

@@ -40,10 +40,8 @@ fn trace(ray: Ray, t_max: f32, any_hit: bool) -> Hit {
             }
             if trace_blas(instance, ray, &hit, any_hit) && any_hit { return hit; }
         }
-        // An interior child that is not the EMPTY placeholder of a one-leaf tree (index NONE): the slab test
-        // cannot reject EMPTY's inverted box for rays that start inside [-1, 1]^3 (min/max swap per axis).
-        let go_a = n.a.count == 0u && n.a.index != NONE && ta < hit.t;
-        let go_b = n.b.count == 0u && n.b.index != NONE && tb < hit.t;
+        let go_a = n.a.count == 0u && ta < hit.t;
+        let go_b = n.b.count == 0u && tb < hit.t;
         if go_a && go_b {
             let a_first = ta <= tb;
             if sp < TLAS_STACK_SIZE {

@@ -33,12 +33,16 @@ pub struct GpuBvhChild {
 }
 
 impl GpuBvhChild {
-    /// The second child of a single-leaf tree: an inverted box, and index `NONE`, which the traversals check
-    /// (a slab test alone does not reject an inverted box for rays that start inside [-1, 1]^3).
+    /// The second child of a single-leaf tree, and both children of an empty tree's root: index `NONE` (for
+    /// the CPU and the refit), and a box that every slab test rejects, so the traversals need no check of their
+    /// own. An inverted box would not do (the slab test swaps each axis' entry and exit, so it accepts it for
+    /// rays starting inside), nor a point far away (an object-space ray of a scaled-down instance can reach it):
+    /// a point at +infinity is entered at t = +infinity, or left at t = -infinity on an axis the ray moves
+    /// away along, so `t_enter <= min(t_exit, t_max)` never holds.
     pub const EMPTY: Self = Self {
-        min: [1.0; 3],
+        min: [f32::INFINITY; 3],
         index: u32::MAX,
-        max: [-1.0; 3],
+        max: [f32::INFINITY; 3],
         count: 0,
     };
 
