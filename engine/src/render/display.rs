@@ -10,67 +10,110 @@ use super::stats::{FrameStats, TONEMAP_PAIR};
 use super::view::ViewTargets;
 use crate::gpu::GpuContext;
 
-/// The accumulation's display transform; during a still's hand-over (`handover` < 1 after a real-time
-/// frame), mixed with the last real-time image first. `host`: an image denoised off the GPU to show instead
-/// of svgf's. True when svgf ran.
-#[allow(clippy::too_many_arguments)]
-pub fn encode_accumulation_display(
-    ctx: &GpuContext,
-    encoder: &mut wgpu::CommandEncoder,
-    view: &ViewTargets,
-    settings: &RenderSettings,
-    tonemap: &TonemapPass,
-    denoiser: &Denoiser,
-    stats: &FrameStats,
-    realtime: &mut Realtime,
-    handover: Option<f32>,
-    host: Option<&wgpu::Buffer>,
-) -> bool {
-    let mixing = handover.is_some_and(|w| w < 1.0)
-        && realtime.targets.is_some()
-        && realtime.state.shown != Shown::Accumulation;
-    if !mixing {
-        if handover.is_some() {
-            realtime.state.shown = Shown::Accumulation;
+/// What every display pass reads: the view, the settings, the tone mapper and the denoiser, with the frame's
+/// timestamp pairs.
+pub struct Display<'a> {
+    pub ctx: &'a GpuContext,
+    pub view: &'a ViewTargets,
+    pub settings: &'a RenderSettings,
+    pub tonemap: &'a TonemapPass,
+    pub denoiser: &'a Denoiser,
+    pub stats: &'a FrameStats,
+}
+
+impl<'a> Display<'a> {
+    /// The accumulation's display transform; during a still's hand-over (`handover` < 1 after a real-time
+    /// frame), mixed with the last real-time image first. `host`: an image denoised off the GPU to show instead
+    /// of svgf's. True when svgf ran.
+    pub fn encode_accumulation(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        realtime: &mut Realtime,
+        handover: Option<f32>,
+        host: Option<&wgpu::Buffer>,
+    ) -> bool {
+        let mixing = handover.is_some_and(|w| w < 1.0)
+            && realtime.targets.is_some()
+            && realtime.state.shown != Shown::Accumulation;
+        if !mixing {
+            if handover.is_some() {
+                realtime.state.shown = Shown::Accumulation;
+            }
+            return self.encode(encoder, host);
         }
-        return encode_display(ctx, encoder, view, settings, tonemap, denoiser, stats, host);
+        let weight = handover.unwrap_or(1.0);
+        realtime.state.shown = Shown::Handover;
+        let settings = self.settings;
+        let denoise = settings.shows_denoised() && host.is_none();
+        let accumulated = match host {
+            Some(image) if settings.shows_denoised() => image,
+            _ if denoise => self.encode_denoise(encoder),
+            _ => &self.view.accum,
+        };
+        let (Some(passes), Some(targets)) = (realtime.passes.as_ref(), realtime.targets.as_ref())
+        else {
+            return self.encode(encoder, host);
+        };
+        passes.handover.encode(
+            self.ctx,
+            encoder,
+            &HandoverBuffers {
+                realtime: realtime_image(targets, realtime.spatial_filter.as_ref(), settings),
+                accumulated,
+                output: &targets.handover,
+            },
+            &HandoverParams {
+                width: self.view.width,
+                height: self.view.height,
+                weight,
+                _pad: 0,
+            },
+        );
+        self.tonemap.encode(
+            self.ctx,
+            encoder,
+            self.view,
+            TonemapInput::Denoised(&targets.handover),
+            &tonemap_params(self.view, settings),
+            self.stats.pass_writes(TONEMAP_PAIR),
+        );
+        denoise
     }
-    let weight = handover.unwrap_or(1.0);
-    realtime.state.shown = Shown::Handover;
-    let denoise = settings.shows_denoised() && host.is_none();
-    let accumulated = match host {
-        Some(image) if settings.shows_denoised() => image,
-        _ if denoise => encode_denoise(ctx, encoder, view, settings, denoiser, stats),
-        _ => &view.accum,
-    };
-    let (Some(passes), Some(targets)) = (realtime.passes.as_ref(), realtime.targets.as_ref())
-    else {
-        return encode_display(ctx, encoder, view, settings, tonemap, denoiser, stats, host);
-    };
-    passes.handover.encode(
-        ctx,
-        encoder,
-        &HandoverBuffers {
-            realtime: realtime_image(targets, realtime.spatial_filter.as_ref(), settings),
-            accumulated,
-            output: &targets.handover,
-        },
-        &HandoverParams {
-            width: view.width,
-            height: view.height,
-            weight,
-            _pad: 0,
-        },
-    );
-    tonemap.encode(
-        ctx,
-        encoder,
-        view,
-        TonemapInput::Denoised(&targets.handover),
-        &tonemap_params(view, settings),
-        stats.pass_writes(TONEMAP_PAIR),
-    );
-    denoise
+
+    /// The denoiser pass over the view, timed by the frame's denoise pair; returns its output.
+    pub fn encode_denoise(&self, encoder: &mut wgpu::CommandEncoder) -> &'a wgpu::Buffer {
+        let output = self.denoiser.encode(
+            self.ctx,
+            encoder,
+            &DenoiseInputs::of(self.view),
+            &self.settings.denoise_params,
+            self.stats.denoise_writes(),
+        );
+        if let Some(t) = &self.stats.denoise_timestamps {
+            t.resolve(encoder, 1);
+        }
+        output
+    }
+
+    /// The display transform into the view's `rgba8`, denoising first when the settings ask for it (`host`, an
+    /// image denoised off the GPU for this accumulation, stands in for svgf's); true when svgf ran.
+    pub fn encode(&self, encoder: &mut wgpu::CommandEncoder, host: Option<&wgpu::Buffer>) -> bool {
+        let shows_denoised = self.settings.shows_denoised();
+        let (input, denoise) = match host {
+            Some(image) if shows_denoised => (TonemapInput::Denoised(image), false),
+            _ if shows_denoised => (TonemapInput::Denoised(self.encode_denoise(encoder)), true),
+            _ => (TonemapInput::Accumulation, false),
+        };
+        self.tonemap.encode(
+            self.ctx,
+            encoder,
+            self.view,
+            input,
+            &tonemap_params(self.view, self.settings),
+            self.stats.pass_writes(TONEMAP_PAIR),
+        );
+        denoise
+    }
 }
 
 /// The last real-time frame's displayed radiance (in the accumulation's layout): the spatial filter's output,
@@ -87,62 +130,6 @@ pub fn realtime_image<'t>(
     } else {
         &targets.history.accum
     }
-}
-
-/// The denoiser pass over the view, timed by the frame's denoise pair; returns its output.
-pub fn encode_denoise<'d>(
-    ctx: &GpuContext,
-    encoder: &mut wgpu::CommandEncoder,
-    view: &ViewTargets,
-    settings: &RenderSettings,
-    denoiser: &'d Denoiser,
-    stats: &FrameStats,
-) -> &'d wgpu::Buffer {
-    let output = denoiser.encode(
-        ctx,
-        encoder,
-        &DenoiseInputs::of(view),
-        &settings.denoise_params,
-        stats.denoise_writes(),
-    );
-    if let Some(t) = &stats.denoise_timestamps {
-        t.resolve(encoder, 1);
-    }
-    output
-}
-
-/// The display transform into the view's `rgba8`, denoising first when the settings ask for it (`host`, an
-/// image denoised off the GPU for this accumulation, stands in for svgf's); true when svgf ran.
-#[allow(clippy::too_many_arguments)]
-pub fn encode_display(
-    ctx: &GpuContext,
-    encoder: &mut wgpu::CommandEncoder,
-    view: &ViewTargets,
-    settings: &RenderSettings,
-    tonemap: &TonemapPass,
-    denoiser: &Denoiser,
-    stats: &FrameStats,
-    host: Option<&wgpu::Buffer>,
-) -> bool {
-    let (input, denoise) = match host {
-        Some(image) if settings.shows_denoised() => (TonemapInput::Denoised(image), false),
-        _ if settings.shows_denoised() => (
-            TonemapInput::Denoised(encode_denoise(
-                ctx, encoder, view, settings, denoiser, stats,
-            )),
-            true,
-        ),
-        _ => (TonemapInput::Accumulation, false),
-    };
-    tonemap.encode(
-        ctx,
-        encoder,
-        view,
-        input,
-        &tonemap_params(view, settings),
-        stats.pass_writes(TONEMAP_PAIR),
-    );
-    denoise
 }
 
 pub fn tonemap_params(view: &ViewTargets, settings: &RenderSettings) -> TonemapParams {

@@ -19,10 +19,10 @@
 //! 8. tonemap.
 //!
 //! Once nothing moves, the still accumulates as above and the display hands over from the last real-time image
-//! to the accumulation (`display::encode_accumulation_display`).
+//! to the accumulation (`display::Display::encode_accumulation`).
 
 use super::accumulation::Accumulation;
-use super::display::{encode_accumulation_display, tonemap_params};
+use super::display::{Display, tonemap_params};
 use super::frame_constants::{FrameConstants, write_frame_constants};
 use super::gpu_scene::GpuScene;
 use super::host_denoised::HostDenoised;
@@ -142,18 +142,15 @@ pub fn render_frame(
         realtime.state.shown = Shown::Accumulation;
     }
     let denoised = display
-        && encode_accumulation_display(
-            &ctx,
-            &mut encoder,
-            &view,
-            &settings,
-            &tonemap,
-            &denoiser,
-            &stats,
-            &mut realtime,
-            handover,
-            host.as_ref(),
-        );
+        && Display {
+            ctx: &ctx,
+            view: &view,
+            settings: &settings,
+            tonemap: &tonemap,
+            denoiser: &denoiser,
+            stats: &stats,
+        }
+        .encode_accumulation(&mut encoder, &mut realtime, handover, host.as_ref());
     if !traces {
         ctx.queue.submit([encoder.finish()]);
         return;

@@ -2,7 +2,7 @@
 //! the ray-casting benchmark. Each records its pass, submits and reads the result back (blocking).
 
 use super::accumulation::Accumulation;
-use super::display::{encode_denoise, encode_display};
+use super::display::Display;
 use super::frame_constants::{FrameConstants, write_frame_constants};
 use super::gpu_scene::GpuScene;
 use super::host_denoised::HostDenoised;
@@ -21,19 +21,24 @@ use bevy_ecs::prelude::World;
 /// Denoises the current accumulation with the settings' `denoise_params` (whatever `RenderSettings::denoise`
 /// says) and reads it back: linear RGB per pixel, row-major from the top-left.
 pub fn denoised_radiance(world: &World) -> Vec<[f32; 3]> {
-    let ctx = world.resource::<GpuContext>();
-    let view = world.resource::<ViewTargets>();
+    let display = display_passes(world);
+    let ctx = display.ctx;
     let mut encoder = ctx.device.create_command_encoder(&Default::default());
-    let output = encode_denoise(
-        ctx,
-        &mut encoder,
-        view,
-        world.resource::<RenderSettings>(),
-        world.resource::<Denoiser>(),
-        world.resource::<FrameStats>(),
-    );
+    let output = display.encode_denoise(&mut encoder);
     ctx.queue.submit([encoder.finish()]);
     mean_rgb(&ctx.read_buffer(output, output.size()))
+}
+
+/// The display passes over the world's view, settings and passes.
+fn display_passes(world: &World) -> Display<'_> {
+    Display {
+        ctx: world.resource::<GpuContext>(),
+        view: world.resource::<ViewTargets>(),
+        settings: world.resource::<RenderSettings>(),
+        tonemap: world.resource::<TonemapPass>(),
+        denoiser: world.resource::<Denoiser>(),
+        stats: world.resource::<FrameStats>(),
+    }
 }
 
 /// The image denoised on the host that the display shows for the current accumulation, if any.
@@ -48,20 +53,11 @@ fn host_denoised(world: &World) -> Option<wgpu::Buffer> {
 /// Tone-maps the current accumulation (denoised if the settings say so: OIDN's image when one was handed
 /// over for it, else svgf's) and reads the sRGB RGBA8 image back.
 pub fn display_rgba8(world: &World) -> Vec<u8> {
-    let ctx = world.resource::<GpuContext>();
-    let view = world.resource::<ViewTargets>();
+    let display = display_passes(world);
+    let (ctx, view) = (display.ctx, display.view);
     let host = host_denoised(world);
     let mut encoder = ctx.device.create_command_encoder(&Default::default());
-    encode_display(
-        ctx,
-        &mut encoder,
-        view,
-        world.resource::<RenderSettings>(),
-        world.resource::<TonemapPass>(),
-        world.resource::<Denoiser>(),
-        world.resource::<FrameStats>(),
-        host.as_ref(),
-    );
+    display.encode(&mut encoder, host.as_ref());
     ctx.queue.submit([encoder.finish()]);
     view.read_rgba8(ctx)
 }

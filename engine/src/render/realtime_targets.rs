@@ -42,6 +42,23 @@ impl SceneGroups<'_> {
     }
 }
 
+/// The layouts behind [`SceneGroups`]: a real-time kernel is built over the scene (group 0), its pass's own
+/// layout (group 1) and the scene's motion (group 2), the order [`SceneGroups::begin_pass`] binds them in.
+pub struct SceneLayouts<'a> {
+    pub scene: &'a wgpu::BindGroupLayout,
+    pub motion: &'a wgpu::BindGroupLayout,
+}
+
+impl<'a> SceneLayouts<'a> {
+    /// The pipeline's group layouts with `pass` as group 1.
+    pub fn with_pass(
+        &self,
+        pass: &'a wgpu::BindGroupLayout,
+    ) -> [Option<&'a wgpu::BindGroupLayout>; 3] {
+        [Some(self.scene), Some(pass), Some(self.motion)]
+    }
+}
+
 /// A colour history in the accumulation's layout (sums over the history length; see `temporal.wgsl`).
 pub struct HistoryBuffers {
     pub accum: wgpu::Buffer,

@@ -43,11 +43,15 @@ const MOTION_BINDINGS: usize = 5;
 impl RealtimePasses {
     pub fn new(ctx: &GpuContext, scene_layout: &wgpu::BindGroupLayout) -> Self {
         let motion_layout = compute_layout(ctx, "scene motion", &[Binding::Read; MOTION_BINDINGS]);
+        let layouts = SceneLayouts {
+            scene: scene_layout,
+            motion: &motion_layout,
+        };
         Self {
-            gbuffer: GBufferPass::new(ctx, scene_layout, &motion_layout),
-            restir: RestirDiPass::new(ctx, scene_layout, &motion_layout),
-            trace: RealtimeTracePass::new(ctx, scene_layout, &motion_layout),
-            gradient: GradientPass::new(ctx, scene_layout, &motion_layout),
+            gbuffer: GBufferPass::new(ctx, &layouts),
+            restir: RestirDiPass::new(ctx, &layouts),
+            trace: RealtimeTracePass::new(ctx, &layouts),
+            gradient: GradientPass::new(ctx, &layouts),
             temporal: TemporalPass::new(ctx),
             handover: HandoverPass::new(ctx),
             motion_layout,

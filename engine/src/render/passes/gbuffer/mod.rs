@@ -6,7 +6,7 @@ use crate::gpu::ComputeModule;
 use crate::gpu::GpuContext;
 use crate::gpu::bind::{Binding, CachedGroup, bind_group, compute_layout};
 use crate::render::material_lobes::MaterialLobes;
-use crate::render::realtime_targets::{RealtimeTargets, SceneGroups};
+use crate::render::realtime_targets::{RealtimeTargets, SceneGroups, SceneLayouts};
 use crate::render::shaders::{ShaderModule, compose};
 use crate::render::view::ViewTargets;
 
@@ -32,11 +32,7 @@ pub struct GBufferPass {
 }
 
 impl GBufferPass {
-    pub fn new(
-        ctx: &GpuContext,
-        scene_layout: &wgpu::BindGroupLayout,
-        motion_layout: &wgpu::BindGroupLayout,
-    ) -> Self {
+    pub fn new(ctx: &GpuContext, layouts: &SceneLayouts) -> Self {
         use Binding::*;
         // frame, real-time frame, G-buffer, previous G-buffer, ray counter
         let layout = compute_layout(
@@ -45,12 +41,8 @@ impl GBufferPass {
             &[Params, Params, ReadWrite, ReadWrite, ReadWrite],
         );
         // The G-buffer keeps only the core BSDF parameters (`pack_bsdf`): its kernel skips the extension lobes.
-        let pipeline = ComputeModule::new(
-            ctx,
-            compose(&KERNEL),
-            &[Some(scene_layout), Some(&layout), Some(motion_layout)],
-        )
-        .pipeline("gbuffer", "write_gbuffer", &MaterialLobes::Core.constants());
+        let pipeline = ComputeModule::new(ctx, compose(&KERNEL), &layouts.with_pass(&layout))
+            .pipeline("gbuffer", "write_gbuffer", &MaterialLobes::Core.constants());
         Self {
             pipeline,
             layout,

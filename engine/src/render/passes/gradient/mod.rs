@@ -4,7 +4,7 @@
 
 use crate::gpu::GpuContext;
 use crate::gpu::bind::{Binding, bind_group, compute_layout, params_buffer, params_entry_dynamic};
-use crate::render::realtime_targets::{RealtimeTargets, SceneGroups};
+use crate::render::realtime_targets::{RealtimeTargets, SceneGroups, SceneLayouts};
 use crate::render::shaders::{ShaderModule, compose};
 use crate::render::view::ViewTargets;
 use bytemuck::{Pod, Zeroable};
@@ -44,11 +44,7 @@ pub struct GradientPass {
 }
 
 impl GradientPass {
-    pub fn new(
-        ctx: &GpuContext,
-        scene_layout: &wgpu::BindGroupLayout,
-        motion_layout: &wgpu::BindGroupLayout,
-    ) -> Self {
+    pub fn new(ctx: &GpuContext, layouts: &SceneLayouts) -> Self {
         use Binding::*;
         // frame, real-time frame, previous G-buffer, estimates, gradients in, gradients out, ray counter
         let layout = compute_layout(
@@ -85,16 +81,13 @@ impl GradientPass {
                 }),
             }],
         });
+        // The filter's step uniform is group 3, after the real-time groups.
+        let [scene, pass, motion] = layouts.with_pass(&layout);
         let [shade, filter] = crate::gpu::compute_pipelines(
             ctx,
             "gradient",
             compose(&KERNEL),
-            &[
-                Some(scene_layout),
-                Some(&layout),
-                Some(motion_layout),
-                Some(&step_layout),
-            ],
+            &[scene, pass, motion, Some(&step_layout)],
             ["shade_gradients", "filter_gradients"],
         );
         Self {

@@ -5,7 +5,7 @@
 use crate::gpu::GpuContext;
 use crate::gpu::bind::{Binding, CachedGroup, bind_group, compute_layout};
 use crate::render::material_lobes::{LobeKernels, MaterialLobes};
-use crate::render::realtime_targets::{RealtimeTargets, SceneGroups};
+use crate::render::realtime_targets::{RealtimeTargets, SceneGroups, SceneLayouts};
 use crate::render::shaders::{ShaderModule, compose};
 use crate::render::view::ViewTargets;
 
@@ -29,11 +29,7 @@ pub struct RealtimeTracePass {
 }
 
 impl RealtimeTracePass {
-    pub fn new(
-        ctx: &GpuContext,
-        scene_layout: &wgpu::BindGroupLayout,
-        motion_layout: &wgpu::BindGroupLayout,
-    ) -> Self {
+    pub fn new(ctx: &GpuContext, layouts: &SceneLayouts) -> Self {
         use Binding::*;
         // frame, real-time frame, G-buffer, direct light, samples, gradient estimates, ray counter
         let layout = compute_layout(
@@ -45,7 +41,7 @@ impl RealtimeTracePass {
             ctx,
             "realtime trace",
             compose(&KERNEL),
-            &[Some(scene_layout), Some(&layout), Some(motion_layout)],
+            &layouts.with_pass(&layout),
             "trace_realtime",
         );
         Self {

@@ -4,7 +4,7 @@
 
 use crate::gpu::GpuContext;
 use crate::gpu::bind::{Binding, CachedGroup, bind_group, compute_layout};
-use crate::render::realtime_targets::{RealtimeTargets, SceneGroups};
+use crate::render::realtime_targets::{RealtimeTargets, SceneGroups, SceneLayouts};
 use crate::render::shaders::{ShaderModule, compose};
 use crate::render::view::ViewTargets;
 
@@ -29,11 +29,7 @@ pub struct RestirDiPass {
 }
 
 impl RestirDiPass {
-    pub fn new(
-        ctx: &GpuContext,
-        scene_layout: &wgpu::BindGroupLayout,
-        motion_layout: &wgpu::BindGroupLayout,
-    ) -> Self {
+    pub fn new(ctx: &GpuContext, layouts: &SceneLayouts) -> Self {
         use Binding::*;
         // frame, real-time frame, G-buffer, previous G-buffer, reservoirs, temporal reservoirs, direct light,
         // ray counter
@@ -48,7 +44,7 @@ impl RestirDiPass {
             ctx,
             "restir di",
             compose(&KERNEL),
-            &[Some(scene_layout), Some(&layout), Some(motion_layout)],
+            &layouts.with_pass(&layout),
             ["candidates", "spatial"],
         );
         Self {
