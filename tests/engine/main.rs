@@ -18,6 +18,7 @@ mod furnace;
 mod glass_reference;
 mod gltf_conformance;
 mod gpu_deform;
+mod layered_materials;
 mod light_sampling;
 mod lights_reference;
 mod near_emitter;
