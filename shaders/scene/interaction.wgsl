@@ -75,6 +75,8 @@ fn resolve_hit(hit: Hit, ray: Ray) -> SurfaceInteraction {
         emission *= srgb_to_linear(sample_texture(m.emissive_texture, texture_uv(m.emissive_texture, mesh, tri, w)).rgb);
     }
     s.emission = emission;
+    // KHR_materials_unlit: the base colour is what the surface shows (the path ends there: integrator).
+    if MATERIAL_LOBES != 0u && (m.flags & MATERIAL_UNLIT) != 0u { s.emission = base.rgb; }
     s.bsdf = core_bsdf(base.rgb, clamp(metallic, 0.0, 1.0), max(roughness * roughness, MIN_ALPHA));
     if MATERIAL_LOBES != 0u { s.bsdf = with_material_extensions(s.bsdf, m, mesh, tri, w, s.front); }
     if (MATERIAL_LOBES & LOBES_LAYERS) != 0u {

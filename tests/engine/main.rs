@@ -33,3 +33,4 @@ mod skinned_image;
 mod thin_lens;
 mod transmission;
 mod traversal;
+mod unlit;

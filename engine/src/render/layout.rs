@@ -13,6 +13,9 @@ pub const INVALID_OCT: u32 = 0x8000_8000;
 pub const MATERIAL_DOUBLE_SIDED: u32 = 1;
 pub const MATERIAL_ALPHA_MASK: u32 = 2;
 pub const MATERIAL_ALPHA_BLEND: u32 = 4;
+/// KHR_materials_unlit: the surface shows its base colour as radiance and scatters nothing (shaded from the
+/// extension-factor kernels up).
+pub const MATERIAL_UNLIT: u32 = 8;
 
 /// `MATERIAL_LOBES` (the trace kernels' pipeline constant, `render::material_lobes`): bits 0-1 the extension
 /// level (0 core, 1 factors, [`LOBES_TEXTURED`] factors and textures), [`LOBES_LAYERS`] the sheen and clearcoat
@@ -204,6 +207,7 @@ pub const WGSL_CONSTANTS: &[(&str, u32)] = &[
     ("MATERIAL_DOUBLE_SIDED", MATERIAL_DOUBLE_SIDED),
     ("MATERIAL_ALPHA_MASK", MATERIAL_ALPHA_MASK),
     ("MATERIAL_ALPHA_BLEND", MATERIAL_ALPHA_BLEND),
+    ("MATERIAL_UNLIT", MATERIAL_UNLIT),
     ("LOBES_LEVEL", LOBES_LEVEL),
     ("LOBES_TEXTURED", LOBES_TEXTURED),
     ("LOBES_LAYERS", LOBES_LAYERS),

@@ -6,7 +6,7 @@
 //! bit of their own, so scenes without sheen or clearcoat compile the kernels they compiled before the layers.
 
 use super::gpu_scene::{TextureSlots, gpu_material};
-use super::layout::{GpuMaterial, LOBES_LAYERS, LOBES_LEVEL, NONE};
+use super::layout::{GpuMaterial, LOBES_LAYERS, LOBES_LEVEL, MATERIAL_UNLIT, NONE};
 use crate::gpu::ComputeModule;
 
 /// What the materials need; the WGSL constant's values.
@@ -15,7 +15,7 @@ pub enum MaterialLobes {
     /// The core metallic-roughness BSDF only.
     #[default]
     Core = 0,
-    /// Extension factors (IOR, specular, transmission, volume) without their textures.
+    /// Extension factors (IOR, specular, transmission, volume; unlit) without their textures.
     Factors = 1,
     /// Factors and the transmission, specular and specular-colour textures.
     Textured = 2,
@@ -80,7 +80,8 @@ impl MaterialLobes {
                 m.sheen_color_texture,
                 m.sheen_roughness_texture,
             ];
-            let factors = m.specular_f0 != core.specular_f0
+            let factors = m.flags & MATERIAL_UNLIT != 0
+                || m.specular_f0 != core.specular_f0
                 || m.specular_weight != core.specular_weight
                 || m.attenuation != core.attenuation
                 || m.refraction_ior != core.refraction_ior

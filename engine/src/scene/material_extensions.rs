@@ -496,6 +496,7 @@ pub const RENDERED: &[&str] = &[
     "KHR_materials_volume",
     "KHR_materials_clearcoat",
     "KHR_materials_sheen",
+    "KHR_materials_unlit",
 ];
 
 /// One line per material extension that the file uses but the renderer does not shade with yet, naming the

@@ -160,6 +160,11 @@ pub fn gpu_material(m: &crate::scene::Material, textures: &TextureSlots) -> GpuM
                 MATERIAL_DOUBLE_SIDED
             } else {
                 0
+            }
+            | if m.extensions.unlit {
+                MATERIAL_UNLIT
+            } else {
+                0
             },
         base_color_texture: textures.slot_word(m.base_color_texture),
         metallic_roughness_texture: textures.slot_word(m.metallic_roughness_texture),
