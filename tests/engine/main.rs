@@ -10,6 +10,7 @@ mod animation_fixtures;
 mod architecture;
 mod assets;
 mod bad_input;
+mod clearcoat_reference;
 mod cornell_reference;
 mod deep_tlas;
 mod denoise;
