@@ -7,6 +7,14 @@ fn sample_cosine_hemisphere(u: vec2<f32>) -> vec3<f32> {
     return vec3<f32>(r * cos(phi), r * sin(phi), sqrt(max(0.0, 1.0 - u.x)));
 }
 
+// Uniform direction over the hemisphere about +z: pdf = 1 / (2 pi).
+fn sample_uniform_hemisphere(u: vec2<f32>) -> vec3<f32> {
+    let z = u.x;
+    let r = sqrt(max(0.0, 1.0 - z * z));
+    let phi = 2.0 * PI * u.y;
+    return vec3<f32>(r * cos(phi), r * sin(phi), z);
+}
+
 // Barycentrics (b1, b2) of a uniform point on a triangle (the fold of the unit square).
 fn sample_triangle_uniform(u: vec2<f32>) -> vec2<f32> {
     var b1 = u.x;

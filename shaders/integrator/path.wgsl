@@ -223,6 +223,8 @@ fn trace_path_from(start: PathStart, forward: vec3<f32>, sampler: Sampler) -> Pa
             result.radiance += throughput * s.emission * weight;
             if depth == 0u { result.unscattered += throughput * s.emission * weight; }
         }
+        // An unlit surface scatters nothing.
+        if MATERIAL_LOBES != 0u && (s.flags & MATERIAL_UNLIT) != 0u { break; }
         if depth >= frame.max_depth { break; }
 
         let dims = bounce_dimensions(depth);

@@ -14,13 +14,16 @@ fn gsurface_first_hit(g: GSurface, origin: vec3<f32>) -> Hit {
 }
 
 // A G-buffer surface seen from `eye` (the camera of the frame that wrote it). The packed BSDF holds the core
-// parameters; the extension lobes take the material's factors (their textures are not applied here, and the
-// surface is taken as seen from outside).
+// parameters; the extension lobes and layers take the material's factors (their textures are not applied here,
+// the surface is taken as seen from outside, and the coat's normal as the shading normal).
 fn gsurface_shading_point(g: GSurface, eye: vec3<f32>) -> ShadingPoint {
     var bsdf = unpack_bsdf(g.bsdf);
     if MATERIAL_LOBES != 0u && g.material != NONE {
         let m = materials[g.material];
         bsdf.lobes = pack_lobes(m.specular_f0, m.specular_weight, m.transmission, m.refraction_ior, false);
+        if (MATERIAL_LOBES & LOBES_LAYERS) != 0u {
+            bsdf.layers = pack_layers(m.clearcoat, m.clearcoat_roughness, vec3<f32>(0.0, 0.0, 1.0), m.sheen_color, m.sheen_roughness);
+        }
     }
     return ShadingPoint(g.position, oct_decode(g.geometric), oct_decode(g.normal), normalize(eye - g.position), bsdf);
 }

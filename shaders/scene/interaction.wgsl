@@ -61,29 +61,13 @@ fn resolve_hit(hit: Hit, ray: Ray) -> SurfaceInteraction {
         roughness *= t.g;
         metallic *= t.b;
     }
+    // The clear coat has its own normal map; without one it follows the interpolated normal, not the base's map.
+    let n_interpolated = n;
     if m.normal_texture != NONE && mesh.tangent_offset != NONE {
-        let ta = vertex_pool[mesh.tangent_offset + 2u * tri.x];
-        let tb = vertex_pool[mesh.tangent_offset + 2u * tri.y];
-        let tc = vertex_pool[mesh.tangent_offset + 2u * tri.z];
-        if ta != INVALID_OCT && tb != INVALID_OCT && tc != INVALID_OCT {
-            let sign = bitcast<f32>(vertex_pool[mesh.tangent_offset + 2u * tri.x + 1u]);
-            var t = transform_vector(inst.world_from_object, oct_decode(ta) * w.x + oct_decode(tb) * w.y + oct_decode(tc) * w.z);
-            t = t - n * dot(n, t);
-            if dot(t, t) > 1e-12 {
-                t = normalize(t);
-                // On back faces n was flipped; the bitangent must follow the surface's own orientation.
-                let b = cross(select(-n, n, s.front), t) * sign;
-                let tex = sample_texture(m.normal_texture, texture_uv(m.normal_texture, mesh, tri, w)).xyz * 2.0 - 1.0;
-                let local = vec3<f32>(untransform_tangent_normal(m.normal_texture, tex.xy) * m.normal_scale, tex.z);
-                let mapped = t * local.x + b * local.y + n * local.z;
-                if dot(mapped, mapped) > 1e-12 { n = normalize(mapped); }
-            }
-        }
+        n = normal_mapped(n, m.normal_texture, m.normal_scale, inst, mesh, tri, w, s.front);
     }
-    // A shading normal facing away from the viewer would make the BRDF vanish: bend it back just enough.
     let v = -ray.dir;
-    let nv = dot(n, v);
-    if nv < 1e-3 { n = normalize(n + (1e-3 - nv) * v); }
+    n = facing_viewer(n, v);
     s.n = n;
 
     var emission = m.emissive;
@@ -91,11 +75,76 @@ fn resolve_hit(hit: Hit, ray: Ray) -> SurfaceInteraction {
         emission *= srgb_to_linear(sample_texture(m.emissive_texture, texture_uv(m.emissive_texture, mesh, tri, w)).rgb);
     }
     s.emission = emission;
+    // KHR_materials_unlit: the base colour is what the surface shows (the path ends there: integrator).
+    if MATERIAL_LOBES != 0u && (m.flags & MATERIAL_UNLIT) != 0u { s.emission = base.rgb; }
     s.bsdf = core_bsdf(base.rgb, clamp(metallic, 0.0, 1.0), max(roughness * roughness, MIN_ALPHA));
     if MATERIAL_LOBES != 0u { s.bsdf = with_material_extensions(s.bsdf, m, mesh, tri, w, s.front); }
+    if (MATERIAL_LOBES & LOBES_LAYERS) != 0u {
+        var coat_n = n_interpolated;
+        if (MATERIAL_LOBES & LOBES_LEVEL) >= LOBES_TEXTURED && m.clearcoat_normal_texture != NONE && mesh.tangent_offset != NONE {
+            coat_n = normal_mapped(coat_n, m.clearcoat_normal_texture, m.clearcoat_normal_scale, inst, mesh, tri, w, s.front);
+        }
+        s.bsdf.layers = material_layers(m, mesh, tri, w, facing_viewer(coat_n, v) * basis(n));
+    }
     s.alpha = base.a;
     s.flags = m.flags;
     return s;
+}
+
+// `n` with the tangent-space normal of `texture` applied (scaled by `scale`); unchanged without usable tangents.
+fn normal_mapped(n: vec3<f32>, texture: u32, scale: f32, inst: Instance, mesh: Mesh, tri: vec4<u32>, w: vec3<f32>, front: bool) -> vec3<f32> {
+    let ta = vertex_pool[mesh.tangent_offset + 2u * tri.x];
+    let tb = vertex_pool[mesh.tangent_offset + 2u * tri.y];
+    let tc = vertex_pool[mesh.tangent_offset + 2u * tri.z];
+    if ta != INVALID_OCT && tb != INVALID_OCT && tc != INVALID_OCT {
+        let sign = bitcast<f32>(vertex_pool[mesh.tangent_offset + 2u * tri.x + 1u]);
+        var t = transform_vector(inst.world_from_object, oct_decode(ta) * w.x + oct_decode(tb) * w.y + oct_decode(tc) * w.z);
+        t = t - n * dot(n, t);
+        if dot(t, t) > 1e-12 {
+            t = normalize(t);
+            // On back faces n was flipped; the bitangent must follow the surface's own orientation.
+            let b = cross(select(-n, n, front), t) * sign;
+            let tex = sample_texture(texture, texture_uv(texture, mesh, tri, w)).xyz * 2.0 - 1.0;
+            let local = vec3<f32>(untransform_tangent_normal(texture, tex.xy) * scale, tex.z);
+            let mapped = t * local.x + b * local.y + n * local.z;
+            if dot(mapped, mapped) > 1e-12 { return normalize(mapped); }
+        }
+    }
+    return n;
+}
+
+// A shading normal facing away from the viewer would make the BRDF vanish: bend it back just enough.
+fn facing_viewer(n: vec3<f32>, v: vec3<f32>) -> vec3<f32> {
+    let nv = dot(n, v);
+    if nv < 1e-3 { return normalize(n + (1e-3 - nv) * v); }
+    return n;
+}
+
+// KHR_materials_clearcoat and _sheen (textures applied at the textured level); `coat_normal` in the local
+// shading frame.
+fn material_layers(m: Material, mesh: Mesh, tri: vec4<u32>, w: vec3<f32>, coat_normal: vec3<f32>) -> vec3<u32> {
+    let textured = (MATERIAL_LOBES & LOBES_LEVEL) >= LOBES_TEXTURED;
+    var coat = m.clearcoat;
+    var coat_roughness = m.clearcoat_roughness;
+    var sheen = m.sheen_color;
+    var sheen_roughness = m.sheen_roughness;
+    if textured && coat > 0.0 {
+        if m.clearcoat_texture != NONE {
+            coat *= sample_texture(m.clearcoat_texture, texture_uv(m.clearcoat_texture, mesh, tri, w)).r;
+        }
+        if m.clearcoat_roughness_texture != NONE {
+            coat_roughness *= sample_texture(m.clearcoat_roughness_texture, texture_uv(m.clearcoat_roughness_texture, mesh, tri, w)).g;
+        }
+    }
+    if textured && any(sheen > vec3<f32>(0.0)) {
+        if m.sheen_color_texture != NONE {
+            sheen *= srgb_to_linear(sample_texture(m.sheen_color_texture, texture_uv(m.sheen_color_texture, mesh, tri, w)).rgb);
+        }
+        if m.sheen_roughness_texture != NONE {
+            sheen_roughness *= sample_texture(m.sheen_roughness_texture, texture_uv(m.sheen_roughness_texture, mesh, tri, w)).a;
+        }
+    }
+    return pack_layers(coat, coat_roughness, coat_normal, sheen, sheen_roughness);
 }
 
 fn emits_towards_viewer(s: SurfaceInteraction) -> bool {
@@ -106,7 +155,7 @@ fn emits_towards_viewer(s: SurfaceInteraction) -> bool {
 // refracting surface from its front enters the volume behind it.
 fn with_material_extensions(core: BsdfParams, m: Material, mesh: Mesh, tri: vec4<u32>, w: vec3<f32>, front: bool) -> BsdfParams {
     var transmission = m.transmission;
-    let textured = MATERIAL_LOBES >= 2u;
+    let textured = (MATERIAL_LOBES & LOBES_LEVEL) >= LOBES_TEXTURED;
     if textured && m.transmission_texture != NONE && transmission > 0.0 {
         transmission *= sample_texture(m.transmission_texture, texture_uv(m.transmission_texture, mesh, tri, w)).r;
     }

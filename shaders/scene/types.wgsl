@@ -30,6 +30,9 @@ struct Material {
     specular_f0: vec3<f32>, specular_weight: f32,
     attenuation: vec3<f32>, refraction_ior: f32,
     transmission: f32, transmission_texture: u32, specular_texture: u32, specular_color_texture: u32,
+    clearcoat: f32, clearcoat_roughness: f32, clearcoat_texture: u32, clearcoat_roughness_texture: u32,
+    sheen_color: vec3<f32>, sheen_roughness: f32,
+    clearcoat_normal_texture: u32, clearcoat_normal_scale: f32, sheen_color_texture: u32, sheen_roughness_texture: u32,
 }
 
 struct TextureInfo { offset: u32, width: u32, height: u32, flags: u32, uv_u: vec4<f32>, uv_v: vec4<f32> }

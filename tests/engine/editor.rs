@@ -301,7 +301,9 @@ fn check_save(source: PathBuf) {
     materials[0].base_color_texture = None;
     // The extensions the inspector edits: added where the file has none, written back as edited.
     for (i, m) in materials.iter_mut().enumerate().take(2) {
-        use raykin::scene::material_extensions::{Specular, Transmission, Volume};
+        use raykin::scene::material_extensions::{
+            Clearcoat, Sheen, Specular, Transmission, Volume,
+        };
         m.extensions.ior = 1.7;
         m.extensions.transmission = Some(Transmission {
             factor: 0.8,
@@ -320,6 +322,30 @@ fn check_save(source: PathBuf) {
             color: Vec3::new(1.0, 0.5, 0.25),
             color_texture: None,
         });
+        // The layers: a file's texture entries the edit turned off (None) must go.
+        m.extensions.clearcoat = Some(Clearcoat {
+            factor: 0.75,
+            texture: None,
+            roughness: 0.25,
+            roughness_texture: None,
+            normal_texture: None,
+            normal_scale: 1.0,
+        });
+        m.extensions.sheen = Some(Sheen {
+            color: Vec3::new(0.5, 0.25, 0.125),
+            color_texture: None,
+            roughness: 0.375,
+            roughness_texture: None,
+        });
+    }
+    // The file's own coats: a texture turned off, a coat normal map's scale changed.
+    for m in materials.iter_mut().skip(2) {
+        if let Some(c) = &mut m.extensions.clearcoat {
+            if c.normal_texture.is_some() {
+                c.normal_scale = 0.5;
+            }
+            c.texture = None;
+        }
     }
     let bytes = std::fs::read(&source).expect("read");
     let dir = temp_dir(&source.file_stem().unwrap().to_string_lossy());
@@ -370,6 +396,8 @@ fn save_as_writes_the_edited_materials() {
     check_save(shared_assets().join("TextureCoordinateTest/glTF/TextureCoordinateTest.gltf"));
     // A .glb: its binary chunk becomes out.bin beside the .gltf, and is repacked into the .glb.
     check_save(shared_assets().join("CornellBox/CornellBox.glb"));
+    // Clearcoat textures (and coat normal maps with their scale) on the materials left as they were.
+    check_save(shared_assets().join("ClearCoatTest/glTF/ClearCoatTest.gltf"));
 }
 
 #[test]

@@ -43,7 +43,17 @@ fn normalize(a: [f64; 3]) -> [f64; 3] {
 /// distributed as D(h) cos(h) (resolves narrow lobes), and cosine-distributed directions (the diffuse part).
 /// Each integrates the whole BRDF with the weight of its own substitution; a partition by a smooth balance
 /// heuristic combines them, so neither needs to resolve what the other covers.
-fn albedo(mu: f64, metallic: f64, roughness: f64) -> f64 {
+pub(crate) fn albedo(mu: f64, metallic: f64, roughness: f64) -> f64 {
+    albedo_weighted(mu, metallic, roughness, &|_| 1.0)
+}
+
+/// [`albedo`] of the BRDF multiplied by `weight(cos(l))` (a layer above that dims it per direction).
+pub(crate) fn albedo_weighted(
+    mu: f64,
+    metallic: f64,
+    roughness: f64,
+    weight: &dyn Fn(f64) -> f64,
+) -> f64 {
     let alpha = (roughness * roughness).max(1e-4);
     let a2 = alpha * alpha;
     let v = [(1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu];
@@ -73,7 +83,7 @@ fn albedo(mu: f64, metallic: f64, roughness: f64) -> f64 {
                 ];
                 if l[2] > 0.0 {
                     let (p1, p2) = (ndf_pdf_l(l), cos_pdf(l));
-                    total += brdf_cos(v, l, metallic, alpha) / (p1 + p2);
+                    total += brdf_cos(v, l, metallic, alpha) * weight(l[2]) / (p1 + p2);
                 }
             }
             // Cosine substitution.
@@ -83,7 +93,7 @@ fn albedo(mu: f64, metallic: f64, roughness: f64) -> f64 {
                 (1.0 - xi).sqrt(),
             ];
             let (p1, p2) = (ndf_pdf_l(l), cos_pdf(l));
-            total += brdf_cos(v, l, metallic, alpha) / (p1 + p2);
+            total += brdf_cos(v, l, metallic, alpha) * weight(l[2]) / (p1 + p2);
         }
     }
     total / (n_theta * n_phi) as f64
@@ -140,13 +150,30 @@ fn expected_pixel(x: u32, y: u32, table: &[(f64, f64)]) -> Option<f64> {
 }
 
 fn furnace_case(metallic: f32, roughness: f32) {
-    let (ctx, _gpu) = gpu();
     let material = Material {
         name: "white".into(),
         metallic,
         roughness,
         ..Default::default()
     };
+    furnace_check(
+        &format!("metallic {metallic} roughness {roughness}"),
+        material,
+        |mu| albedo(mu, metallic as f64, roughness as f64),
+        16384,
+    );
+}
+
+/// Renders a unit sphere of `material` in the white furnace (max depth 1) and checks every interior pixel
+/// against `albedo(cos(view))` (computed by the caller from the specification), within 1% where the noise allows
+/// (at most `max_spp` samples per half; the per-pixel bound widens to 4 sigma of what noise remains).
+pub(crate) fn furnace_check(
+    what: &str,
+    material: Material,
+    albedo: impl Fn(f64) -> f64,
+    max_spp: u32,
+) {
+    let (ctx, _gpu) = gpu();
     let sphere = procedural::uv_sphere(1.0, 128, 64, 0);
     let scene = Arc::new(procedural::scene_from_meshes(
         "furnace",
@@ -170,7 +197,7 @@ fn furnace_case(metallic: f32, roughness: f32) {
     let table: Vec<(f64, f64)> = (0..=56)
         .map(|i| {
             let mu = 0.2 + 0.8 * i as f64 / 56.0;
-            (mu, albedo(mu, metallic as f64, roughness as f64))
+            (mu, albedo(mu))
         })
         .collect();
 
@@ -219,11 +246,8 @@ fn furnace_case(metallic: f32, roughness: f32) {
         assert!(checked > 90, "only {checked} interior pixels");
         // Per-pixel noise (RMS over pixels) must be a quarter of the tolerance, so a 1% miss is a bias.
         let sigma = (sigma2_sum / checked as f64).sqrt();
-        eprintln!(
-            "metallic {metallic} roughness {roughness}: {} spp, relative noise {sigma:.4}",
-            2 * spp
-        );
-        if sigma > 0.0025 && spp < 16384 {
+        eprintln!("{what}: {} spp, relative noise {sigma:.4}", 2 * spp);
+        if sigma > 0.0025 && spp < max_spp {
             continue;
         }
         // Per pixel: 1% wherever the noise target was met. Metal at roughness 1 reflects most visible-normal
@@ -232,7 +256,7 @@ fn furnace_case(metallic: f32, roughness: f32) {
         let tolerance = 0.01f64.max(4.0 * sigma);
         let mean_ratio = ratio_sum / checked as f64;
         eprintln!(
-            "metallic {metallic} roughness {roughness}: {checked} pixels at {} spp, worst error {:.4} at ({}, {}) value {:.4} expected {:.4}; mean ratio {mean_ratio:.5}; tolerance {tolerance:.4}",
+            "{what}: {checked} pixels at {} spp, worst error {:.4} at ({}, {}) value {:.4} expected {:.4}; mean ratio {mean_ratio:.5}; tolerance {tolerance:.4}",
             2 * spp,
             worst.0,
             worst.1,
@@ -242,7 +266,7 @@ fn furnace_case(metallic: f32, roughness: f32) {
         );
         assert!(
             worst.0 < tolerance,
-            "metallic {metallic} roughness {roughness}: pixel ({}, {}) is {:.4}, expected {:.4} ({:.2}% off)",
+            "{what}: pixel ({}, {}) is {:.4}, expected {:.4} ({:.2}% off)",
             worst.1,
             worst.2,
             worst.3,
@@ -252,7 +276,7 @@ fn furnace_case(metallic: f32, roughness: f32) {
         let mean_tolerance = 0.002 + 4.0 * sigma / (checked as f64).sqrt();
         assert!(
             (mean_ratio - 1.0).abs() < mean_tolerance,
-            "metallic {metallic} roughness {roughness}: mean rendered/expected {mean_ratio:.5} (tolerance {mean_tolerance:.4})"
+            "{what}: mean rendered/expected {mean_ratio:.5} (tolerance {mean_tolerance:.4})"
         );
         return;
     }

@@ -468,8 +468,6 @@ fn material_extensions_arrive_with_their_values_or_clamped_with_a_warning() {
         );
     }
     for ext in [
-        "KHR_materials_clearcoat",
-        "KHR_materials_sheen",
         "KHR_materials_iridescence",
         "KHR_materials_anisotropy",
         "KHR_materials_dispersion",

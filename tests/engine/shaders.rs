@@ -173,7 +173,17 @@ fn scene_structs_match_wgsl() {
             base_color_texture,
             metallic_roughness_texture,
             normal_texture,
-            emissive_texture
+            emissive_texture,
+            specular_f0,
+            transmission,
+            specular_color_texture,
+            clearcoat,
+            clearcoat_roughness_texture,
+            sheen_color,
+            sheen_roughness,
+            clearcoat_normal_texture,
+            clearcoat_normal_scale,
+            sheen_roughness_texture
         ]
     );
     same_layout!(

@@ -129,6 +129,7 @@ fn edit(ui: &mut egui::Ui, m: &mut Material, original: &Material) {
             }
         });
     edit_dielectric(ui, m);
+    edit_layers(ui, m);
     // Textures can be switched off (and back on) where the file has them.
     let slots: [(&str, TextureSlot, Option<TextureRef>); 4] = [
         (
@@ -251,6 +252,70 @@ fn edit_dielectric(ui: &mut egui::Ui, m: &mut Material) {
                     // Only an edit adds the extension (its defaults are the core specification's).
                     if !had_specular && *specular == before {
                         e.specular = None;
+                    }
+                });
+        });
+}
+
+/// KHR_materials_clearcoat and _sheen: the layers over the material. Setting a value on a material without the
+/// extension adds it (Save as writes it); a layer at 0 stays in the file but renders as none.
+fn edit_layers(ui: &mut egui::Ui, m: &mut Material) {
+    use crate::scene::material_extensions::{Clearcoat, Sheen};
+    let e = &mut m.extensions;
+    egui::CollapsingHeader::new("clearcoat, sheen")
+        .default_open(e.clearcoat.is_some() || e.sheen.is_some())
+        .show(ui, |ui| {
+            egui::Grid::new("layer params")
+                .num_columns(2)
+                .show(ui, |ui| {
+                    let had_coat = e.clearcoat.is_some();
+                    let coat = e.clearcoat.get_or_insert(Clearcoat {
+                        factor: 0.0,
+                        texture: None,
+                        roughness: 0.0,
+                        roughness_texture: None,
+                        normal_texture: None,
+                        normal_scale: 1.0,
+                    });
+                    let before = coat.clone();
+                    ui.label("clearcoat");
+                    ui.add(egui::Slider::new(&mut coat.factor, 0.0..=1.0));
+                    ui.end_row();
+                    ui.label("clearcoat roughness");
+                    ui.add(egui::Slider::new(&mut coat.roughness, 0.0..=1.0));
+                    ui.end_row();
+                    if coat.normal_texture.is_some() {
+                        ui.label("clearcoat normal scale");
+                        ui.add(
+                            egui::DragValue::new(&mut coat.normal_scale)
+                                .speed(0.01)
+                                .range(-10.0..=10.0),
+                        );
+                        ui.end_row();
+                    }
+                    // Only an edit adds the extension.
+                    if !had_coat && *coat == before {
+                        e.clearcoat = None;
+                    }
+                    let had_sheen = e.sheen.is_some();
+                    let sheen = e.sheen.get_or_insert(Sheen {
+                        color: glam::Vec3::ZERO,
+                        color_texture: None,
+                        roughness: 0.0,
+                        roughness_texture: None,
+                    });
+                    let before = sheen.clone();
+                    ui.label("sheen colour");
+                    let mut c = sheen.color.to_array();
+                    if ui.color_edit_button_rgb(&mut c).changed() {
+                        sheen.color = c.into();
+                    }
+                    ui.end_row();
+                    ui.label("sheen roughness");
+                    ui.add(egui::Slider::new(&mut sheen.roughness, 0.0..=1.0));
+                    ui.end_row();
+                    if !had_sheen && *sheen == before {
+                        e.sheen = None;
                     }
                 });
         });

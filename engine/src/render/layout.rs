@@ -13,6 +13,16 @@ pub const INVALID_OCT: u32 = 0x8000_8000;
 pub const MATERIAL_DOUBLE_SIDED: u32 = 1;
 pub const MATERIAL_ALPHA_MASK: u32 = 2;
 pub const MATERIAL_ALPHA_BLEND: u32 = 4;
+/// KHR_materials_unlit: the surface shows its base colour as radiance and scatters nothing (shaded from the
+/// extension-factor kernels up).
+pub const MATERIAL_UNLIT: u32 = 8;
+
+/// `MATERIAL_LOBES` (the trace kernels' pipeline constant, `render::material_lobes`): bits 0-1 the extension
+/// level (0 core, 1 factors, [`LOBES_TEXTURED`] factors and textures), [`LOBES_LAYERS`] the sheen and clearcoat
+/// layers.
+pub const LOBES_LEVEL: u32 = 3;
+pub const LOBES_TEXTURED: u32 = 2;
+pub const LOBES_LAYERS: u32 = 4;
 
 pub const TEXTURE_NEAREST: u32 = 1 << 4;
 /// The texture-info entry carries a KHR_texture_transform (its `uv_u`/`uv_v` rows apply to the UVs).
@@ -100,6 +110,18 @@ pub struct GpuMaterial {
     pub transmission_texture: u32,
     pub specular_texture: u32,
     pub specular_color_texture: u32,
+    /// KHR_materials_clearcoat: factor and roughness (textures: red and green channel).
+    pub clearcoat: f32,
+    pub clearcoat_roughness: f32,
+    pub clearcoat_texture: u32,
+    pub clearcoat_roughness_texture: u32,
+    /// KHR_materials_sheen: colour (texture: sRGB RGB) and roughness (texture: alpha); colour 0 = no sheen.
+    pub sheen_color: [f32; 3],
+    pub sheen_roughness: f32,
+    pub clearcoat_normal_texture: u32,
+    pub clearcoat_normal_scale: f32,
+    pub sheen_color_texture: u32,
+    pub sheen_roughness_texture: u32,
 }
 
 #[repr(C)]
@@ -185,6 +207,10 @@ pub const WGSL_CONSTANTS: &[(&str, u32)] = &[
     ("MATERIAL_DOUBLE_SIDED", MATERIAL_DOUBLE_SIDED),
     ("MATERIAL_ALPHA_MASK", MATERIAL_ALPHA_MASK),
     ("MATERIAL_ALPHA_BLEND", MATERIAL_ALPHA_BLEND),
+    ("MATERIAL_UNLIT", MATERIAL_UNLIT),
+    ("LOBES_LEVEL", LOBES_LEVEL),
+    ("LOBES_TEXTURED", LOBES_TEXTURED),
+    ("LOBES_LAYERS", LOBES_LAYERS),
     ("TEXTURE_NEAREST", TEXTURE_NEAREST),
     ("TEXTURE_TRANSFORMED", TEXTURE_TRANSFORMED),
     ("WIDE_BLAS", WIDE_BLAS),

@@ -1,54 +1,103 @@
-//! Which of the glTF BSDF's extension lobes (KHR_materials_ior, _specular, _transmission, _volume) a scene's
-//! materials use, and the path-tracing kernels compiled for exactly that. The WGSL library reads the choice as
-//! the pipeline constant `MATERIAL_LOBES` (`shaders/scene/interaction.wgsl`), so a scene without them runs a
-//! kernel in which the extension code folds away: measured on the H200, reading the lobes cost scenes that do
-//! not use them 12-38% of their trace time (docs/BENCHMARKS.md).
+//! Which of the glTF BSDF's extension lobes (KHR_materials_ior, _specular, _transmission, _volume) and layers
+//! (KHR_materials_sheen, _clearcoat) a scene's materials use, and the path-tracing kernels compiled for exactly
+//! that. The WGSL library reads the choice as the pipeline constant `MATERIAL_LOBES` (`shaders/bsdf/gltf.wgsl`),
+//! so a scene without them runs a kernel in which the extension code folds away: measured on the H200, reading
+//! the lobes cost scenes that do not use them 12-38% of their trace time (docs/BENCHMARKS.md). The layers are a
+//! bit of their own, so scenes without sheen or clearcoat compile the kernels they compiled before the layers.
 
 use super::gpu_scene::{TextureSlots, gpu_material};
-use super::layout::{GpuMaterial, NONE};
+use super::layout::{GpuMaterial, LOBES_LAYERS, LOBES_LEVEL, MATERIAL_UNLIT, NONE};
 use crate::gpu::ComputeModule;
 
-/// What the materials need, least first; the WGSL constant's values.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord)]
+/// What the materials need; the WGSL constant's values.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum MaterialLobes {
     /// The core metallic-roughness BSDF only.
     #[default]
     Core = 0,
-    /// Extension factors (IOR, specular, transmission, volume) without their textures.
+    /// Extension factors (IOR, specular, transmission, volume; unlit) without their textures.
     Factors = 1,
     /// Factors and the transmission, specular and specular-colour textures.
     Textured = 2,
+    /// Extension factors with the sheen and clearcoat layers' factors.
+    LayeredFactors = 1 | LOBES_LAYERS as isize,
+    /// Everything: factors, layers and all their textures.
+    LayeredTextured = 2 | LOBES_LAYERS as isize,
 }
 
 impl MaterialLobes {
+    const ALL: [Self; 5] = [
+        Self::Core,
+        Self::Factors,
+        Self::Textured,
+        Self::LayeredFactors,
+        Self::LayeredTextured,
+    ];
+
     /// The pipeline constants that compile a kernel of the WGSL library for this choice.
     pub fn constants(self) -> [(&'static str, f64); 1] {
         [("MATERIAL_LOBES", self as u32 as f64)]
+    }
+
+    /// Whether the kernel shades the sheen and clearcoat layers.
+    pub fn layered(self) -> bool {
+        self as u32 & LOBES_LAYERS != 0
+    }
+
+    /// The least choice that shades what `self` and `other` both need.
+    pub fn union(self, other: Self) -> Self {
+        let level = (self as u32 & LOBES_LEVEL).max(other as u32 & LOBES_LEVEL);
+        let layers = (self as u32 | other as u32) & LOBES_LAYERS;
+        // Layers come with at least the extension factors (the level-0 kernel reads no extension data).
+        let value = if layers != 0 {
+            level.max(1) | layers
+        } else {
+            level
+        };
+        Self::ALL
+            .into_iter()
+            .find(|k| *k as u32 == value)
+            .unwrap_or(Self::LayeredTextured)
+    }
+
+    fn index(self) -> usize {
+        Self::ALL.iter().position(|k| *k == self).unwrap_or(0)
     }
 
     /// The least the materials need.
     pub fn of(materials: &[GpuMaterial]) -> Self {
         let core = gpu_material(&crate::scene::Material::default(), &TextureSlots::default());
         materials.iter().fold(Self::Core, |need, m| {
-            let textured = [
+            let textures = [
                 m.transmission_texture,
                 m.specular_texture,
                 m.specular_color_texture,
-            ]
-            .iter()
-            .any(|&t| t != NONE);
-            let factors = m.specular_f0 != core.specular_f0
+            ];
+            let layer_textures = [
+                m.clearcoat_texture,
+                m.clearcoat_roughness_texture,
+                m.clearcoat_normal_texture,
+                m.sheen_color_texture,
+                m.sheen_roughness_texture,
+            ];
+            let factors = m.flags & MATERIAL_UNLIT != 0
+                || m.specular_f0 != core.specular_f0
                 || m.specular_weight != core.specular_weight
                 || m.attenuation != core.attenuation
                 || m.refraction_ior != core.refraction_ior
                 || m.transmission != core.transmission;
-            need.max(if textured {
-                Self::Textured
-            } else if factors {
-                Self::Factors
-            } else {
-                Self::Core
-            })
+            // A layer is there when its factor or colour is not 0 (its textures only multiply those).
+            let layers = m.clearcoat > 0.0 || m.sheen_color.iter().any(|&c| c > 0.0);
+            let textured = textures.iter().any(|&t| t != NONE)
+                || (layers && layer_textures.iter().any(|&t| t != NONE));
+            let this = match (layers, textured, factors) {
+                (true, true, _) => Self::LayeredTextured,
+                (true, false, _) => Self::LayeredFactors,
+                (false, true, _) => Self::Textured,
+                (false, false, true) => Self::Factors,
+                (false, false, false) => Self::Core,
+            };
+            need.union(this)
         })
     }
 }
@@ -59,7 +108,7 @@ pub struct LobeKernels {
     label: &'static str,
     entry: &'static str,
     module: ComputeModule,
-    pipelines: [Option<wgpu::ComputePipeline>; 3],
+    pipelines: [Option<wgpu::ComputePipeline>; 5],
 }
 
 impl LobeKernels {
@@ -80,7 +129,7 @@ impl LobeKernels {
 
     /// The kernel for `lobes`, compiled now if it has not been.
     pub fn get(&mut self, lobes: MaterialLobes) -> &wgpu::ComputePipeline {
-        self.pipelines[lobes as usize].get_or_insert_with(|| {
+        self.pipelines[lobes.index()].get_or_insert_with(|| {
             self.module
                 .pipeline(self.label, self.entry, &lobes.constants())
         })
@@ -88,7 +137,7 @@ impl LobeKernels {
 
     /// The kernel for `lobes` if [`Self::get`] compiled it.
     pub fn compiled(&self, lobes: MaterialLobes) -> Option<&wgpu::ComputePipeline> {
-        self.pipelines[lobes as usize].as_ref()
+        self.pipelines[lobes.index()].as_ref()
     }
 }
 
@@ -96,7 +145,7 @@ impl LobeKernels {
 mod tests {
     use super::*;
     use crate::render::gpu_scene::{TextureSlots, gpu_material};
-    use crate::scene::material_extensions::{Specular, Transmission};
+    use crate::scene::material_extensions::{Clearcoat, Sheen, Specular, Transmission};
     use crate::scene::{Material, TextureRef};
 
     fn need(m: &Material) -> MaterialLobes {
@@ -125,5 +174,37 @@ mod tests {
             color_texture: None,
         });
         assert_eq!(need(&m), MaterialLobes::Textured);
+        m.extensions.clearcoat = Some(Clearcoat {
+            factor: 1.0,
+            texture: None,
+            roughness: 0.0,
+            roughness_texture: None,
+            normal_texture: None,
+            normal_scale: 1.0,
+        });
+        assert_eq!(need(&m), MaterialLobes::LayeredTextured);
+        m.extensions.specular = None;
+        assert_eq!(need(&m), MaterialLobes::LayeredFactors);
+        // A layer of factor 0 is no layer, whatever its textures.
+        m.extensions.clearcoat = None;
+        m.extensions.transmission = None;
+        m.extensions.sheen = Some(Sheen {
+            color: glam::Vec3::ZERO,
+            color_texture: Some(TextureRef::new(0, 0)),
+            roughness: 0.5,
+            roughness_texture: None,
+        });
+        assert_eq!(need(&m), MaterialLobes::Core);
+        m.extensions.sheen.as_mut().unwrap().color = glam::Vec3::splat(0.5);
+        assert_eq!(need(&m), MaterialLobes::LayeredTextured);
+    }
+
+    #[test]
+    fn union_keeps_every_need() {
+        use MaterialLobes::*;
+        assert_eq!(Textured.union(LayeredFactors), LayeredTextured);
+        assert_eq!(Factors.union(Core), Factors);
+        assert_eq!(LayeredFactors.union(Factors), LayeredFactors);
+        assert!(LayeredFactors.layered() && !Textured.layered());
     }
 }

@@ -273,8 +273,8 @@ fn apply_material(j: &mut json::Material, m: &Material) {
 }
 
 /// Writes the material extensions the renderer shades with (and the inspector edits) over the JSON material:
-/// IOR, transmission, volume and specular, added, changed or removed as the material has them. Texture
-/// references the editor turned off are removed. Returns the names of those in use.
+/// IOR, transmission, volume, specular, clearcoat and sheen, added, changed or removed as the material has them.
+/// Texture references the editor turned off are removed. Returns the names of those in use.
 fn apply_rendered_extensions(j: &mut json::Material, m: &Material) -> Vec<&'static str> {
     use json::extensions::material as ext;
     let e = &m.extensions;
@@ -328,12 +328,79 @@ fn apply_rendered_extensions(j: &mut json::Material, m: &Material) -> Vec<&'stat
             used.push("KHR_materials_volume");
         }
     }
+    let coat = e.clearcoat.as_ref().map(|c| {
+        let factors = [
+            ("clearcoatFactor", c.factor),
+            ("clearcoatRoughnessFactor", c.roughness),
+        ];
+        let textures = [
+            ("clearcoatTexture", c.texture.is_some()),
+            ("clearcoatRoughnessTexture", c.roughness_texture.is_some()),
+            ("clearcoatNormalTexture", c.normal_texture.is_some()),
+        ];
+        let mut object = layer_json(x.others.get("KHR_materials_clearcoat"), &factors, &textures);
+        if let Some(normal) = object
+            .get_mut("clearcoatNormalTexture")
+            .and_then(serde_json::Value::as_object_mut)
+        {
+            normal.insert("scale".into(), c.normal_scale.into());
+        }
+        object
+    });
+    let sheen = e.sheen.as_ref().map(|s| {
+        let mut object = layer_json(
+            x.others.get("KHR_materials_sheen"),
+            &[("sheenRoughnessFactor", s.roughness)],
+            &[
+                ("sheenColorTexture", s.color_texture.is_some()),
+                ("sheenRoughnessTexture", s.roughness_texture.is_some()),
+            ],
+        );
+        object.insert(
+            "sheenColorFactor".into(),
+            s.color.to_array().to_vec().into(),
+        );
+        object
+    });
+    for (name, layer) in [
+        ("KHR_materials_clearcoat", coat),
+        ("KHR_materials_sheen", sheen),
+    ] {
+        x.others.remove(name);
+        if let Some(object) = layer {
+            x.others
+                .insert(name.into(), serde_json::Value::Object(object));
+            used.push(name);
+        }
+    }
     let empty =
         serde_json::to_value(&*x).is_ok_and(|v| v.as_object().is_some_and(|o| o.is_empty()));
     if empty {
         j.extensions = None;
     }
     used
+}
+
+/// A layer extension's JSON (the gltf crate has no typed form of clearcoat or sheen): the file's object with
+/// `factors` set and the texture entries whose slot the editor turned off (`false`) removed.
+fn layer_json(
+    file: Option<&serde_json::Value>,
+    factors: &[(&str, f32)],
+    textures: &[(&str, bool)],
+) -> serde_json::Map<String, serde_json::Value> {
+    let mut object = file
+        .and_then(serde_json::Value::as_object)
+        .cloned()
+        .unwrap_or_default();
+    for &(key, value) in factors {
+        object.insert(key.into(), value.into());
+    }
+    for &(key, present) in textures {
+        if !present {
+            object.remove(key);
+        }
+    }
+    object
 }
 
 /// Where the original buffers and images are read from.

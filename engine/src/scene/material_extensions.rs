@@ -494,6 +494,9 @@ pub const RENDERED: &[&str] = &[
     "KHR_materials_specular",
     "KHR_materials_transmission",
     "KHR_materials_volume",
+    "KHR_materials_clearcoat",
+    "KHR_materials_sheen",
+    "KHR_materials_unlit",
 ];
 
 /// One line per material extension that the file uses but the renderer does not shade with yet, naming the

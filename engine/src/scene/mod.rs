@@ -135,6 +135,10 @@ pub struct Material {
 impl Material {
     /// Emitted radiance (before the emissive texture): factor x strength.
     pub fn emitted_radiance(&self) -> Vec3 {
+        // An unlit material shows its base colour instead (KHR_materials_unlit): it is no light.
+        if self.extensions.unlit {
+            return Vec3::ZERO;
+        }
         self.emissive * self.emissive_strength
     }
 

@@ -75,9 +75,12 @@ impl TextureSlots {
     }
 }
 
-/// Every texture slot the shader samples: the core four, then transmission, specular and specular colour.
-fn gpu_texture_slots(m: &crate::scene::Material) -> [Option<crate::scene::TextureRef>; 7] {
+/// Every texture slot the shader samples: the core four, then transmission, specular and specular colour, then
+/// clearcoat, clearcoat roughness, clearcoat normal, sheen colour and sheen roughness.
+fn gpu_texture_slots(m: &crate::scene::Material) -> [Option<crate::scene::TextureRef>; 12] {
     let e = &m.extensions;
+    let coat = e.clearcoat.as_ref();
+    let sheen = e.sheen.as_ref();
     [
         m.base_color_texture,
         m.metallic_roughness_texture,
@@ -86,6 +89,11 @@ fn gpu_texture_slots(m: &crate::scene::Material) -> [Option<crate::scene::Textur
         e.transmission.as_ref().and_then(|t| t.texture),
         e.specular.as_ref().and_then(|s| s.texture),
         e.specular.as_ref().and_then(|s| s.color_texture),
+        coat.and_then(|c| c.texture),
+        coat.and_then(|c| c.roughness_texture),
+        coat.and_then(|c| c.normal_texture),
+        sheen.and_then(|s| s.color_texture),
+        sheen.and_then(|s| s.roughness_texture),
     ]
 }
 
@@ -138,6 +146,8 @@ pub fn gpu_material(m: &crate::scene::Material, textures: &TextureSlots) -> GpuM
     let (specular_f0, specular_weight, attenuation, refraction_ior, transmission) =
         gpu_extension_factors(m);
     let slots = gpu_texture_slots(m);
+    let coat = m.extensions.clearcoat.as_ref();
+    let sheen = m.extensions.sheen.as_ref();
     GpuMaterial {
         base_color: m.base_color.to_array(),
         emissive: m.emitted_radiance().to_array(),
@@ -148,6 +158,11 @@ pub fn gpu_material(m: &crate::scene::Material, textures: &TextureSlots) -> GpuM
         flags: alpha_flags
             | if m.double_sided {
                 MATERIAL_DOUBLE_SIDED
+            } else {
+                0
+            }
+            | if m.extensions.unlit {
+                MATERIAL_UNLIT
             } else {
                 0
             },
@@ -163,6 +178,16 @@ pub fn gpu_material(m: &crate::scene::Material, textures: &TextureSlots) -> GpuM
         transmission_texture: textures.slot_word(slots[4]),
         specular_texture: textures.slot_word(slots[5]),
         specular_color_texture: textures.slot_word(slots[6]),
+        clearcoat: coat.map_or(0.0, |c| c.factor),
+        clearcoat_roughness: coat.map_or(0.0, |c| c.roughness),
+        clearcoat_texture: textures.slot_word(slots[7]),
+        clearcoat_roughness_texture: textures.slot_word(slots[8]),
+        sheen_color: sheen.map_or([0.0; 3], |s| s.color.to_array()),
+        sheen_roughness: sheen.map_or(0.0, |s| s.roughness),
+        clearcoat_normal_texture: textures.slot_word(slots[9]),
+        clearcoat_normal_scale: coat.map_or(1.0, |c| c.normal_scale),
+        sheen_color_texture: textures.slot_word(slots[10]),
+        sheen_roughness_texture: textures.slot_word(slots[11]),
     }
 }
 
