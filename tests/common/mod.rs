@@ -4,6 +4,7 @@
 
 pub mod cornell;
 pub mod denoising;
+pub mod sphere_reference;
 
 use raykin::camera::CameraChoice;
 use raykin::gpu::GpuContext;

@@ -6,13 +6,10 @@
 //! wrote the scene, the map and the two reference halves. See tests/reference/glass/README.md.
 
 use crate::common::cornell::assert_agree_within_noise;
+use crate::common::sphere_reference::*;
 use crate::common::*;
-use glam::Vec3;
-use raykin::camera::{CameraChoice, CameraView};
-use raykin::render::{Environment, RenderSettings};
 use std::path::PathBuf;
 
-const SIZE: u32 = 64;
 /// raykin depth = Mitsuba max_depth - 1 (reference.json records 9).
 const DEPTH: u32 = 8;
 /// Samples per pixel in each of our two halves.
@@ -22,82 +19,6 @@ const SPHERE_TOLERANCE: f64 = 0.03;
 
 fn dir() -> PathBuf {
     repo_root().join("tests/reference/glass")
-}
-
-fn reference_info() -> serde_json::Value {
-    serde_json::from_str(&std::fs::read_to_string(dir().join("reference.json")).unwrap()).unwrap()
-}
-
-fn f32s(v: &serde_json::Value) -> Vec<f32> {
-    v.as_array()
-        .unwrap()
-        .iter()
-        .map(|x| x.as_f64().unwrap() as f32)
-        .collect()
-}
-
-fn vec3(v: &serde_json::Value) -> Vec3 {
-    Vec3::from_slice(&f32s(v))
-}
-
-/// The reference's camera, read from reference.json.
-fn camera(info: &serde_json::Value) -> CameraChoice {
-    let c = &info["camera"];
-    assert_eq!(c["up"], serde_json::json!([0.0, 1.0, 0.0]));
-    CameraChoice::LookAt {
-        eye: vec3(&c["eye"]),
-        target: vec3(&c["target"]),
-        yfov: (c["yfov_deg"].as_f64().unwrap() as f32).to_radians(),
-    }
-}
-
-fn settings(info: &serde_json::Value, seed: u32) -> RenderSettings {
-    let env = &info["envmap"];
-    RenderSettings {
-        width: SIZE,
-        height: SIZE,
-        max_depth: DEPTH,
-        environment: Environment::Map(raykin::environment::MapSettings {
-            path: dir().join(env["file"].as_str().unwrap()),
-            rotation_degrees: env["rotation_degrees"].as_f64().unwrap() as f32,
-            strength: 1.0,
-        }),
-        seed,
-        ..Default::default()
-    }
-}
-
-/// Indices of the pixels whose four corner rays all hit the exact sphere (the glass's own pixels, no edge).
-fn sphere_pixels(view: &CameraView, centre: Vec3, radius: f32) -> Vec<usize> {
-    let hits = |x: u32, y: u32| {
-        let (o, d) = view.ray_through(x as f32, y as f32, SIZE, SIZE);
-        let oc = o - centre;
-        let b = oc.dot(d);
-        b * b - (oc.length_squared() - radius * radius) > 0.0
-    };
-    (0..SIZE * SIZE)
-        .filter(|&i| {
-            let (x, y) = (i % SIZE, i / SIZE);
-            hits(x, y) && hits(x + 1, y) && hits(x, y + 1) && hits(x + 1, y + 1)
-        })
-        .map(|i| i as usize)
-        .collect()
-}
-
-/// Per-channel mean over `pixels` of the average of two halves, and its standard error estimated from the
-/// halves' per-pixel differences (pixels independent: Var(mean) = sum (a - b)^2 / 4 / n^2).
-fn masked_mean(a: &[[f32; 3]], b: &[[f32; 3]], pixels: &[usize]) -> ([f64; 3], [f64; 3]) {
-    let n = pixels.len() as f64;
-    let mut mean = [0.0; 3];
-    let mut var = [0.0; 3];
-    for &p in pixels {
-        for c in 0..3 {
-            let (x, y) = (a[p][c] as f64, b[p][c] as f64);
-            mean[c] += 0.5 * (x + y) / n;
-            var[c] += (x - y) * (x - y) / 4.0 / (n * n);
-        }
-    }
-    (mean, var.map(f64::sqrt))
 }
 
 /// The scene file is what reference.json says Mitsuba rendered: the glass's extensions and values.
@@ -126,7 +47,7 @@ fn check_scene_file(info: &serde_json::Value) {
 
 #[test]
 fn glass_sphere_with_absorption_matches_mitsuba() {
-    let info = reference_info();
+    let info = reference_info(&dir());
     assert_eq!(
         info["integrator"]["max_depth"].as_u64(),
         Some(DEPTH as u64 + 1)
@@ -139,8 +60,20 @@ fn glass_sphere_with_absorption_matches_mitsuba() {
     let (ctx, _gpu) = gpu();
     let choice = camera(&info);
     let start = std::time::Instant::now();
-    let a = render(&ctx, &scene, settings(&info, 1), &choice, SPP);
-    let b = render(&ctx, &scene, settings(&info, 2), &choice, SPP);
+    let a = render(
+        &ctx,
+        &scene,
+        settings(&dir(), &info, DEPTH, 1),
+        &choice,
+        SPP,
+    );
+    let b = render(
+        &ctx,
+        &scene,
+        settings(&dir(), &info, DEPTH, 2),
+        &choice,
+        SPP,
+    );
     eprintln!(
         "glass: 2 x {SPP} spp, depth {DEPTH}, in {:.1} s",
         start.elapsed().as_secs_f64()
@@ -155,10 +88,14 @@ fn glass_sphere_with_absorption_matches_mitsuba() {
     let (ra, rb) = (read("glass_a.exr"), read("glass_b.exr"));
 
     // The glass's own pixels, found through raykin's camera; the script found as many through its own.
-    let view =
-        raykin::headless::HeadlessApp::new(ctx.clone(), scene.clone(), settings(&info, 0), &choice)
-            .unwrap()
-            .camera();
+    let view = raykin::headless::HeadlessApp::new(
+        ctx.clone(),
+        scene.clone(),
+        settings(&dir(), &info, DEPTH, 0),
+        &choice,
+    )
+    .unwrap()
+    .camera();
     let sphere = &info["sphere"];
     let pixels = sphere_pixels(
         &view,
