@@ -241,6 +241,15 @@ pub struct BenchArgs {
     /// Error-vs-time part: the largest spp of each curve (a power of two), instead of the suite's.
     #[arg(long, value_parser = at_least_one())]
     pub error_max_spp: Option<u32>,
+    /// Write the static scenes for Mitsuba 3 into this folder (one subfolder per scene: geometry, textures,
+    /// environment, camera, the error part's size and sample counts), then stop. Render them with
+    /// `scripts/mitsuba-side-by-side.py DIR`, then compare with `--mitsuba DIR`.
+    #[arg(long, value_name = "DIR")]
+    pub export_mitsuba: Option<PathBuf>,
+    /// Error-vs-time part: add the Mitsuba renders that `scripts/mitsuba-side-by-side.py` left in this folder
+    /// (a curve per scene, and the side-by-side table: samples/s, variance, time to equal error).
+    #[arg(long, value_name = "DIR")]
+    pub mitsuba: Option<PathBuf>,
 }
 
 /// `--deform`: where deformable meshes are skinned, morphed and refit.

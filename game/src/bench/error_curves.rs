@@ -66,6 +66,9 @@ pub struct CurvePoint {
     pub spp: u32,
     /// Cumulative trace time (median over repeats), ms.
     pub time_ms: f64,
+    /// Cumulative wall time of the frames (median over repeats), ms: what the trace time leaves out (frame
+    /// set-up, submission, the other passes, waiting for the GPU).
+    pub wall_ms: f64,
     /// relMSE of the tone-mapped image against the tone-mapped reference (median over repeats, min, max).
     pub rel_mse: f64,
     pub rel_mse_min: f64,
@@ -102,6 +105,9 @@ pub struct SceneErrors {
     pub reference_noise_rel_mse_linear: f64,
     pub repeats: usize,
     pub curves: Vec<CurveResult>,
+    /// The reference image (mean of its halves), for comparisons with other renderers.
+    #[serde(skip)]
+    pub reference_mean: Vec<[f32; 3]>,
     /// Default curve: least-squares slope of log relMSE against log spp (Monte Carlo: -1), and of log relative
     /// RMSE (= half of it; the TARGETS figure, -0.5 +- 0.05); tone-mapped, then linear radiance.
     pub slope_rel_mse_vs_spp: Option<f64>,
@@ -138,12 +144,9 @@ pub fn measure(
         let mut settings = base.clone();
         (c.apply)(&mut settings);
         let spf = settings.spp_per_frame.max(1);
-        let checkpoints: Vec<u32> = (0..20)
-            .map(|k| 1u32 << k)
-            .filter(|&s| s >= spf && s <= suite.error_max_spp.max(spf))
-            .collect();
-        // runs[r][k] = (time, relMSE, FLIP, linear relMSE) at checkpoint k of repeat r.
-        let mut runs: Vec<Vec<[f64; 4]>> = Vec::new();
+        let checkpoints = checkpoints(spf, suite.error_max_spp);
+        // runs[r][k] = (time, relMSE, FLIP, linear relMSE, wall time) at checkpoint k of repeat r.
+        let mut runs: Vec<Vec<[f64; 5]>> = Vec::new();
         let oidn = settings.denoise && settings.denoiser == DenoiserKind::Oidn;
         for repeat in 0..suite.error_repeats {
             settings.seed = 1000 + 100 * index as u32 + repeat as u32;
@@ -159,16 +162,17 @@ pub fn measure(
             // and start the curve from a cleared accumulation.
             app.step();
             app.restart_accumulation();
-            let (mut elapsed_ms, mut run) = (0.0, Vec::new());
+            let (mut elapsed_ms, mut wall_ms, mut run) = (0.0, 0.0, Vec::new());
             let mut denoise_times = Vec::new();
             for &target in &checkpoints {
                 while app.samples() < target {
                     let start = std::time::Instant::now();
                     app.step();
+                    app.ctx.wait_idle();
+                    wall_ms += start.elapsed().as_secs_f64() * 1e3;
                     match app.pass_times() {
                         Some(p) => elapsed_ms += p.trace_ms,
                         None => {
-                            app.ctx.wait_idle();
                             elapsed_ms += start.elapsed().as_secs_f64() * 1e3;
                             timing_source = "cpu-wall";
                         }
@@ -190,12 +194,15 @@ pub fn measure(
                 let err = rel_mse(&display, &reference_display);
                 let flip = flip_mean(&reference_srgb8, &srgb8(&display), w, h);
                 denoise_times.push(denoise_ms);
-                run.push([elapsed_ms, err, flip, rel_mse(&image, &r.mean)]);
+                run.push([elapsed_ms, err, flip, rel_mse(&image, &r.mean), wall_ms]);
             }
             // A denoise costs the same at any spp: its median time is added to every point (one pass's
             // jitter would otherwise outweigh the trace time between the first checkpoints).
             let denoise_ms = median(&denoise_times);
-            run.iter_mut().for_each(|p| p[0] += denoise_ms);
+            run.iter_mut().for_each(|p| {
+                p[0] += denoise_ms;
+                p[4] += denoise_ms;
+            });
             runs.push(run);
         }
         if runs.is_empty() {
@@ -212,6 +219,7 @@ pub fn measure(
                 CurvePoint {
                     spp,
                     time_ms: median(&t),
+                    wall_ms: median(&at(4)),
                     rel_mse: median(&e),
                     rel_mse_min: e_min,
                     rel_mse_max: e_max,
@@ -250,19 +258,8 @@ pub fn measure(
         .iter()
         .map(|p| (p.time_ms, (p.rel_mse - r.noise).max(1e-12)))
         .collect();
-    let tail = &time_curve[time_curve.len() / 2..];
-    let time_fit = log_log_fit(tail);
-    let reach = |target: f64| -> (Option<f64>, bool) {
-        match time_to_reach(&time_curve, target) {
-            Some(t) => (Some(t), false),
-            None => match time_fit {
-                Some((b, a)) if b < 0.0 => (Some(((target.ln() - a) / b).exp()), true),
-                _ => (None, false),
-            },
-        }
-    };
-    let (t2, t2x) = reach(0.01);
-    let (t3, t3x) = reach(0.001);
+    let (t2, t2x) = time_to_rel_mse(&time_curve, 0.01);
+    let (t3, t3x) = time_to_rel_mse(&time_curve, 0.001);
     Ok(SceneErrors {
         scene: scene.name.clone(),
         width: w,
@@ -276,6 +273,7 @@ pub fn measure(
         reference_noise_rel_mse_linear: r.noise_linear,
         repeats: suite.error_repeats,
         curves,
+        reference_mean: r.mean,
         slope_rel_mse_vs_spp: slope,
         slope_rel_rmse_vs_spp: slope.map(|s| s * 0.5),
         slope_rel_rmse_linear_vs_spp: slope_linear.map(|s| s * 0.5),
@@ -284,6 +282,27 @@ pub fn measure(
         ms_to_rel_mse_0_001: t3,
         ms_to_rel_mse_0_001_extrapolated: t3x,
     })
+}
+
+/// The sample counts a curve is measured at: powers of two from `spp_per_frame` to `max_spp`.
+pub fn checkpoints(spp_per_frame: u32, max_spp: u32) -> Vec<u32> {
+    (0..20)
+        .map(|k| 1u32 << k)
+        .filter(|&s| s >= spp_per_frame && s <= max_spp.max(spp_per_frame))
+        .collect()
+}
+
+/// Time until `curve` ((time, relMSE with the reference noise subtracted), in time order) reaches `target`:
+/// measured where it got there, else extrapolated along the power law fitted to its second half (then the
+/// flag is true).
+pub fn time_to_rel_mse(curve: &[(f64, f64)], target: f64) -> (Option<f64>, bool) {
+    if let Some(t) = time_to_reach(curve, target) {
+        return (Some(t), false);
+    }
+    match log_log_fit(&curve[curve.len() / 2..]) {
+        Some((b, a)) if b < 0.0 => (Some(((target.ln() - a) / b).exp()), true),
+        _ => (None, false),
+    }
 }
 
 fn median(v: &[f64]) -> f64 {

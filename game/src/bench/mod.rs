@@ -13,6 +13,7 @@ mod charts;
 mod error_curves;
 mod frame_loop;
 mod metrics;
+mod mitsuba;
 pub mod motion;
 mod oidn;
 mod scaling;
@@ -72,6 +73,7 @@ struct Results {
     rows: Vec<frame_loop::FrameRow>,
     table: Vec<TableRow>,
     error_vs_time: Vec<error_curves::SceneErrors>,
+    mitsuba_side_by_side: Vec<mitsuba::SideBySide>,
     bvh_presets: Vec<bvh_quality::PresetRow>,
     refit_vs_rebuild: Option<bvh_quality::RefitResult>,
     scaling_triangles: Vec<scaling::TriangleScalingRow>,
@@ -114,6 +116,35 @@ fn at_size(base: &RenderSettings, (width, height): (u32, u32)) -> RenderSettings
         height,
         ..base.clone()
     }
+}
+
+/// `--export-mitsuba DIR`: each static scene as the error part renders it, written for Mitsuba.
+fn export_mitsuba(
+    ctx: &GpuContext,
+    loaded: &[BenchScene],
+    base: &RenderSettings,
+    suite: &suite::Suite,
+    dir: &Path,
+) -> Result<()> {
+    let (width, height) = suite.error_size;
+    let renders = mitsuba::export::Renders {
+        width,
+        height,
+        max_depth: base.max_depth,
+        checkpoints: error_curves::checkpoints(1, suite.error_max_spp),
+        reference_spp: suite.reference_spp,
+    };
+    for scene in loaded.iter().filter(|s| !s.animated()) {
+        let app = open_app(ctx, scene, at_size(base, (width, height)))?;
+        let settings = RenderSettings {
+            environment: scene.environment.clone(),
+            ..base.clone()
+        };
+        let out = dir.join(&scene.name);
+        mitsuba::export::export(scene, &app.camera(), &settings, &renders, &out)?;
+        eprintln!("raykin bench: {}: exported for Mitsuba to {}", scene.name, out.display());
+    }
+    Ok(())
 }
 
 fn wants(args: &BenchArgs, part: &str) -> bool {
@@ -182,6 +213,9 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         eprintln!("raykin bench: loading {name}");
         loaded.push(scenes::resolve(name, &args.assets)?);
     }
+    if let Some(dir) = &args.export_mitsuba {
+        return export_mitsuba(&ctx, &loaded, &base, &suite, dir);
+    }
     let mut charts = Vec::new();
     let mut chart = |name: &str, draw: &dyn Fn(&Path) -> Result<()>| -> Result<()> {
         let path = charts_dir.join(name);
@@ -234,13 +268,19 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     }
 
     let mut errors = Vec::new();
+    let mut side_by_side = Vec::new();
     if wants(args, "errors") {
         let (w, h) = suite.error_size;
         let settings = at_size(&base, (w, h));
         let cache = args.cache.clone();
         for scene in loaded.iter().filter(|s| !s.animated()) {
             eprintln!("raykin bench: {}: error vs time at {w}x{h}", scene.name);
-            let e = error_curves::measure(&ctx, scene, &settings, &suite, &cache, &args.curve)?;
+            let mut e =
+                error_curves::measure(&ctx, scene, &settings, &suite, &cache, &args.curve)?;
+            if let Some(dir) = &args.mitsuba {
+                let reference = std::mem::take(&mut e.reference_mean);
+                side_by_side.extend(mitsuba::compare(dir, &mut e, &reference)?);
+            }
             let file = format!("error-vs-time-{}.png", scene.name);
             chart(&file, &|p| {
                 charts::error_vs_time(
@@ -443,6 +483,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         rows,
         table,
         error_vs_time: errors,
+        mitsuba_side_by_side: side_by_side,
         bvh_presets: presets,
         refit_vs_rebuild: refit,
         scaling_triangles: tri_scaling,
@@ -675,6 +716,16 @@ per hit), per size.\n";
 relMSE and FLIP), settled = mean over the evaluated frames from K/4 (before the lamp switch); GPU ms: every pass of \
 the frame (deform, G-buffer, ReSTIR, gradients, trace, temporal, spatial filter, tone map); disoccluded = pixels \
 whose history (reprojection without gradients) is at most 8 frames long.\n";
+    }
+    if !r.mitsuba_side_by_side.is_empty() {
+        s += "\n### Mitsuba 3 side by side\n\n";
+        s += &mitsuba::markdown(&r.mitsuba_side_by_side);
+        s += "\n\nEach renderer's tone-mapped relMSE against its own two-half reference (its noise subtracted); \
+throughput at the largest common sample count; variance ratio = (relMSE x spp) raykin / Mitsuba there; time to equal \
+error = median over each curve's second half of relMSE x time, raykin / Mitsuba (below 1: raykin is faster), with \
+raykin's time from GPU timestamps of the trace pass or the wall time of its frames, Mitsuba's the wall time of \
+`mi.render` after a warm-up render; references apart = relMSE of the two converged images against each other, both \
+noises subtracted.\n";
     }
     s += &oidn_markdown(r);
     s

@@ -1,0 +1,241 @@
+//! Mitsuba 3 side by side: the bench's static scenes rendered by Mitsuba on the same machine, and raykin's
+//! error-vs-time curve set beside Mitsuba's.
+//!
+//! Three steps, so that Mitsuba (Python) and raykin never share a process: `raykin bench --export-mitsuba
+//! DIR` writes each scene ([`export`]); `scripts/mitsuba-side-by-side.py DIR` renders in Mitsuba, with the
+//! glTF BRDF plugin of tests/reference, a two-half reference and one render per curve sample count, each
+//! timed on its own; `raykin bench --parts errors --mitsuba DIR` reads those images and measures them with
+//! the same metric as raykin's curves ([`compare`]).
+//!
+//! Each renderer's error is taken against its own converged image (both halves' noise subtracted), so the
+//! time-to-equal-error ratio compares estimators and speed, not the small differences between the two
+//! models; those differences are reported on their own (`references_rel_mse`).
+
+pub mod export;
+
+use super::error_curves::{CurvePoint, CurveResult, SceneErrors, time_to_rel_mse};
+use super::metrics::{flip_mean, rel_mse, srgb8, tonemap};
+use anyhow::{Context, Result};
+use std::path::Path;
+
+/// What `scripts/mitsuba-side-by-side.py` writes into `DIR/SCENE/mitsuba.json`.
+#[derive(serde::Deserialize)]
+struct MitsubaRun {
+    variant: String,
+    mitsuba_version: String,
+    device: String,
+    reference: MitsubaReference,
+    points: Vec<MitsubaPoint>,
+}
+
+#[derive(serde::Deserialize)]
+struct MitsubaReference {
+    spp: u32,
+    files: [String; 2],
+}
+
+#[derive(serde::Deserialize)]
+struct MitsubaPoint {
+    spp: u32,
+    seconds: f64,
+    file: String,
+}
+
+/// One scene's comparison (a row of docs/BENCHMARKS.md's side-by-side table).
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct SideBySide {
+    pub scene: String,
+    pub mitsuba_variant: String,
+    pub mitsuba_version: String,
+    pub mitsuba_device: String,
+    pub mitsuba_reference_spp: u32,
+    /// Tone-mapped relMSE of Mitsuba's reference (from its halves).
+    pub mitsuba_reference_noise: f64,
+    /// Samples per second at the largest common sample count: raykin by GPU trace time and by wall time of
+    /// its frames, Mitsuba by the wall time of `mi.render` (kernel compilation excluded).
+    pub raykin_samples_per_s_trace: f64,
+    pub raykin_samples_per_s_wall: f64,
+    pub mitsuba_samples_per_s: f64,
+    /// Per-sample variance ratio, raykin / Mitsuba: (relMSE - noise) x spp at the largest common count.
+    pub variance_ratio: f64,
+    /// Time to equal error, raykin / Mitsuba: (relMSE - noise) x time over the curves' second halves
+    /// (median), by raykin's trace time and by its wall time. Below 1: raykin is faster.
+    pub time_to_equal_error_trace: f64,
+    pub time_to_equal_error_wall: f64,
+    /// Milliseconds to reach tone-mapped relMSE 0.01 (noise subtracted; extrapolated along the fitted power law
+    /// where a curve stopped short): raykin (trace) and Mitsuba.
+    pub raykin_ms_to_0_01: Option<f64>,
+    pub mitsuba_ms_to_0_01: Option<f64>,
+    /// How far apart the two converged images are: tone-mapped relMSE of raykin's reference against
+    /// Mitsuba's, both noises subtracted, and the ratio of their mean radiance per channel.
+    pub references_rel_mse: f64,
+    pub reference_mean_ratio: [f64; 3],
+    /// What the export could not give Mitsuba (scene.json's `unsupported`).
+    pub unsupported: Vec<String>,
+}
+
+/// Reads `dir/SCENE/mitsuba.json` when it is there and compares; adds Mitsuba's curve to `errors`.
+pub fn compare(
+    dir: &Path,
+    errors: &mut SceneErrors,
+    raykin_reference: &[[f32; 3]],
+) -> Result<Option<SideBySide>> {
+    let scene_dir = dir.join(&errors.scene);
+    let run_path = scene_dir.join("mitsuba.json");
+    if !run_path.exists() {
+        eprintln!(
+            "raykin bench: {}: no Mitsuba renders in {} (run scripts/mitsuba-side-by-side.py first)",
+            errors.scene,
+            scene_dir.display()
+        );
+        return Ok(None);
+    }
+    let run: MitsubaRun = serde_json::from_slice(
+        &std::fs::read(&run_path).with_context(|| format!("{}: cannot read", run_path.display()))?,
+    )
+    .with_context(|| format!("{}: not a Mitsuba run", run_path.display()))?;
+    let description: serde_json::Value = serde_json::from_slice(
+        &std::fs::read(scene_dir.join("scene.json")).context("scene.json of the export")?,
+    )?;
+    let unsupported = description["unsupported"]
+        .as_array()
+        .map(|a| a.iter().filter_map(|v| v.as_str().map(String::from)).collect())
+        .unwrap_or_default();
+    let (w, h) = (errors.width, errors.height);
+    let read = |file: &str| -> Result<Vec<[f32; 3]>> {
+        let (iw, ih, image) = raykin::image_io::read_exr(&scene_dir.join(file))?;
+        anyhow::ensure!(
+            (iw, ih) == (w, h),
+            "{file}: {iw}x{ih}, the bench measures {w}x{h}: export again"
+        );
+        Ok(image)
+    };
+    let halves = [read(&run.reference.files[0])?, read(&run.reference.files[1])?];
+    let mean: Vec<[f32; 3]> = halves[0]
+        .iter()
+        .zip(&halves[1])
+        .map(|(a, b)| [0, 1, 2].map(|c| 0.5 * (a[c] + b[c])))
+        .collect();
+    let noise = rel_mse(&tonemap(&halves[0]), &tonemap(&halves[1])) / 4.0;
+    let display = tonemap(&mean);
+    let display8 = srgb8(&display);
+    let mut points = Vec::new();
+    for p in &run.points {
+        let image = read(&p.file)?;
+        let shown = tonemap(&image);
+        let e = rel_mse(&shown, &display);
+        let flip = flip_mean(&display8, &srgb8(&shown), w, h);
+        points.push(CurvePoint {
+            spp: p.spp,
+            time_ms: p.seconds * 1e3,
+            wall_ms: p.seconds * 1e3,
+            rel_mse: e,
+            rel_mse_min: e,
+            rel_mse_max: e,
+            rel_mse_linear: rel_mse(&image, &mean),
+            flip,
+            flip_min: flip,
+            flip_max: flip,
+        });
+    }
+    points.sort_by_key(|p| p.spp);
+    anyhow::ensure!(
+        !points.is_empty(),
+        "{}: no curve points",
+        run_path.display()
+    );
+    let raykin = &errors.curves[0].points;
+    let excess = |p: &CurvePoint, noise: f64| (p.rel_mse - noise).max(1e-12);
+    let common = raykin
+        .iter()
+        .filter(|r| points.iter().any(|m| m.spp == r.spp))
+        .map(|r| r.spp)
+        .max()
+        .context("raykin's and Mitsuba's curves share no sample count")?;
+    let at = |curve: &[CurvePoint]| curve.iter().find(|p| p.spp == common).cloned();
+    let (r, m) = (at(raykin).unwrap_or_else(|| raykin[0].clone()), at(&points).unwrap_or_else(|| points[0].clone()));
+    let pixels = (w * h) as f64 * common as f64;
+    // relMSE x time over each curve's second half: constant for an estimator converging at 1/t.
+    let efficiency = |curve: &[CurvePoint], noise: f64, time: fn(&CurvePoint) -> f64| {
+        let tail: Vec<f64> = curve[curve.len() / 2..]
+            .iter()
+            .map(|p| excess(p, noise) * time(p))
+            .collect();
+        crate::stats::Spread::of(&tail).median
+    };
+    let mitsuba_efficiency = efficiency(&points, noise, |p| p.time_ms);
+    let reference_noise = errors.reference_noise_rel_mse;
+    let references_rel_mse =
+        rel_mse(&tonemap(raykin_reference), &display) - noise - reference_noise;
+    let channel_mean = |image: &[[f32; 3]], c: usize| {
+        image.iter().map(|p| p[c] as f64).sum::<f64>() / image.len().max(1) as f64
+    };
+    let reference_mean_ratio = [0, 1, 2].map(|c| {
+        channel_mean(raykin_reference, c) / channel_mean(&mean, c).max(1e-12)
+    });
+    let mitsuba_curve: Vec<(f64, f64)> =
+        points.iter().map(|p| (p.time_ms, excess(p, noise))).collect();
+    let result = SideBySide {
+        scene: errors.scene.clone(),
+        mitsuba_variant: run.variant.clone(),
+        mitsuba_version: run.mitsuba_version,
+        mitsuba_device: run.device,
+        mitsuba_reference_spp: run.reference.spp,
+        mitsuba_reference_noise: noise,
+        raykin_samples_per_s_trace: pixels / (r.time_ms * 1e-3),
+        raykin_samples_per_s_wall: pixels / (r.wall_ms * 1e-3),
+        mitsuba_samples_per_s: pixels / (m.time_ms * 1e-3),
+        variance_ratio: excess(&r, reference_noise) / excess(&m, noise),
+        time_to_equal_error_trace: efficiency(raykin, reference_noise, |p| p.time_ms)
+            / mitsuba_efficiency,
+        time_to_equal_error_wall: efficiency(raykin, reference_noise, |p| p.wall_ms)
+            / mitsuba_efficiency,
+        raykin_ms_to_0_01: errors.ms_to_rel_mse_0_01,
+        mitsuba_ms_to_0_01: time_to_rel_mse(&mitsuba_curve, 0.01).0,
+        references_rel_mse,
+        reference_mean_ratio,
+        unsupported,
+    };
+    errors.curves.push(CurveResult {
+        name: format!("Mitsuba 3 {} (own reference)", run.variant),
+        ms_to_rel_mse_0_01: result.mitsuba_ms_to_0_01,
+        points,
+    });
+    Ok(Some(result))
+}
+
+/// The side-by-side table for summary.md and docs/BENCHMARKS.md.
+pub fn markdown(rows: &[SideBySide]) -> String {
+    let mut s = String::from(
+        "| scene | Mitsuba | samples/s raykin (trace / wall) | samples/s Mitsuba | throughput | variance ratio | time to equal error (trace / wall) | ms to relMSE 0.01 raykin / Mitsuba | references apart (relMSE; mean ratio) |\n|---|---|---|---|---|---|---|---|---|\n",
+    );
+    let ms = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.1}"));
+    for r in rows {
+        s += &format!(
+            "| {} | {} | {:.2} M / {:.2} M | {:.2} M | {:.2}x | {:.2} | **{:.2}x** / {:.2}x | {} / {} | {:.1e}; {:.3} {:.3} {:.3} |\n",
+            r.scene,
+            r.mitsuba_variant,
+            r.raykin_samples_per_s_trace / 1e6,
+            r.raykin_samples_per_s_wall / 1e6,
+            r.mitsuba_samples_per_s / 1e6,
+            r.raykin_samples_per_s_trace / r.mitsuba_samples_per_s,
+            r.variance_ratio,
+            r.time_to_equal_error_trace,
+            r.time_to_equal_error_wall,
+            ms(r.raykin_ms_to_0_01),
+            ms(r.mitsuba_ms_to_0_01),
+            r.references_rel_mse,
+            r.reference_mean_ratio[0],
+            r.reference_mean_ratio[1],
+            r.reference_mean_ratio[2],
+        );
+    }
+    for r in rows.iter().filter(|r| !r.unsupported.is_empty()) {
+        s += &format!(
+            "\n{}: not given to Mitsuba: {}.",
+            r.scene,
+            r.unsupported.join("; ")
+        );
+    }
+    s
+}
