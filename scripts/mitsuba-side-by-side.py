@@ -278,10 +278,15 @@ def main():
                                   if os.path.exists(os.path.join(args.dir, d, 'scene.json')))
     if not scenes:
         sys.exit('%s: no exported scenes (run raykin bench --export-mitsuba %s first)' % (args.dir, args.dir))
+    failed = []
     for name in scenes:
         print('mitsuba-side-by-side: %s (%s)' % (name, args.variant), file=sys.stderr)
-        run_scene(mi, dr, os.path.join(args.dir, name), args)
-    return 0
+        try:
+            run_scene(mi, dr, os.path.join(args.dir, name), args)
+        except Exception as e:  # noqa: BLE001 - one scene's failure must not lose the others
+            print('mitsuba-side-by-side: %s failed: %r' % (name, e), file=sys.stderr)
+            failed.append(name)
+    return 1 if failed else 0
 
 
 if __name__ == '__main__':

@@ -41,6 +41,9 @@ pub enum Source {
     /// `raykin::animation::interior_scene`: CesiumMan and the Fox walking in the Cornell box, lit by its
     /// light, with a lamp the motion bench switches on.
     Interior,
+    /// `raykin::animation::seed_interior_scene`: the crowd, the 1M-triangle spheres and FlightHelmets in a hall
+    /// lit by ceiling panels (~1.6M triangles).
+    SeedInterior,
     /// A file of this repository (the light tests' scenes, in tests/reference/lights).
     Repo(&'static str),
     /// `raykin::scene::procedural::light_field(n)`: n x n small emissive squares over a floor.
@@ -174,6 +177,19 @@ pub const MANY_LIGHTS: NamedScene = NamedScene {
     environment_map: None,
 };
 
+/// The seed-like workload (issue 17): ~1.6M triangles in a hall lit by six ceiling panels, the crowd walking.
+pub const SEED_INTERIOR: NamedScene = NamedScene {
+    name: "seed-interior",
+    source: Source::SeedInterior,
+    view: FixedView {
+        eye: [0.0, 4.5, 16.0],
+        target: [0.0, 2.0, -6.0],
+        yfov_deg: 60.0,
+    },
+    environment: Environment::Constant([0.0; 3]),
+    environment_map: None,
+};
+
 const NAMED: &[&NamedScene] = &[
     &CORNELL,
     &FLIGHT_HELMET,
@@ -182,6 +198,7 @@ const NAMED: &[&NamedScene] = &[
     &MANY_LIGHTS,
     &INTERIOR,
     &CROWD,
+    &SEED_INTERIOR,
 ];
 
 /// The named scene called `name`, if any.
@@ -254,6 +271,24 @@ impl NamedScene {
                     .map(|f| assets.join(f))
                     .collect(),
                     switchable_light: Some((interior.lamp_material, interior.lamp_radiance)),
+                }
+            }
+            Source::SeedInterior => {
+                let hall = raykin::animation::seed_interior_scene(assets).with_context(context)?;
+                LoadedNamedScene {
+                    scene: Arc::new(hall.scene),
+                    players: hall.players,
+                    source_files: [
+                        "CesiumMan/glTF-Binary/CesiumMan.glb",
+                        "Fox/glTF-Binary/Fox.glb",
+                        "FlightHelmet/glTF/FlightHelmet.gltf",
+                        "MetalRoughSpheresNoTextures/glTF-Binary/MetalRoughSpheresNoTextures.glb",
+                    ]
+                    .iter()
+                    .map(|f| assets.join(f))
+                    .chain([repo_path("engine/src/animation/seed_interior.rs")])
+                    .collect(),
+                    switchable_light: None,
                 }
             }
             Source::Repo(relative) => {

@@ -4,9 +4,11 @@
 mod crowd;
 mod deform;
 mod interior;
+mod seed_interior;
 
 pub use crowd::{CrowdScene, crowd_scene};
 pub use interior::{InteriorScene, interior_scene};
+pub use seed_interior::{SeedInterior, seed_interior_scene};
 
 pub use deform::{
     DeformedElsewhere, DeformedMesh, DeformedMeshes, MeshPose, MeshPoses, deform_mesh,

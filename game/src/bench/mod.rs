@@ -142,7 +142,11 @@ fn export_mitsuba(
         };
         let out = dir.join(&scene.name);
         mitsuba::export::export(scene, &app.camera(), &settings, &renders, &out)?;
-        eprintln!("raykin bench: {}: exported for Mitsuba to {}", scene.name, out.display());
+        eprintln!(
+            "raykin bench: {}: exported for Mitsuba to {}",
+            scene.name,
+            out.display()
+        );
     }
     Ok(())
 }
@@ -275,8 +279,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         let cache = args.cache.clone();
         for scene in loaded.iter().filter(|s| !s.animated()) {
             eprintln!("raykin bench: {}: error vs time at {w}x{h}", scene.name);
-            let mut e =
-                error_curves::measure(&ctx, scene, &settings, &suite, &cache, &args.curve)?;
+            let mut e = error_curves::measure(&ctx, scene, &settings, &suite, &cache, &args.curve)?;
             if let Some(dir) = &args.mitsuba {
                 let reference = std::mem::take(&mut e.reference_mean);
                 side_by_side.extend(mitsuba::compare(dir, &mut e, &reference)?);

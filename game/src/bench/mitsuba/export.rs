@@ -47,8 +47,11 @@ pub fn export(
     std::fs::write(dir.join("geometry.bin"), &geometry.bytes)
         .with_context(|| format!("{}: cannot write geometry.bin", dir.display()))?;
     let mut textures = Textures::new(dir, asset);
-    let materials = asset
-        .materials
+    // Triangles without a material name the one past the end: glTF's default material, which the renderer
+    // appends.
+    let mut all_materials = asset.materials.clone();
+    all_materials.push(Material::default());
+    let materials = all_materials
         .iter()
         .enumerate()
         .map(|(i, m)| material_json(i, m, &mut textures, &mut unsupported))
@@ -257,7 +260,12 @@ impl<'a> Textures<'a> {
                     .chunks_exact(4)
                     .flat_map(|p| [p[0], p[1], p[2], 255])
                     .collect();
-                raykin::image_io::write_png(&self.dir.join(&file), image.width, image.height, &rgba)?;
+                raykin::image_io::write_png(
+                    &self.dir.join(&file),
+                    image.width,
+                    image.height,
+                    &rgba,
+                )?;
                 self.written.insert(key, file.clone());
                 file
             }
@@ -289,7 +297,12 @@ impl<'a> Textures<'a> {
     }
 }
 
-fn bitmap_json(file: &str, srgb: bool, texture: &raykin::scene::Texture, slot: &TextureRef) -> Value {
+fn bitmap_json(
+    file: &str,
+    srgb: bool,
+    texture: &raykin::scene::Texture,
+    slot: &TextureRef,
+) -> Value {
     json!({
         "file": file,
         "srgb": srgb,
@@ -362,7 +375,11 @@ fn material_json(
         extensions.push("ior");
     }
     if !extensions.is_empty() {
-        unsupported.push(format!("material {index} `{}`: {}", m.name, extensions.join(", ")));
+        unsupported.push(format!(
+            "material {index} `{}`: {}",
+            m.name,
+            extensions.join(", ")
+        ));
     }
     let emission = m.emitted_radiance();
     let emission_texture = match (&m.emissive_texture, emission.max_element() > 0.0) {
@@ -396,8 +413,12 @@ fn material_json(
         Some(slot) if m.normal_scale != 1.0 => {
             let scale = m.normal_scale;
             textures.baked(slot, &format!("material{index}_normal"), |p| {
-                let n = Vec3::new((2.0 * p[0] - 1.0) * scale, (2.0 * p[1] - 1.0) * scale, 2.0 * p[2] - 1.0)
-                    .normalize_or(Vec3::Z);
+                let n = Vec3::new(
+                    (2.0 * p[0] - 1.0) * scale,
+                    (2.0 * p[1] - 1.0) * scale,
+                    2.0 * p[2] - 1.0,
+                )
+                .normalize_or(Vec3::Z);
                 (n * 0.5 + Vec3::splat(0.5)).to_array()
             })?
         }

@@ -91,7 +91,8 @@ pub fn compare(
         return Ok(None);
     }
     let run: MitsubaRun = serde_json::from_slice(
-        &std::fs::read(&run_path).with_context(|| format!("{}: cannot read", run_path.display()))?,
+        &std::fs::read(&run_path)
+            .with_context(|| format!("{}: cannot read", run_path.display()))?,
     )
     .with_context(|| format!("{}: not a Mitsuba run", run_path.display()))?;
     let description: serde_json::Value = serde_json::from_slice(
@@ -99,7 +100,11 @@ pub fn compare(
     )?;
     let unsupported = description["unsupported"]
         .as_array()
-        .map(|a| a.iter().filter_map(|v| v.as_str().map(String::from)).collect())
+        .map(|a| {
+            a.iter()
+                .filter_map(|v| v.as_str().map(String::from))
+                .collect()
+        })
         .unwrap_or_default();
     let (w, h) = (errors.width, errors.height);
     let read = |file: &str| -> Result<Vec<[f32; 3]>> {
@@ -110,7 +115,10 @@ pub fn compare(
         );
         Ok(image)
     };
-    let halves = [read(&run.reference.files[0])?, read(&run.reference.files[1])?];
+    let halves = [
+        read(&run.reference.files[0])?,
+        read(&run.reference.files[1])?,
+    ];
     let mean: Vec<[f32; 3]> = halves[0]
         .iter()
         .zip(&halves[1])
@@ -153,7 +161,10 @@ pub fn compare(
         .max()
         .context("raykin's and Mitsuba's curves share no sample count")?;
     let at = |curve: &[CurvePoint]| curve.iter().find(|p| p.spp == common).cloned();
-    let (r, m) = (at(raykin).unwrap_or_else(|| raykin[0].clone()), at(&points).unwrap_or_else(|| points[0].clone()));
+    let (r, m) = (
+        at(raykin).unwrap_or_else(|| raykin[0].clone()),
+        at(&points).unwrap_or_else(|| points[0].clone()),
+    );
     let pixels = (w * h) as f64 * common as f64;
     // relMSE x time over each curve's second half: constant for an estimator converging at 1/t.
     let efficiency = |curve: &[CurvePoint], noise: f64, time: fn(&CurvePoint) -> f64| {
@@ -170,11 +181,12 @@ pub fn compare(
     let channel_mean = |image: &[[f32; 3]], c: usize| {
         image.iter().map(|p| p[c] as f64).sum::<f64>() / image.len().max(1) as f64
     };
-    let reference_mean_ratio = [0, 1, 2].map(|c| {
-        channel_mean(raykin_reference, c) / channel_mean(&mean, c).max(1e-12)
-    });
-    let mitsuba_curve: Vec<(f64, f64)> =
-        points.iter().map(|p| (p.time_ms, excess(p, noise))).collect();
+    let reference_mean_ratio =
+        [0, 1, 2].map(|c| channel_mean(raykin_reference, c) / channel_mean(&mean, c).max(1e-12));
+    let mitsuba_curve: Vec<(f64, f64)> = points
+        .iter()
+        .map(|p| (p.time_ms, excess(p, noise)))
+        .collect();
     let result = SideBySide {
         scene: errors.scene.clone(),
         mitsuba_variant: run.variant.clone(),
