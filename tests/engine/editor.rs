@@ -430,3 +430,158 @@ fn saving_refuses_bad_requests_clearly() {
     .expect_err("count");
     assert!(err.to_string().contains("materials"), "{err}");
 }
+
+fn material_variants_file() -> PathBuf {
+    repo_root().join("assets/conformance/Authored/MaterialVariants.gltf")
+}
+
+/// The inspector's variant switch (it writes [`ActiveVariant`]) on MaterialVariants.gltf: a grey quad whose
+/// variants `red` and `blue` map it to red and blue materials, under a white sky. Each switch restarts the
+/// accumulation once and recolours the quad's pixels towards the variant's base colour while the sky's stay
+/// bit-identical; switching back gives the first image bit for bit (same seed and samples). Neither a mesh BVH
+/// nor the top-level one is rebuilt and no GPU buffer is recreated: only triangle material words change.
+#[test]
+fn variant_switch_recolours_without_rebuilding_bvhs() {
+    use raykin::render::Environment;
+    use raykin::scene::ActiveVariant;
+    const SIZE: u32 = 16;
+    const SPP: u32 = 8;
+    let scene = Arc::new(load_gltf(material_variants_file(), &LoadOptions::default()).unwrap());
+    let (ctx, _gpu) = gpu();
+    let settings = RenderSettings {
+        width: SIZE,
+        height: SIZE,
+        max_depth: 1,
+        environment: Environment::Constant([1.0; 3]),
+        ..Default::default()
+    };
+    // The unit quad at z = 0 covers the middle 58% of a 60-degree view from 1.5 away.
+    let camera = CameraChoice::LookAt {
+        eye: Vec3::new(0.0, 0.0, 1.5),
+        target: Vec3::ZERO,
+        yfov: 60f32.to_radians(),
+    };
+    let mut app = HeadlessApp::new(ctx, scene.clone(), settings, &camera).expect("uploads");
+    app.accumulate(SPP, SPP, |_| {});
+    let file_image = app.radiance();
+    let quad: Vec<usize> = (5..11)
+        .flat_map(|y| (5..11).map(move |x| (y * SIZE + x) as usize))
+        .collect();
+    let sky = [0usize, (SIZE - 1) as usize, (SIZE * SIZE - 1) as usize];
+    let chroma = |c: [f64; 3]| {
+        let sum = c.iter().sum::<f64>().max(1e-9);
+        c.map(|x| x / sum)
+    };
+    let quad_chroma = |img: &[[f32; 3]]| {
+        let mut sum = [0.0f64; 3];
+        for &i in &quad {
+            for c in 0..3 {
+                sum[c] += img[i][c] as f64;
+            }
+        }
+        chroma(sum)
+    };
+    let distance =
+        |a: [f64; 3], b: [f64; 3]| (0..3).map(|c| (a[c] - b[c]).powi(2)).sum::<f64>().sqrt();
+    let gpu_scene = app.gpu_scene();
+    let (built, generation) = (gpu_scene.build_seconds, gpu_scene.generation);
+    let order = gpu_scene.mesh_slots[0].blas.order().to_vec();
+    let rebuilds = app.bvh_stats().rebuilds;
+
+    let show = |app: &mut HeadlessApp, variant: Option<usize>| -> Vec<[f32; 3]> {
+        let epoch = app.accumulation_mut().epoch;
+        app.app.world_mut().resource_mut::<ActiveVariant>().0 = variant;
+        app.accumulate(SPP, SPP, |_| {});
+        assert_eq!(
+            app.accumulation_mut().epoch,
+            epoch + 1,
+            "{variant:?}: one restart"
+        );
+        assert_eq!(app.samples(), SPP, "{variant:?}: a fresh accumulation");
+        assert_eq!(app.gpu_scene().variant, variant);
+        assert_eq!(
+            app.bvh_stats().last_tlas_seconds,
+            0.0,
+            "{variant:?}: top-level BVH rebuilt"
+        );
+        app.radiance()
+    };
+    for (variant, name) in scene.variants.iter().enumerate() {
+        let material = scene
+            .materials
+            .iter()
+            .find(|m| &m.name == name)
+            .expect("each variant maps the quad to the material of its name");
+        let target = chroma(material.base_color.truncate().as_dvec3().to_array());
+        let image = show(&mut app, Some(variant));
+        let (before, after) = (
+            distance(quad_chroma(&file_image), target),
+            distance(quad_chroma(&image), target),
+        );
+        eprintln!(
+            "variant `{name}`: quad chromaticity {before:.3} -> {after:.3} from the material's"
+        );
+        assert!(
+            before > 0.3 && after < 0.1,
+            "variant `{name}`: the quad's chromaticity is {after:.3} from its material's (was {before:.3})"
+        );
+        for &i in &sky {
+            assert_eq!(
+                image[i], file_image[i],
+                "variant `{name}`: sky pixel {i} changed"
+            );
+        }
+    }
+    let back = show(&mut app, None);
+    assert!(
+        back == file_image,
+        "the file's materials again: the image differs"
+    );
+
+    let gpu_scene = app.gpu_scene();
+    assert_eq!(
+        gpu_scene.build_seconds, built,
+        "the scene was uploaded again"
+    );
+    assert_eq!(
+        gpu_scene.generation, generation,
+        "GPU buffers were recreated"
+    );
+    assert_eq!(gpu_scene.mesh_slots[0].blas.order(), &order[..]);
+    assert_eq!(app.bvh_stats().rebuilds, rebuilds, "a mesh BVH was rebuilt");
+    // Nothing changed: the accumulation goes on.
+    app.step();
+    assert_eq!(app.samples(), 2 * SPP);
+}
+
+/// File > Save as keeps KHR_materials_variants: the saved file offers every variant with the same mappings,
+/// and its primitives keep the file's own materials (the variant shown is a view setting, not written).
+#[test]
+fn save_as_keeps_every_variant() {
+    let source = material_variants_file();
+    let original = load_gltf(&source, &LoadOptions::default()).unwrap();
+    let bytes = std::fs::read(&source).unwrap();
+    let out = temp_dir("variants").join("saved.gltf");
+    raykin::scene::save_with_materials(
+        &bytes,
+        source.parent().unwrap(),
+        &source.display().to_string(),
+        Default::default(),
+        &original.materials,
+        &out,
+    )
+    .unwrap();
+    let saved = load_gltf(&out, &LoadOptions::default()).unwrap();
+    assert_eq!(saved.variants, original.variants);
+    assert_eq!(saved.active_variant, None);
+    for (a, b) in saved.meshes.iter().zip(&original.meshes) {
+        assert_eq!(a.primitive_variants, b.primitive_variants);
+        for variant in [None, Some(0), Some(1)] {
+            assert_eq!(
+                a.triangle_materials_under(variant),
+                b.triangle_materials_under(variant),
+                "{variant:?}"
+            );
+        }
+    }
+}

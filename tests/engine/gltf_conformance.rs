@@ -953,3 +953,138 @@ fn texture_transform_moves_the_texels() {
         );
     }
 }
+
+/// KHR_texture_transform on a normal map: the tangent-space normals turn with the image. A flat quad (tangent
+/// +x, bitangent +y, glTF's v down the image) carries a constant normal map tilted towards the image's right
+/// (+x in the texel); rotated by 90 degrees the image turns clockwise on the surface, so its right points down
+/// the quad and the shading normal must tilt towards -y. Lit by a directional light from below the camera,
+/// the rotated map must shade exactly like an unrotated map whose texel already points down, and unlike the
+/// texel taken unturned or turned the other way (what a missing or sign-flipped correction gives).
+#[test]
+fn texture_transform_turns_normal_map_texels() {
+    use raykin::scene::{
+        Image, Material, NodeData, NodeTransform, PunctualKind, PunctualLight, Texture, TextureRef,
+        TextureTransform, Wrap,
+    };
+    use std::f32::consts::FRAC_PI_2;
+    const SIZE: u32 = 16;
+    // Texel bytes of a tangent-space normal: 204 -> +0.6, 51 -> -0.6, 128 -> +1/255, 230 -> 0.804.
+    let right = [204u8, 128, 230];
+    let down = [128u8, 51, 230];
+    let up = [128u8, 204, 230];
+    let quad = raykin::scene::MeshData {
+        uv0: Some(vec![
+            Vec2::new(0.0, 0.0),
+            Vec2::new(0.0, 1.0),
+            Vec2::new(1.0, 1.0),
+            Vec2::new(1.0, 0.0),
+        ]),
+        normals: Some(vec![Vec3::Z; 4]),
+        tangents: Some(vec![glam::Vec4::new(1.0, 0.0, 0.0, 1.0); 4]),
+        ..quad_mesh(
+            [
+                Vec3::new(-1.0, 1.0, 0.0),
+                Vec3::new(-1.0, -1.0, 0.0),
+                Vec3::new(1.0, -1.0, 0.0),
+                Vec3::new(1.0, 1.0, 0.0),
+            ],
+            0,
+        )
+    };
+    let render_with = |ctx: &raykin::gpu::GpuContext, texel: [u8; 3], rotation: f32| {
+        let mut scene = raykin::scene::procedural::scene_from_meshes(
+            "rotated normal map",
+            vec![(quad.clone(), Default::default())],
+            vec![Material {
+                name: "bumpy".into(),
+                base_color: glam::Vec4::new(0.8, 0.8, 0.8, 1.0),
+                metallic: 0.0,
+                roughness: 1.0,
+                normal_texture: Some(TextureRef {
+                    texture: 0,
+                    tex_coord: 0,
+                    transform: TextureTransform {
+                        rotation,
+                        ..TextureTransform::IDENTITY
+                    },
+                }),
+                ..Default::default()
+            }],
+        );
+        scene.images = vec![Image {
+            name: "constant normal".into(),
+            width: 2,
+            height: 2,
+            rgba8: [texel[0], texel[1], texel[2], 255].repeat(4),
+        }];
+        scene.textures = vec![Texture {
+            image: 0,
+            wrap_s: Wrap::Repeat,
+            wrap_t: Wrap::Repeat,
+            nearest: true,
+        }];
+        // A directional light shines along its node's -Z: turned 45 degrees about +X it travels along
+        // (0, 1, -1), i.e. it comes from below the camera.
+        scene.lights = vec![PunctualLight {
+            name: "from below".into(),
+            kind: PunctualKind::Directional,
+            color: Vec3::ONE,
+            intensity: 3.0,
+            range: None,
+        }];
+        scene.nodes.push(NodeData {
+            name: "light".into(),
+            transform: NodeTransform {
+                rotation: glam::Quat::from_rotation_x(std::f32::consts::FRAC_PI_4),
+                ..Default::default()
+            },
+            light: Some(0),
+            ..Default::default()
+        });
+        scene.roots.push(scene.nodes.len() - 1);
+        let camera = CameraChoice::LookAt {
+            eye: Vec3::new(0.0, 0.0, 1.0),
+            target: Vec3::ZERO,
+            yfov: 90f32.to_radians(),
+        };
+        let settings = RenderSettings {
+            width: SIZE,
+            height: SIZE,
+            max_depth: 1,
+            environment: Environment::Constant([0.0; 3]),
+            ..Default::default()
+        };
+        render(ctx, &Arc::new(scene), settings, &camera, 2)
+    };
+    let mean = |img: &[[f32; 3]]| img.iter().map(|p| p[1] as f64).sum::<f64>() / img.len() as f64;
+    let (ctx, _gpu) = gpu();
+    let rotated = render_with(&ctx, right, FRAC_PI_2);
+    let expected = render_with(&ctx, down, 0.0);
+    let unturned = render_with(&ctx, right, 0.0);
+    let turned_back = render_with(&ctx, up, 0.0);
+    assert_all_finite(&rotated, "rotated normal map");
+    let worst = rotated
+        .iter()
+        .zip(&expected)
+        .map(|(a, b)| (a[1] - b[1]).abs() / b[1].max(1e-3))
+        .fold(0.0f32, f32::max);
+    let (m_rot, m_exp, m_unturned, m_back) = (
+        mean(&rotated),
+        mean(&expected),
+        mean(&unturned),
+        mean(&turned_back),
+    );
+    eprintln!(
+        "mean green: rotated {m_rot:.4}, pre-rotated texel {m_exp:.4}, unturned {m_unturned:.4}, turned the other way {m_back:.4}; worst pixel {worst:.2e}"
+    );
+    // The alternatives are far apart (the normal's tilt decides the cosine), so the comparison discriminates.
+    assert!(m_exp > 0.05, "the quad is lit: {m_exp}");
+    assert!(
+        m_unturned < 0.8 * m_exp && m_back < 0.8 * m_unturned,
+        "tilts shade apart: down {m_exp}, right {m_unturned}, up {m_back}"
+    );
+    assert!(
+        worst < 1e-3,
+        "the rotated normal map shades unlike the pre-rotated texel: worst pixel off by {worst:.2e} (means: rotated {m_rot}, expected {m_exp}, unturned {m_unturned}, turned the other way {m_back})"
+    );
+}

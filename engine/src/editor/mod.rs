@@ -2,8 +2,8 @@
 //! viewer's window, or its offscreen loop) owns egui and the frame loop; each frame it calls [`show`] inside
 //! an egui pass and carries out the [`EditorAction`]s returned (open, save, screenshot, record, quit), then
 //! runs the frame schedule. Everything a panel changes is ordinary ECS data ([`crate::scene::Materials`],
-//! [`RenderSettings`], [`crate::animation::AnimationPlayer`]s, [`CameraInput`]), so scripted tests drive the same
-//! state the panels do.
+//! [`crate::scene::ActiveVariant`], [`RenderSettings`], [`crate::animation::AnimationPlayer`]s, [`CameraInput`]),
+//! so scripted tests drive the same state the panels do.
 
 mod animation_panel;
 mod inspector;
@@ -14,6 +14,7 @@ mod render_panel;
 mod scene_tree;
 pub mod screenshot;
 mod stats_panel;
+mod variant_switch;
 mod viewport;
 
 pub use prefs::ViewerPrefs;
@@ -328,7 +329,10 @@ fn side_panel(
         .show(ui, |ui| inspector::show(ui, world, state));
     egui::CollapsingHeader::new("Material")
         .default_open(true)
-        .show(ui, |ui| material_panel::show(ui, world, state));
+        .show(ui, |ui| {
+            variant_switch::show(ui, world);
+            material_panel::show(ui, world, state);
+        });
     egui::CollapsingHeader::new("Lights")
         .default_open(false)
         .show(ui, |ui| lights_panel::show(ui, world, state));

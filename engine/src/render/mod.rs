@@ -121,7 +121,11 @@ impl Plugin for RenderPlugin {
                     )
                         .chain()
                         .in_set(FrameSet::Bvh),
-                    (systems::upload_materials, systems::update_lights)
+                    (
+                        systems::upload_materials,
+                        systems::upload_variant,
+                        systems::update_lights,
+                    )
                         .chain()
                         .in_set(FrameSet::Upload),
                     frame::render_frame.in_set(FrameSet::Render),

@@ -49,7 +49,12 @@ pub fn pick_pixel(world: &World, x: u32, y: u32) -> Option<PickHit> {
     let slot = gpu_scene.mesh_slots.get(mesh)?;
     let local = hit.triangle.checked_sub(slot.gpu.triangle_offset)? as usize;
     let triangle = *slot.blas.order().get(local)? as usize;
-    let material = *scene.meshes.get(mesh)?.triangle_materials.get(triangle)? as usize;
+    // The material shown: that of the variant the GPU holds.
+    let material = *scene
+        .meshes
+        .get(mesh)?
+        .triangle_materials_under(gpu_scene.variant)
+        .get(triangle)? as usize;
     Some(PickHit {
         entity,
         mesh,

@@ -1,5 +1,5 @@
 //! The render plugin's systems before the frame: the CPU backend's refit of deformed meshes, the top-level
-//! structure over this frame's placements, and edited materials.
+//! structure over this frame's placements, edited materials and the material variant shown.
 
 use super::accumulation::Accumulation;
 use super::gpu_scene::{GpuScene, InstanceInput};
@@ -7,7 +7,9 @@ use crate::animation::{DeformedElsewhere, DeformedMeshes};
 use crate::bvh::MeshBvh;
 use crate::bvh::refit::BvhStats;
 use crate::gpu::GpuContext;
-use crate::scene::{GlobalTransform, Materials, MeshInstance, SceneAssets, SkinnedMesh};
+use crate::scene::{
+    ActiveVariant, GlobalTransform, Materials, MeshInstance, SceneAssets, SkinnedMesh,
+};
 use bevy_ecs::prelude::*;
 
 /// Deformed geometry moved this frame (set by whichever backend deformed it): the top-level BVH must be rebuilt
@@ -153,6 +155,26 @@ pub fn upload_materials(
     if !edited.is_empty() {
         accumulation.restart();
         realtime.state.edited_materials.extend(edited);
+    }
+}
+
+/// Shows the KHR_materials_variants variant [`ActiveVariant`] names: rewrites only the triangles' material
+/// words (no BVH is touched), and restarts accumulation when the image changes.
+pub fn upload_variant(
+    ctx: Res<GpuContext>,
+    assets: Res<SceneAssets>,
+    variant: Res<ActiveVariant>,
+    mut scene: ResMut<GpuScene>,
+    mut accumulation: ResMut<Accumulation>,
+    mut realtime: ResMut<super::realtime::Realtime>,
+) {
+    if variant.0 == scene.variant {
+        return;
+    }
+    let changed = scene.select_variant(&ctx, &assets.0, variant.0);
+    if !changed.is_empty() {
+        accumulation.restart();
+        realtime.state.edited_materials.extend(changed);
     }
 }
 

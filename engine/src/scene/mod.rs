@@ -34,6 +34,7 @@ pub use spawn::{
     ScenePlugin, SceneRoot, SkinnedMesh, Transform, propagate_transforms, spawn_scene,
 };
 pub use texture_transform::TextureTransform;
+pub use variants::ActiveVariant;
 
 use bevy_ecs::prelude::Resource;
 use glam::{Mat4, Quat, Vec2, Vec3, Vec4};

@@ -177,7 +177,8 @@ pub struct ScenePlugin {
 impl Plugin for ScenePlugin {
     fn build(&self, app: &mut App) {
         app.insert_resource(SceneAssets(self.scene.clone()))
-            .insert_resource(super::Materials::from_asset(&self.scene));
+            .insert_resource(super::Materials::from_asset(&self.scene))
+            .insert_resource(super::ActiveVariant(self.scene.active_variant));
         spawn_scene(app.world_mut(), &self.scene, Transform::default());
         app.add_systems(Update, propagate_transforms.in_set(FrameSet::Transform));
     }

@@ -1,7 +1,8 @@
 //! KHR_texture_basisu: textures whose image is a KTX2 container of Basis Universal data. raykin does not
-//! decode KTX2 (docs/GLTF.md says why: no crate on crates.io transcodes KTX2 ETC1S/UASTC to RGBA on the CPU
-//! without pieces its bindings leave out). A texture that also names a PNG/JPEG `source` uses that; one
-//! that only has the KTX2 image is dropped with a warning, and its materials use their factors.
+//! decode KTX2 yet (docs/GLTF.md has the evaluation: the C++-backed crates leave out what BasisLZ needs or
+//! need libclang to build; the pure-Rust `basisu` is young and unchecked here). A texture that also names a
+//! PNG/JPEG `source` uses that; one that only has the KTX2 image is dropped with a warning, and its materials
+//! use their factors.
 
 pub(super) const EXTENSION: &str = "KHR_texture_basisu";
 

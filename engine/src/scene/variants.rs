@@ -1,7 +1,10 @@
 //! KHR_materials_variants: named material sets a file offers (a shoe in several colours). The loader keeps
-//! each primitive's mappings; [`SceneAsset::select_variant`] switches the materials its triangles use.
+//! each primitive's mappings; [`SceneAsset::select_variant`] switches the materials its triangles use at load,
+//! and [`ActiveVariant`] switches what the renderer shows at run time (the asset stays as loaded).
 
-use super::{SceneAsset, SceneError};
+use super::{MeshData, SceneAsset, SceneError};
+use bevy_ecs::prelude::Resource;
+use std::borrow::Cow;
 use std::ops::Range;
 
 pub(super) const EXTENSION: &str = "KHR_materials_variants";
@@ -15,6 +18,38 @@ pub struct PrimitiveVariants {
     pub file_material: u32,
     /// `(variant, material)` pairs: under that variant the primitive uses that material.
     pub mappings: Vec<(u32, u32)>,
+}
+
+/// The variant the renderer shows (index into [`SceneAsset::variants`]; `None`: the file's own materials). It
+/// starts as the asset's [`SceneAsset::active_variant`] (`--variant`); the editor's switch writes it, and the
+/// render plugin then rewrites only the triangles' material words.
+#[derive(Resource, Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ActiveVariant(pub Option<usize>);
+
+impl MeshData {
+    /// Each triangle's material under `variant` (`None`: the file's materials). A mesh without mappings keeps
+    /// its own; an index the file does not have selects the file's materials.
+    pub fn triangle_materials_under(&self, variant: Option<usize>) -> Cow<'_, [u32]> {
+        if self.primitive_variants.is_empty() {
+            return Cow::Borrowed(&self.triangle_materials);
+        }
+        let mut materials = self.triangle_materials.clone();
+        for pv in &self.primitive_variants {
+            let end = (pv.triangles.end as usize).min(materials.len());
+            let start = (pv.triangles.start as usize).min(end);
+            materials[start..end].fill(pv.material_under(variant));
+        }
+        Cow::Owned(materials)
+    }
+}
+
+impl PrimitiveVariants {
+    /// The primitive's material under `variant`: its mapping for it, else the file's material.
+    pub fn material_under(&self, variant: Option<usize>) -> u32 {
+        variant
+            .and_then(|v| self.mappings.iter().find(|(mv, _)| *mv as usize == v))
+            .map_or(self.file_material, |&(_, m)| m)
+    }
 }
 
 impl SceneAsset {
@@ -41,22 +76,20 @@ impl SceneAsset {
                             )
                         },
                     },
-                )? as u32),
+                )?),
             };
         for mesh in &mut self.meshes {
+            if mesh.primitive_variants.is_empty() {
+                continue;
+            }
+            mesh.triangle_materials = mesh.triangle_materials_under(variant).into_owned();
             for (p, pv) in mesh.primitive_variants.iter().enumerate() {
-                let material = variant
-                    .and_then(|v| pv.mappings.iter().find(|(mv, _)| *mv == v))
-                    .map_or(pv.file_material, |&(_, m)| m);
                 if let Some(range) = mesh.primitives.get_mut(p) {
-                    range.material = material;
+                    range.material = pv.material_under(variant);
                 }
-                let end = (pv.triangles.end as usize).min(mesh.triangle_materials.len());
-                let start = (pv.triangles.start as usize).min(end);
-                mesh.triangle_materials[start..end].fill(material);
             }
         }
-        self.active_variant = variant.map(|v| v as usize);
+        self.active_variant = variant;
         Ok(())
     }
 }

@@ -32,7 +32,7 @@ impl GpuScene {
             /// The triangle order went back to the upload tree's.
             restored: Option<OrderedTriangles>,
         }
-        let (materials, quality) = (&self.material_data, self.bvh_quality);
+        let (materials, quality, variant) = (&self.material_data, self.bvh_quality, self.variant);
         let mut changed = vec![false; self.mesh_slots.len()];
         for &m in &deformed.changed {
             if deformed.meshes.get(m).is_some_and(Option::is_some) && m < changed.len() {
@@ -69,7 +69,9 @@ impl GpuScene {
                     words.push((gpu.tangent_offset, tangent_words));
                 }
                 let restored = (policy == RebuildPolicy::PoseDetermined)
-                    .then(|| slot.restore_upload_tree(&scene.meshes[m], materials, quality))
+                    .then(|| {
+                        slot.restore_upload_tree(&scene.meshes[m], variant, materials, quality)
+                    })
                     .flatten();
                 let bvh = slot
                     .blas
@@ -174,6 +176,7 @@ impl GpuScene {
         nodes.resize(slot.blas_capacity as usize, crate::bvh::GpuBvhNode::EMPTY);
         let ordered = order_triangles(
             data,
+            &data.triangle_materials_under(self.variant),
             &bvh.flat.order,
             slot.gpu.triangle_offset,
             &self.material_data,

@@ -117,26 +117,32 @@ impl GpuScene {
             for (m, mesh) in scene.meshes.iter().enumerate() {
                 let slot = &self.mesh_slots[m];
                 self.emissive_triangles[m] = emissive_slots(
-                    mesh,
+                    &mesh.triangle_materials_under(self.variant),
                     slot.blas.order(),
                     slot.gpu.triangle_offset,
                     &self.material_data,
                 );
             }
-            let mut instances = std::mem::take(&mut self.uploaded_instances);
-            let triangles = self.triangle_lights(scene, &mut instances);
-            self.lights.set_triangles(triangles);
-            if write_or_grow(
-                ctx,
-                &mut self.instances,
-                bytemuck::cast_slice(&instances),
-                "instances",
-            ) {
-                self.generation += 1;
-            }
-            self.uploaded_instances = instances;
+            self.refresh_triangle_lights(ctx, scene);
         }
         changed
+    }
+
+    /// Rebuilds the light list's emissive triangles (and the instances' ranges into it) for the current
+    /// instances, after the emissive triangles changed.
+    pub(super) fn refresh_triangle_lights(&mut self, ctx: &GpuContext, scene: &SceneAsset) {
+        let mut instances = std::mem::take(&mut self.uploaded_instances);
+        let triangles = self.triangle_lights(scene, &mut instances);
+        self.lights.set_triangles(triangles);
+        if write_or_grow(
+            ctx,
+            &mut self.instances,
+            bytemuck::cast_slice(&instances),
+            "instances",
+        ) {
+            self.generation += 1;
+        }
+        self.uploaded_instances = instances;
     }
 
     /// The emissive triangles of every instance as lights, weighed by power (pi x luminance x world area, twice

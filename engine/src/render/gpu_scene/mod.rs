@@ -8,6 +8,7 @@ pub mod light_tree;
 pub mod lights;
 pub mod motion;
 mod packing;
+mod variant;
 
 pub use instances::{InstanceInput, InstanceMap, transform_box};
 pub use lights::LightList;
@@ -71,6 +72,7 @@ impl MeshSlot {
     fn restore_upload_tree(
         &mut self,
         mesh: &MeshData,
+        variant: Option<usize>,
         materials: &[GpuMaterial],
         quality: crate::bvh::BvhQuality,
     ) -> Option<OrderedTriangles> {
@@ -90,6 +92,7 @@ impl MeshSlot {
         let upload = self.upload_bvh.clone()?;
         let ordered = order_triangles(
             mesh,
+            &mesh.triangle_materials_under(variant),
             &upload.flat.order,
             self.gpu.triangle_offset,
             materials,
@@ -160,6 +163,8 @@ pub struct GpuScene {
     pub lights: LightList,
     /// For each GPU instance (TLAS leaf order), its index in the last [`Self::update_instances`] input.
     pub instance_order: Vec<u32>,
+    /// The KHR_materials_variants variant whose materials the triangles hold (`None`: the file's).
+    pub variant: Option<usize>,
     /// Emissive triangles per mesh (triangle slot, material), for building the light list.
     emissive_triangles: Vec<Vec<(u32, u32)>>,
     /// Instances as last uploaded (TLAS leaf order): material edits rebuild the light list from them.
@@ -241,7 +246,13 @@ impl GpuScene {
         for (mesh, blas) in scene.meshes.iter().zip(blases) {
             let mut gpu = pack_vertices(mesh, &mut pool);
             gpu.triangle_offset = triangles.len() as u32;
-            let ordered = order_triangles(mesh, blas.order(), gpu.triangle_offset, &materials);
+            let ordered = order_triangles(
+                mesh,
+                &mesh.triangle_materials_under(scene.active_variant),
+                blas.order(),
+                gpu.triangle_offset,
+                &materials,
+            );
             triangles.extend_from_slice(&ordered.packed);
             let (gpu_triangles, emissive) = (ordered.indices, ordered.emissive);
             emissive_triangles.push(emissive);
@@ -331,6 +342,7 @@ impl GpuScene {
             memory,
             lights: LightList::default(),
             instance_order: Vec::new(),
+            variant: scene.active_variant,
             emissive_triangles,
             uploaded_instances: Vec::new(),
             motion: None,

@@ -342,29 +342,41 @@ pub(super) struct OrderedTriangles {
     pub emissive: Vec<(u32, u32)>,
 }
 
+/// `triangle_materials`: each triangle's material (file order) under the variant shown.
 pub(super) fn order_triangles(
     mesh: &MeshData,
+    triangle_materials: &[u32],
     order: &[u32],
     triangle_offset: u32,
     materials: &[GpuMaterial],
 ) -> OrderedTriangles {
     let indices = crate::bvh::ordered_triangles(order, &mesh.triangles);
-    let packed = order
-        .iter()
-        .zip(&indices)
-        .map(|(&t, [a, b, c])| [*a, *b, *c, mesh.triangle_materials[t as usize]])
-        .collect();
+    let packed = pack_triangles(&indices, order, triangle_materials);
     OrderedTriangles {
         indices,
         packed,
-        emissive: emissive_slots(mesh, order, triangle_offset, materials),
+        emissive: emissive_slots(triangle_materials, order, triangle_offset, materials),
     }
+}
+
+/// The GPU triangles: vertex indices in BVH order (`indices`) with the material of the triangle each slot
+/// holds (`order`: original triangle of each slot).
+pub(super) fn pack_triangles(
+    indices: &[[u32; 3]],
+    order: &[u32],
+    triangle_materials: &[u32],
+) -> Vec<[u32; 4]> {
+    order
+        .iter()
+        .zip(indices)
+        .map(|(&t, [a, b, c])| [*a, *b, *c, triangle_materials[t as usize]])
+        .collect()
 }
 
 /// A mesh's emissive triangles in BVH order (`order`: original triangle of each slot): (slot in the
 /// triangle buffer, material).
 pub(super) fn emissive_slots(
-    mesh: &MeshData,
+    triangle_materials: &[u32],
     order: &[u32],
     triangle_offset: u32,
     materials: &[GpuMaterial],
@@ -373,7 +385,7 @@ pub(super) fn emissive_slots(
         .iter()
         .enumerate()
         .filter_map(|(slot, &t)| {
-            let material = mesh.triangle_materials[t as usize];
+            let material = triangle_materials[t as usize];
             (luminance(Vec3::from(materials[material as usize].emissive)) > 0.0)
                 .then_some((triangle_offset + slot as u32, material))
         })
