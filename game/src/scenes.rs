@@ -177,7 +177,7 @@ pub const MANY_LIGHTS: NamedScene = NamedScene {
     environment_map: None,
 };
 
-/// The seed-like workload (issue 17): ~1.6M triangles in a hall lit by six ceiling panels, the crowd walking.
+/// The seed-like workload (issue 17): 1.64M triangle instances in a hall lit by six ceiling panels, the crowd walking.
 pub const SEED_INTERIOR: NamedScene = NamedScene {
     name: "seed-interior",
     source: Source::SeedInterior,

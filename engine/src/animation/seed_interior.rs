@@ -20,7 +20,7 @@ pub struct SeedInterior {
 /// Hall: 24 m wide (x -12..12), 7 m high, from the back wall at z = -12 to the front wall at z = 18 behind
 /// the camera, lit by six ceiling panels (2 x 2 m, radiance 12) and nothing else. Inside: the crowd (64
 /// CesiumMan and 32 Fox walking, 317k triangles, its ground as the floor), MetalRoughSpheresNoTextures (1.04M
-/// triangles) as a 6 m panel on the back wall, and three FlightHelmets (1.8 m tall) along the side walls.
+/// triangles) as a 6 m panel on the back wall, and three FlightHelmets (1.8 m tall) by the side walls.
 /// `shared_assets` holds `CesiumMan/`, `Fox/`, `FlightHelmet/` and `MetalRoughSpheresNoTextures/`.
 pub fn seed_interior_scene(shared_assets: impl AsRef<Path>) -> Result<SeedInterior, SceneError> {
     let dir = shared_assets.as_ref();
@@ -42,7 +42,9 @@ pub fn seed_interior_scene(shared_assets: impl AsRef<Path>) -> Result<SeedInteri
             fit(&spheres, 6.0, Vec3::new(0.0, 3.6, -11.8), Quat::IDENTITY),
         ),
     ];
-    for (x, z, turn) in [(-9.0, -6.0, 0.6), (9.0, -6.0, -0.6), (-9.0, 4.0, 1.2)] {
+    // Three helmets by the side walls, turned towards the hall's middle: with them the hall holds 1.64M
+    // triangle instances (1.45M distinct triangles: the helmets share theirs).
+    for (x, z, turn) in [(-9.5, -8.0, 0.9), (9.5, -8.0, -0.9), (9.5, 2.0, -1.2)] {
         let placement = fit(
             &helmet,
             1.8,
