@@ -209,7 +209,7 @@ pub fn compare(
         unsupported,
     };
     errors.curves.push(CurveResult {
-        name: format!("Mitsuba 3 {} (own reference)", run.variant),
+        name: format!("Mitsuba 3 {} (wall time of mi.render, own reference)", run.variant),
         ms_to_rel_mse_0_01: result.mitsuba_ms_to_0_01,
         points,
     });
