@@ -1,5 +1,6 @@
 // The environment light (`LIGHT_ENVIRONMENT`): an equirectangular radiance map at infinity, turned about +Y,
-// scaled, bilinear between texels and importance-sampled by a 2D distribution over luminance x sin(theta).
+// scaled, bilinear between texels and importance-sampled by a 2D distribution over luminance x sin(theta):
+// a cell by its corners' mean, the point inside it in proportion to their bilinear interpolation.
 // Conventions (exactly Mitsuba 3's `envmap`): engine/src/environment/map.rs; the distribution and its CPU
 // twin: engine/src/environment/sampling.rs.
 //
@@ -79,6 +80,32 @@ fn environment_cell_density(w: u32, rows: u32, i: u32, j: u32) -> f32 {
     return environment_cdf_step(marginal, j) * environment_cdf_step(conditional + j * w, i) * f32(w * rows);
 }
 
+// Luminance at the corners of cell (i, j): (i, j), (i + 1, j), (i, j + 1), (i + 1, j + 1), columns wrapping.
+fn environment_corners(w: u32, i: u32, j: u32) -> vec4<f32> {
+    let i1 = (i + 1u) % w;
+    return vec4<f32>(
+        luminance(environment_texel(w, i, j)),
+        luminance(environment_texel(w, i1, j)),
+        luminance(environment_texel(w, i, j + 1u)),
+        luminance(environment_texel(w, i1, j + 1u)),
+    );
+}
+
+// The bilinear density of corners `c` at f inside the cell, relative to their mean (1 where all are 0).
+fn environment_bilinear_density(c: vec4<f32>, f: vec2<f32>) -> f32 {
+    let mean = 0.25 * (c.x + c.y + c.z + c.w);
+    if mean <= 0.0 { return 1.0; }
+    return mix(mix(c.x, c.y, f.x), mix(c.z, c.w, f.x), f.y) / mean;
+}
+
+// The point in [0, 1) below which a density linear from a (at 0) to b (at 1) holds the fraction r: the root of
+// ((b - a) / 2) x^2 + a x = r (a + b) / 2, written so that it stays exact as b - a goes to 0.
+fn environment_sample_linear(r: f32, a: f32, b: f32) -> f32 {
+    let denominator = a + sqrt(max(mix(a * a, b * b, r), 0.0));
+    if a + b <= 0.0 || denominator <= 0.0 { return r; }
+    return clamp(r * (a + b) / denominator, 0.0, 0.99999994);
+}
+
 // Solid-angle density with which `environment_sample_li` gives world direction `dir`.
 fn environment_pdf(light: Light, dir: vec3<f32>) -> f32 {
     let w = light.index_a;
@@ -87,9 +114,13 @@ fn environment_pdf(light: Light, dir: vec3<f32>) -> f32 {
     let sin_theta = sqrt(max(0.0, 1.0 - d.y * d.y));
     if sin_theta <= 0.0 { return 0.0; }
     let uv = environment_uv(d);
-    let i = u32((i32(floor(uv.x * f32(w) - 0.5)) + i32(w)) % i32(w));
-    let j = min(u32(uv.y * f32(rows)), rows - 1u);
-    return environment_cell_density(w, rows, i, j) / (2.0 * PI * PI * sin_theta);
+    let x = uv.x * f32(w) - 0.5;
+    let i = u32((i32(floor(x)) + i32(w)) % i32(w));
+    let y = uv.y * f32(rows);
+    let j = min(u32(y), rows - 1u);
+    let f = vec2<f32>(x - floor(x), clamp(y - f32(j), 0.0, 1.0));
+    let inside = environment_bilinear_density(environment_corners(w, i, j), f);
+    return environment_cell_density(w, rows, i, j) * inside / (2.0 * PI * PI * sin_theta);
 }
 
 fn environment_sample_li(light: Light, u: vec2<f32>) -> LightLiSample {
@@ -100,15 +131,20 @@ fn environment_sample_li(light: Light, u: vec2<f32>) -> LightLiSample {
     let j = environment_cdf_search(marginal, rows, u.y);
     let row = conditional + j * w;
     let i = environment_cdf_search(row, w, u.x);
-    // Where u falls inside the chosen entries places the point inside the cell.
-    let fy = clamp((u.y - (environment_map[marginal + j] - environment_cdf_step(marginal, j))) / environment_cdf_step(marginal, j), 0.0, 0.99999994);
-    let fx = clamp((u.x - (environment_map[row + i] - environment_cdf_step(row, i))) / environment_cdf_step(row, i), 0.0, 0.99999994);
+    // Where u falls inside the chosen entries places the point inside the cell, through the bilinear density
+    // of the cell's corner luminances: v by its linear marginal, then u by the linear conditional.
+    let ry = clamp((u.y - (environment_map[marginal + j] - environment_cdf_step(marginal, j))) / environment_cdf_step(marginal, j), 0.0, 0.99999994);
+    let rx = clamp((u.x - (environment_map[row + i] - environment_cdf_step(row, i))) / environment_cdf_step(row, i), 0.0, 0.99999994);
+    let c = environment_corners(w, i, j);
+    let fy = environment_sample_linear(ry, c.x + c.y, c.z + c.w);
+    let fx = environment_sample_linear(rx, mix(c.x, c.z, fy), mix(c.y, c.w, fy));
     let su = (f32(i) + 0.5 + fx) / f32(w);
     let d = environment_direction(vec2<f32>(su - floor(su), (f32(j) + fy) / f32(rows)));
-    let sin_theta = sqrt(max(0.0, 1.0 - d.y * d.y));
-    if sin_theta <= 0.0 { return no_light_sample(); }
-    let pdf = environment_cell_density(w, rows, i, j) / (2.0 * PI * PI * sin_theta);
-    if pdf <= 0.0 { return no_light_sample(); }
     let dir = environment_to_world(light, d);
+    // The density from the direction, as BSDF-sampled rays that reach the map get it: where the bilinear
+    // density is steep (a sun texel beside dark ones) the point's round trip through the direction moves it
+    // by enough to change its density by more than 0.2%, and both must agree for MIS.
+    let pdf = environment_pdf(light, dir);
+    if pdf <= 0.0 { return no_light_sample(); }
     return LightLiSample(dir, MISS, environment_le(light, dir), pdf, false);
 }

@@ -1,12 +1,16 @@
-//! Importance sampling of an environment map: a piecewise-constant 2D distribution over the cells between the
-//! map's texel lattice (W columns x H-1 rows, see [`super::map`]), each cell weighed by the mean luminance of
-//! its four corner texels times the mean sin(theta) over its rows. The bilinear radiance inside a cell is
-//! zero only where all four corners are, so every direction that carries light has a positive density.
+//! Importance sampling of an environment map: a 2D distribution over the cells between the map's texel
+//! lattice (W columns x H-1 rows, see [`super::map`]), each cell weighed by the mean luminance of its four
+//! corner texels times the mean sin(theta) over its rows, and inside a cell a point drawn in proportion to the
+//! bilinear interpolation of those four luminances, which is how the radiance itself is reconstructed. So a
+//! one-texel sun is sampled as the tent it is rendered as (a uniform point in its cells would put as many
+//! samples at the tent's dark edges as at its peak: measured 2.1x Mitsuba's per-sample variance on the
+//! env-lit scene, whose `envmap` samples bilinearly too). The density is zero only where the radiance is.
 //!
 //! A row is picked by the marginal CDF, a cell within it by that row's conditional CDF, and the point inside
-//! the cell uniformly in (u, v). The density of a direction is computed from the same CDFs (differences of
-//! adjacent entries), so it is exactly the density the sampler draws from, and it integrates to 1 over the
-//! sphere (`tests`). The WGSL twin is `shaders/lights/environment.wgsl`.
+//! the cell by inverting the bilinear density (first its linear marginal in v, then the linear conditional in
+//! u), reusing where the uniform numbers fell inside the CDF entries. The density of a direction is computed
+//! from the same CDFs and corner luminances, so it is exactly the density the sampler draws from, and it
+//! integrates to 1 over the sphere (`tests`). The WGSL twin is `shaders/lights/environment.wgsl`.
 
 use super::map::{EnvironmentMap, direction_to_uv, uv_to_direction};
 use glam::Vec3;
@@ -23,6 +27,9 @@ pub struct EnvironmentDistribution {
     pub marginal_cdf: Vec<f32>,
     /// Integral of luminance over the sphere (W/m^2 per unit luminance scale): the power estimate's input.
     pub luminance_integral: f64,
+    /// Luminance of every texel (W x H, row by row): the corners of the bilinear density inside a cell (the GPU
+    /// computes it from the texels it already holds).
+    pub texel_luminance: Vec<f32>,
 }
 
 impl EnvironmentDistribution {
@@ -60,13 +67,26 @@ impl EnvironmentDistribution {
         let total: f64 = row_weights.iter().sum();
         let mut marginal_cdf = Vec::with_capacity(rows);
         push_cdf(&mut marginal_cdf, &row_weights, total);
+        let texel_luminance = (0..h)
+            .flat_map(|y| (0..w).map(move |x| (x, y)))
+            .map(|(x, y)| luminance(x, y) as f32)
+            .collect();
         Self {
             columns: w as u32,
             rows: rows as u32,
             conditional_cdf,
             marginal_cdf,
             luminance_integral,
+            texel_luminance,
         }
+    }
+
+    /// Luminance at the corners of cell (i, j): (i, j), (i + 1, j), (i, j + 1), (i + 1, j + 1), columns wrapping.
+    fn corners(&self, i: u32, j: u32) -> [f32; 4] {
+        let w = self.columns as usize;
+        let (i0, i1, j0) = (i as usize, (i as usize + 1) % w, j as usize);
+        let at = |x: usize, y: usize| self.texel_luminance[y * w + x];
+        [at(i0, j0), at(i1, j0), at(i0, j0 + 1), at(i1, j0 + 1)]
     }
 
     fn row_cdf(&self, j: u32) -> &[f32] {
@@ -77,32 +97,62 @@ impl EnvironmentDistribution {
     /// Solid-angle density of the map-local direction `d`.
     pub fn pdf(&self, d: Vec3) -> f32 {
         let (u, v) = direction_to_uv(d);
-        let (i, j) = self.cell_of(u, v);
+        let (i, j, fx, fy) = self.cell_of(u, v);
         let sin_theta = (1.0 - d.y * d.y).max(0.0).sqrt();
         if sin_theta <= 0.0 {
             return 0.0;
         }
-        let p = difference(&self.marginal_cdf, j) * difference(self.row_cdf(j), i);
+        let p = difference(&self.marginal_cdf, j)
+            * difference(self.row_cdf(j), i)
+            * bilinear_density(self.corners(i, j), fx, fy);
         p * (self.columns * self.rows) as f32 / (2.0 * std::f32::consts::PI.powi(2) * sin_theta)
     }
 
-    /// The cell holding (u, v): column i spans u in [(i + 1/2) / W, (i + 3/2) / W) (wrapping), row j spans
-    /// v in [j / rows, (j + 1) / rows].
-    fn cell_of(&self, u: f32, v: f32) -> (u32, u32) {
+    /// The cell holding (u, v) and where in it: column i spans u in [(i + 1/2) / W, (i + 3/2) / W)
+    /// (wrapping), row j spans v in [j / rows, (j + 1) / rows].
+    fn cell_of(&self, u: f32, v: f32) -> (u32, u32, f32, f32) {
         let x = u * self.columns as f32 - 0.5;
         let i = (x.floor() as i64).rem_euclid(self.columns as i64) as u32;
-        let j = ((v * self.rows as f32).floor().max(0.0) as u32).min(self.rows - 1);
-        (i, j)
+        let y = v * self.rows as f32;
+        let j = (y.floor().max(0.0) as u32).min(self.rows - 1);
+        (i, j, x - x.floor(), (y - j as f32).clamp(0.0, 1.0))
     }
 
     /// A map-local direction for the uniform pair `u`, with its solid-angle density (0: no sample).
     pub fn sample(&self, u: [f32; 2]) -> (Vec3, f32) {
-        let (j, fy) = sample_cdf(&self.marginal_cdf, u[1]);
-        let (i, fx) = sample_cdf(self.row_cdf(j), u[0]);
+        let (j, ry) = sample_cdf(&self.marginal_cdf, u[1]);
+        let (i, rx) = sample_cdf(self.row_cdf(j), u[0]);
+        let [c00, c10, c01, c11] = self.corners(i, j);
+        let fy = sample_linear(ry, c00 + c10, c01 + c11);
+        let fx = sample_linear(rx, lerp(c00, c01, fy), lerp(c10, c11, fy));
         let uu = (i as f32 + 0.5 + fx) / self.columns as f32;
         let d = uv_to_direction(uu - uu.floor(), (j as f32 + fy) / self.rows as f32);
         (d, self.pdf(d))
     }
+}
+
+fn lerp(a: f32, b: f32, t: f32) -> f32 {
+    a + (b - a) * t
+}
+
+/// The point in [0, 1) below which a density linear from `a` at 0 to `b` at 1 holds the fraction `r`: the root
+/// of ((b - a) / 2) x^2 + a x = r (a + b) / 2, written as r (a + b) / (a + sqrt(a^2 + r (b^2 - a^2))) so that
+/// it stays exact as b - a goes to 0 (uniform).
+fn sample_linear(r: f32, a: f32, b: f32) -> f32 {
+    let denominator = a + lerp(a * a, b * b, r).max(0.0).sqrt();
+    if a + b <= 0.0 || denominator <= 0.0 {
+        return r;
+    }
+    (r * (a + b) / denominator).clamp(0.0, 0.99999994)
+}
+
+/// The bilinear density of corners `c` at (fx, fy) relative to the cell's mean (1 where all corners are 0).
+fn bilinear_density(c: [f32; 4], fx: f32, fy: f32) -> f32 {
+    let mean = 0.25 * (c[0] + c[1] + c[2] + c[3]);
+    if mean <= 0.0 {
+        return 1.0;
+    }
+    lerp(lerp(c[0], c[1], fx), lerp(c[2], c[3], fx), fy) / mean
 }
 
 /// Appends the normalised running sum of `weights` (uniform when they sum to 0); the last entry is exactly 1.
@@ -206,6 +256,40 @@ mod tests {
         }
         // The sun texel carries most of the map's power.
         assert!(near_sun > n / 2, "{near_sun} of {n} samples near the sun");
+    }
+
+    /// Luminance / pdf over the samples estimates the map's luminance integral: its mean must be that integral
+    /// (the samples follow the density they report) and, with the density shaped like the bilinear radiance,
+    /// its spread must be small even with a one-texel sun (measured 0.042; 0.87 with uniform points inside the
+    /// cells, as before).
+    #[test]
+    fn samples_follow_the_bilinear_radiance() {
+        let map = sunny_map();
+        let dist = EnvironmentDistribution::new(&map);
+        let mut state = 99u64;
+        let mut rand = || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 40) as f32 / (1u64 << 24) as f32
+        };
+        let n = 200_000;
+        let (mut sum, mut sum2) = (0.0f64, 0.0f64);
+        for _ in 0..n {
+            let (d, pdf) = dist.sample([rand(), rand()]);
+            let l = map.lookup(d);
+            let x = (0.2126 * l[0] + 0.7152 * l[1] + 0.0722 * l[2]) as f64 / pdf as f64;
+            sum += x;
+            sum2 += x * x;
+        }
+        let mean = sum / n as f64;
+        let relative_spread = (sum2 / n as f64 - mean * mean).max(0.0).sqrt() / mean;
+        let integral = dist.luminance_integral;
+        assert!(
+            (mean / integral - 1.0).abs() < 0.01,
+            "mean {mean} vs integral {integral}"
+        );
+        assert!(relative_spread < 0.3, "relative spread {relative_spread}");
     }
 
     #[test]
