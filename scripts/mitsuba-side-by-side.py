@@ -9,7 +9,8 @@ Usage:
 For each DIR/SCENE/scene.json it builds the scene from the export (world-space triangle groups, textures,
 environment map, camera), with the exact glTF 2.0 BRDF of tests/reference/cornell/gltf_brdf.py (extended here by a
 metallic-roughness texture), Mitsuba's `path` integrator at max_depth = raykin's depth + 1 (Mitsuba counts path
-segments) with its default Russian roulette, an `independent` sampler and a box pixel filter, and writes into
+segments) with its default Russian roulette, an `independent` sampler and a box pixel filter (scene and camera
+centred at the origin, which only changes Mitsuba's ray offsets), and writes into
 DIR/SCENE/mitsuba/:
     ref_a.exr, ref_b.exr     two independent halves of the reference (scene.json's reference_spp in all)
     spp_N.exr                one render of N spp per curve sample count, each timed on its own after a warm-up
@@ -127,12 +128,20 @@ def material_bsdf(mi, scene_dir, mat):
 def build_scene(mi, dr, scene_dir, desc, spp):
     scene = {'type': 'scene'}
     bsdfs = {}
+    arrays = [load_arrays(scene_dir, shape) for shape in desc['shapes']]
+    # The scene and camera moved rigidly so that the geometry's bounds are centred at the origin: radiance does
+    # not change, but Mitsuba offsets spawned rays in proportion to the coordinates' magnitude (about 0.05 units at
+    # 550 from the origin: enough to leak light past the Cornell box's ceiling light, 0.89 units below it).
+    lo = np.min([a[0].min(axis=0) for a in arrays], axis=0) if arrays else np.zeros(3)
+    hi = np.max([a[0].max(axis=0) for a in arrays], axis=0) if arrays else np.zeros(3)
+    shift = (-0.5 * (lo + hi)).astype(np.float32)
     for k, shape in enumerate(desc['shapes']):
         mat_index = shape['material']
         mat = desc['materials'][mat_index]
         if mat_index not in bsdfs:
             bsdfs[mat_index] = material_bsdf(mi, scene_dir, mat)
-        positions, normals, uvs, indices = load_arrays(scene_dir, shape)
+        positions, normals, uvs, indices = arrays[k]
+        positions = positions + shift
         emissive = max(mat['emission']) > 0.0
         copies = [(positions, indices, '')]
         if emissive and mat['double_sided']:
@@ -169,7 +178,8 @@ def build_scene(mi, dr, scene_dir, desc, spp):
     cam = desc['camera']
     scene['sensor'] = {
         'type': 'perspective', 'fov': cam['yfov_deg'], 'fov_axis': 'y', 'near_clip': 1e-4, 'far_clip': 1e7,
-        'to_world': mi.ScalarTransform4f().look_at(origin=cam['eye'], target=cam['target'], up=cam['up']),
+        'to_world': mi.ScalarTransform4f().look_at(origin=(np.array(cam['eye']) + shift).tolist(),
+                                                   target=(np.array(cam['target']) + shift).tolist(), up=cam['up']),
         'film': {'type': 'hdrfilm', 'width': desc['width'], 'height': desc['height'], 'rfilter': {'type': 'box'},
                  'pixel_format': 'rgb', 'component_format': 'float32'},
         'sampler': {'type': 'independent', 'sample_count': spp},
