@@ -727,7 +727,8 @@ whose history (reprojection without gradients) is at most 8 frames long.\n";
 throughput at the largest common sample count; variance ratio = (relMSE x spp) raykin / Mitsuba there; time to equal \
 error = median over each curve's second half of relMSE x time, raykin / Mitsuba (below 1: raykin is faster), with \
 raykin's time from GPU timestamps of the trace pass or the wall time of its frames, Mitsuba's the wall time of \
-`mi.render` after a warm-up render; references apart = relMSE of the two converged images against each other, both \
+`mi.render` after a warm-up render; steady = variance ratio x raykin's trace ms per sample over its last segment / \
+Mitsuba's ms per sample; references apart = relMSE of the two converged images against each other, both \
 noises subtracted.\n";
     }
     s += &oidn_markdown(r);

@@ -62,6 +62,10 @@ pub struct SideBySide {
     /// (median), by raykin's trace time and by its wall time. Below 1: raykin is faster.
     pub time_to_equal_error_trace: f64,
     pub time_to_equal_error_wall: f64,
+    /// The same from steady rates: the variance ratio times raykin's trace ms per sample over its curve's last
+    /// segment (where the GPU has settled) over Mitsuba's ms per sample at that count. The curve-based figures
+    /// include every transient of the accumulation loop (on the H200 a 3-4x slower stretch mid-curve).
+    pub time_to_equal_error_steady: f64,
     /// Milliseconds to reach tone-mapped relMSE 0.01 (noise subtracted; extrapolated along the fitted power law
     /// where a curve stopped short): raykin (trace) and Mitsuba.
     pub raykin_ms_to_0_01: Option<f64>,
@@ -221,6 +225,9 @@ pub fn compare(
             / mitsuba_efficiency,
         time_to_equal_error_wall: efficiency(raykin, reference_noise, |p| p.wall_ms)
             / mitsuba_efficiency,
+        time_to_equal_error_steady: excess(&r, reference_noise) / excess(&m, noise)
+            * steady_ms_per_spp(raykin)
+            / (m.time_ms / m.spp.max(1) as f64),
         raykin_ms_to_0_01: time_to_rel_mse(
             &raykin
                 .iter()
@@ -247,6 +254,15 @@ pub fn compare(
     Ok(Some(result))
 }
 
+/// Trace ms per sample per pixel between a curve's last two points.
+fn steady_ms_per_spp(curve: &[CurvePoint]) -> f64 {
+    match curve {
+        [.., a, b] if b.spp > a.spp => (b.time_ms - a.time_ms) / (b.spp - a.spp) as f64,
+        [.., b] => b.time_ms / b.spp.max(1) as f64,
+        [] => f64::NAN,
+    }
+}
+
 /// relMSE above the reference's noise.
 fn excess(p: &CurvePoint, noise: f64) -> f64 {
     (p.rel_mse - noise).max(1e-12)
@@ -265,12 +281,12 @@ fn efficiency(curve: &[CurvePoint], noise: f64, time: fn(&CurvePoint) -> f64) ->
 /// The side-by-side table for summary.md and docs/BENCHMARKS.md.
 pub fn markdown(rows: &[SideBySide]) -> String {
     let mut s = String::from(
-        "| scene | raykin curve | Mitsuba | samples/s raykin (trace / wall) | samples/s Mitsuba | throughput | variance ratio | time to equal error (trace / wall) | ms to relMSE 0.01 raykin / Mitsuba | references apart (relMSE; mean ratio; Mitsuba's negative or non-finite pixels) |\n|---|---|---|---|---|---|---|---|---|---|\n",
+        "| scene | raykin curve | Mitsuba | samples/s raykin (trace / wall) | samples/s Mitsuba | throughput | variance ratio | time to equal error (trace / wall / steady) | ms to relMSE 0.01 raykin / Mitsuba | references apart (relMSE; mean ratio; Mitsuba's negative or non-finite pixels) |\n|---|---|---|---|---|---|---|---|---|---|\n",
     );
     let ms = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.1}"));
     for r in rows {
         s += &format!(
-            "| {} | {} | {} | {:.2} M / {:.2} M | {:.2} M | {:.2}x | {:.2} | **{:.2}x** / {:.2}x | {} / {} | {:.1e}; {:.3} {:.3} {:.3}; {} |\n",
+            "| {} | {} | {} | {:.2} M / {:.2} M | {:.2} M | {:.2}x | {:.2} | **{:.2}x** / {:.2}x / {:.2}x | {} / {} | {:.1e}; {:.3} {:.3} {:.3}; {} |\n",
             r.scene,
             r.raykin_curve,
             r.mitsuba_variant,
@@ -281,6 +297,7 @@ pub fn markdown(rows: &[SideBySide]) -> String {
             r.variance_ratio,
             r.time_to_equal_error_trace,
             r.time_to_equal_error_wall,
+            r.time_to_equal_error_steady,
             ms(r.raykin_ms_to_0_01),
             ms(r.mitsuba_ms_to_0_01),
             r.references_rel_mse,
