@@ -1,11 +1,12 @@
 // The environment light (`LIGHT_ENVIRONMENT`): an equirectangular radiance map at infinity, turned about +Y,
 // scaled, bilinear between texels and importance-sampled by a 2D distribution over luminance x sin(theta):
-// a cell by its corners' mean, the point inside it in proportion to their bilinear interpolation.
+// a cell by its corners' mean, the point inside it in proportion to their bilinear interpolation where the map's
+// cells have enough contrast for that to pay (`LIGHT_ENVIRONMENT_BILINEAR`), else uniformly.
 // Conventions (exactly Mitsuba 3's `envmap`): engine/src/environment/map.rs; the distribution and its CPU
 // twin: engine/src/environment/sampling.rs.
 //
 // Fields: index_a = map width W, index_b = map height H, position.xy = (cos, sin) of the rotation about +Y,
-// radiance = strength. `environment_map` holds 3 W H texel values, then W (H - 1) conditional CDF entries (row
+// radiance = strength, flags: LIGHT_ENVIRONMENT_BILINEAR. `environment_map` holds 3 W H texel values, then W (H - 1) conditional CDF entries (row
 // by row), then H - 1 marginal CDF entries.
 
 // A world direction in the map's frame.
@@ -118,8 +119,11 @@ fn environment_pdf(light: Light, dir: vec3<f32>) -> f32 {
     let i = u32((i32(floor(x)) + i32(w)) % i32(w));
     let y = uv.y * f32(rows);
     let j = min(u32(y), rows - 1u);
-    let f = vec2<f32>(x - floor(x), clamp(y - f32(j), 0.0, 1.0));
-    let inside = environment_bilinear_density(environment_corners(w, i, j), f);
+    var inside = 1.0;
+    if (light.flags & LIGHT_ENVIRONMENT_BILINEAR) != 0u {
+        let f = vec2<f32>(x - floor(x), clamp(y - f32(j), 0.0, 1.0));
+        inside = environment_bilinear_density(environment_corners(w, i, j), f);
+    }
     return environment_cell_density(w, rows, i, j) * inside / (2.0 * PI * PI * sin_theta);
 }
 
@@ -135,16 +139,27 @@ fn environment_sample_li(light: Light, u: vec2<f32>) -> LightLiSample {
     // of the cell's corner luminances: v by its linear marginal, then u by the linear conditional.
     let ry = clamp((u.y - (environment_map[marginal + j] - environment_cdf_step(marginal, j))) / environment_cdf_step(marginal, j), 0.0, 0.99999994);
     let rx = clamp((u.x - (environment_map[row + i] - environment_cdf_step(row, i))) / environment_cdf_step(row, i), 0.0, 0.99999994);
-    let c = environment_corners(w, i, j);
-    let fy = environment_sample_linear(ry, c.x + c.y, c.z + c.w);
-    let fx = environment_sample_linear(rx, mix(c.x, c.z, fy), mix(c.y, c.w, fy));
-    let su = (f32(i) + 0.5 + fx) / f32(w);
-    let d = environment_direction(vec2<f32>(su - floor(su), (f32(j) + fy) / f32(rows)));
+    let bilinear = (light.flags & LIGHT_ENVIRONMENT_BILINEAR) != 0u;
+    var f = vec2<f32>(rx, ry);
+    if bilinear {
+        let c = environment_corners(w, i, j);
+        f.y = environment_sample_linear(ry, c.x + c.y, c.z + c.w);
+        f.x = environment_sample_linear(rx, mix(c.x, c.z, f.y), mix(c.y, c.w, f.y));
+    }
+    let su = (f32(i) + 0.5 + f.x) / f32(w);
+    let d = environment_direction(vec2<f32>(su - floor(su), (f32(j) + f.y) / f32(rows)));
     let dir = environment_to_world(light, d);
-    // The density from the direction, as BSDF-sampled rays that reach the map get it: where the bilinear
-    // density is steep (a sun texel beside dark ones) the point's round trip through the direction moves it
-    // by enough to change its density by more than 0.2%, and both must agree for MIS.
-    let pdf = environment_pdf(light, dir);
+    var pdf: f32;
+    if bilinear {
+        // The density from the direction, as BSDF-sampled rays that reach the map get it: where the bilinear
+        // density is steep (a sun texel beside dark ones) the point's round trip through the direction moves it
+        // by enough to change its density by more than 0.2%, and both must agree for MIS.
+        pdf = environment_pdf(light, dir);
+    } else {
+        let sin_theta = sqrt(max(0.0, 1.0 - d.y * d.y));
+        if sin_theta <= 0.0 { return no_light_sample(); }
+        pdf = environment_cell_density(w, rows, i, j) / (2.0 * PI * PI * sin_theta);
+    }
     if pdf <= 0.0 { return no_light_sample(); }
     return LightLiSample(dir, MISS, environment_le(light, dir), pdf, false);
 }

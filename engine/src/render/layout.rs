@@ -146,6 +146,10 @@ pub const LIGHT_SPOT: u32 = 2;
 pub const LIGHT_DIRECTIONAL: u32 = 3;
 pub const LIGHT_ENVIRONMENT: u32 = 4;
 pub const LIGHT_SUN: u32 = 5;
+/// `GpuLight::flags` of an environment map: points inside a cell follow the bilinear interpolation of its
+/// corners' luminance (set where some cell's corners differ enough for it to pay; see
+/// `environment::EnvironmentDistribution::bilinear`).
+pub const LIGHT_ENVIRONMENT_BILINEAR: u32 = 1;
 
 /// One light of any kind (`shaders/scene/types.wgsl` `Light`; `shaders/lights/` reads it). What each field
 /// holds per kind:
@@ -157,6 +161,7 @@ pub const LIGHT_SUN: u32 = 5;
 /// | spot | - | world position, range | axis it shines along, cos outer cone | intensity, cos inner cone |
 /// | directional | - | - | direction it travels | irradiance (W/m^2) |
 /// | environment | map width, height | (cos, sin) of the turn about +Y | - | strength |
+/// (an environment's `flags`: [`LIGHT_ENVIRONMENT_BILINEAR`])
 /// | sun | - | -, 1 - cos(angular radius) | towards the sun | radiance |
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
@@ -223,6 +228,7 @@ pub const WGSL_CONSTANTS: &[(&str, u32)] = &[
     ("LIGHT_DIRECTIONAL", LIGHT_DIRECTIONAL),
     ("LIGHT_ENVIRONMENT", LIGHT_ENVIRONMENT),
     ("LIGHT_SUN", LIGHT_SUN),
+    ("LIGHT_ENVIRONMENT_BILINEAR", LIGHT_ENVIRONMENT_BILINEAR),
     ("LIGHT_TREE_LEAF", LIGHT_TREE_LEAF),
     ("LIGHT_TREE_TWO_SIDED", LIGHT_TREE_TWO_SIDED),
     // A BVH2 traversal stack needs at most one entry per level below the root; builds deeper than

@@ -175,7 +175,11 @@ impl GpuScene {
                 kind: LIGHT_ENVIRONMENT,
                 index_a: map.width,
                 index_b: map.height,
-                flags: 0,
+                flags: if dist.bilinear {
+                    LIGHT_ENVIRONMENT_BILINEAR
+                } else {
+                    0
+                },
                 position: [cos, sin, 0.0],
                 range: 0.0,
                 direction: [0.0; 3],
