@@ -23,5 +23,5 @@ python3 "$here/mitsuba-side-by-side.py" "$export_dir" --variant "${MITSUBA_VARIA
 for s in $scenes; do
   cp "$export_dir/$s/mitsuba.json" "$work/mitsuba-$s.json" 2>/dev/null
 done
-"$bin" bench --suite full "${scene_args[@]}" --assets "$assets" --parts errors --curve "16 spp" --curve "from depth 5" \
+"$bin" bench --suite full "${scene_args[@]}" --assets "$assets" --parts errors --curve "16 spp" \
   --mitsuba "$export_dir" --out "$work/bench" --cache /tmp/bench-cache 2>&1 | tee "$work/bench.log"

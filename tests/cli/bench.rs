@@ -174,9 +174,9 @@ fn check_error_curves(results: &Value, out: &Path) {
         let cached = out.join("cache").join(format!("{scene}-{key}"));
         assert!(cached.join("half_a.exr").exists() && cached.join("half_b.exr").exists());
         let curves = s["curves"].as_array().unwrap();
-        // The estimator's curves (with the light sampler the default does not use and roulette from depth 5),
-        // svgf, and OIDN at high and fast quality.
-        assert_eq!(curves.len(), 12);
+        // The estimator's curves (with the light sampler the default does not use), svgf, and OIDN at high and
+        // fast quality.
+        assert_eq!(curves.len(), 11);
         for c in curves {
             let name = c["name"].as_str().unwrap();
             let points = c["points"].as_array().unwrap();

@@ -338,6 +338,10 @@ fn check_save(source: PathBuf) {
             roughness_texture: None,
         });
     }
+    // Unlit switched on (the inspector's checkbox) on the last material.
+    if let Some(m) = materials.last_mut() {
+        m.extensions.unlit = !m.extensions.unlit;
+    }
     // The file's own coats: a texture turned off, a coat normal map's scale changed.
     for m in materials.iter_mut().skip(2) {
         if let Some(c) = &mut m.extensions.clearcoat {

@@ -874,19 +874,7 @@ fn texture_transform_moves_the_texels() {
             wrap_t: Wrap::Repeat,
             nearest: true,
         }];
-        // The quad exactly fills a 90-degree view from distance 1.
-        let camera = CameraChoice::LookAt {
-            eye: Vec3::new(0.0, 0.0, 1.0),
-            target: Vec3::ZERO,
-            yfov: 90f32.to_radians(),
-        };
-        let settings = RenderSettings {
-            width: SIZE,
-            height: SIZE,
-            max_depth: 0,
-            environment: Environment::Constant([0.0; 3]),
-            ..Default::default()
-        };
+        let (camera, settings) = unit_quad_view(SIZE, 0);
         render(ctx, &Arc::new(scene), settings, &camera, 16)
     };
     // The specification's transform, and the texel a UV lands in under repeat wrapping.
@@ -1042,18 +1030,7 @@ fn texture_transform_turns_normal_map_texels() {
             ..Default::default()
         });
         scene.roots.push(scene.nodes.len() - 1);
-        let camera = CameraChoice::LookAt {
-            eye: Vec3::new(0.0, 0.0, 1.0),
-            target: Vec3::ZERO,
-            yfov: 90f32.to_radians(),
-        };
-        let settings = RenderSettings {
-            width: SIZE,
-            height: SIZE,
-            max_depth: 1,
-            environment: Environment::Constant([0.0; 3]),
-            ..Default::default()
-        };
+        let (camera, settings) = unit_quad_view(SIZE, 1);
         render(ctx, &Arc::new(scene), settings, &camera, 2)
     };
     let mean = |img: &[[f32; 3]]| img.iter().map(|p| p[1] as f64).sum::<f64>() / img.len() as f64;
@@ -1087,4 +1064,22 @@ fn texture_transform_turns_normal_map_texels() {
         worst < 1e-3,
         "the rotated normal map shades unlike the pre-rotated texel: worst pixel off by {worst:.2e} (means: rotated {m_rot}, expected {m_exp}, unturned {m_unturned}, turned the other way {m_back})"
     );
+}
+
+/// A `size` x `size` view in which the unit quad at z = 0 (x, y in -1..1) exactly fills a 90-degree view from
+/// distance 1, in black, with paths of `max_depth` bounces.
+fn unit_quad_view(size: u32, max_depth: u32) -> (CameraChoice, RenderSettings) {
+    let camera = CameraChoice::LookAt {
+        eye: Vec3::new(0.0, 0.0, 1.0),
+        target: Vec3::ZERO,
+        yfov: 90f32.to_radians(),
+    };
+    let settings = RenderSettings {
+        width: size,
+        height: size,
+        max_depth,
+        environment: Environment::Constant([0.0; 3]),
+        ..Default::default()
+    };
+    (camera, settings)
 }

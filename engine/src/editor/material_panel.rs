@@ -87,6 +87,11 @@ fn edit(ui: &mut egui::Ui, m: &mut Material, original: &Material) {
                     .range(0.0..=1.0e4),
             );
             ui.end_row();
+            ui.label("unlit");
+            ui.checkbox(&mut m.extensions.unlit, "").on_hover_text(
+                "KHR_materials_unlit: the base colour is shown as is, with no lighting",
+            );
+            ui.end_row();
             ui.label("alpha mode");
             let mut mode = match m.alpha_mode {
                 AlphaMode::Opaque => 0,

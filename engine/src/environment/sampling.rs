@@ -238,6 +238,17 @@ mod tests {
         EnvironmentMap::new(w, h, texels)
     }
 
+    /// A linear congruential stream of uniform numbers in [0, 1) from `seed`.
+    fn uniforms(seed: u64) -> impl FnMut() -> f32 {
+        let mut state = seed;
+        move || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 40) as f32 / (1u64 << 24) as f32
+        }
+    }
+
     /// Integrates the density over the sphere with a fine (theta, phi) midpoint rule.
     #[test]
     fn pdf_integrates_to_one() {
@@ -271,13 +282,7 @@ mod tests {
         let sun = uv_to_direction(7.5 / 32.0, 5.0 / 16.0);
         let mut near_sun = 0;
         let n = 20000;
-        let mut state = 12345u64;
-        let mut rand = || {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (state >> 40) as f32 / (1u64 << 24) as f32
-        };
+        let mut rand = uniforms(12345);
         for _ in 0..n {
             let (d, pdf) = dist.sample([rand(), rand()]);
             assert!(pdf > 0.0 && (d.length() - 1.0).abs() < 1e-4);
@@ -298,13 +303,7 @@ mod tests {
     fn samples_follow_the_bilinear_radiance() {
         let map = sunny_map();
         let dist = EnvironmentDistribution::new(&map);
-        let mut state = 99u64;
-        let mut rand = || {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (state >> 40) as f32 / (1u64 << 24) as f32
-        };
+        let mut rand = uniforms(99);
         let n = 200_000;
         let (mut sum, mut sum2) = (0.0f64, 0.0f64);
         for _ in 0..n {

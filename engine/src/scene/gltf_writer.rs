@@ -273,13 +273,18 @@ fn apply_material(j: &mut json::Material, m: &Material) {
 }
 
 /// Writes the material extensions the renderer shades with (and the inspector edits) over the JSON material:
-/// IOR, transmission, volume, specular, clearcoat and sheen, added, changed or removed as the material has them.
+/// IOR, transmission, volume, specular, clearcoat, sheen and unlit, added, changed or removed as the material has
+/// them.
 /// Texture references the editor turned off are removed. Returns the names of those in use.
 fn apply_rendered_extensions(j: &mut json::Material, m: &Material) -> Vec<&'static str> {
     use json::extensions::material as ext;
     let e = &m.extensions;
     let x = j.extensions.get_or_insert_with(Default::default);
     let mut used = Vec::new();
+    x.unlit = e.unlit.then(Default::default);
+    if e.unlit {
+        used.push("KHR_materials_unlit");
+    }
     if e.ior != 1.5 || x.ior.is_some() {
         x.ior.get_or_insert_with(Default::default).ior = ext::IndexOfRefraction(e.ior);
         used.push("KHR_materials_ior");

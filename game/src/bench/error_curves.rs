@@ -35,8 +35,6 @@ pub const CURVES: &[Curve] = &[
     curve("max depth 2", |s| s.max_depth = s.max_depth.min(2)),
     curve("max depth 3", |s| s.max_depth = s.max_depth.min(3)),
     curve("Russian roulette off", |s| s.russian_roulette = false),
-    // Where roulette starts (the default 3; Mitsuba's path integrator starts at 5).
-    curve("Russian roulette from depth 5", |s| s.rr_depth = 5),
     curve("NEE/MIS off (BRDF sampling only)", |s| s.nee = false),
     // The light sampler the default does not use (power vs the spatial tree).
     curve("power light sampler", |s| {

@@ -135,13 +135,19 @@ fn export_mitsuba(
         reference_spp: suite.reference_spp,
     };
     for scene in loaded.iter().filter(|s| !s.animated()) {
-        let app = open_app(ctx, scene, at_size(base, (width, height)))?;
+        // A fixed view is the camera as is (as the renderer resolves it); any other is resolved by an app.
+        let camera = match scene.camera {
+            raykin::camera::CameraChoice::LookAt { eye, target, yfov } => {
+                raykin::camera::CameraView::look_at(eye, target, glam::Vec3::Y, yfov)
+            }
+            _ => open_app(ctx, scene, at_size(base, (width, height)))?.camera(),
+        };
         let settings = RenderSettings {
             environment: scene.environment.clone(),
             ..base.clone()
         };
         let out = dir.join(&scene.name);
-        mitsuba::export::export(scene, &app.camera(), &settings, &renders, &out)?;
+        mitsuba::export::export(scene, &camera, &settings, &renders, &out)?;
         eprintln!(
             "raykin bench: {}: exported for Mitsuba to {}",
             scene.name,
