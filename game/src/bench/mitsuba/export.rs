@@ -1,8 +1,8 @@
 //! A bench scene written the way `scripts/mitsuba-side-by-side.py` reads it, so that Mitsuba 3 renders the
 //! same pixels raykin does: world-space triangle groups (one per mesh instance and material) in one binary
-//! file, textures as PNGs (their factors stay in `scene.json`, as glTF keeps them), what cannot be a shared
-//! texture (emission x factor x strength, coverage alpha) baked per material as EXR, the environment as the
-//! equirectangular EXR raykin itself samples, and the camera raykin resolved.
+//! file, textures as PNGs where their factor is 1 and as EXRs with the factor baked in elsewhere (Mitsuba's
+//! bitmap has no factor), emission x factor x strength and coverage alpha baked per material as EXR, the
+//! environment as the equirectangular EXR raykin itself samples, and the camera raykin resolved.
 //!
 //! What the script cannot reproduce is listed in `scene.json`'s `unsupported` (the comparison then says so):
 //! the KHR material extensions beyond metallic-roughness, vertex colours, punctual lights, a thin lens.
