@@ -5,7 +5,6 @@
 //! albedo); tests/reference/clearcoat/make_reference.py wrote the scene and the two reference halves. See
 //! tests/reference/clearcoat/README.md.
 
-use crate::common::cornell::assert_agree_within_noise;
 use crate::common::sphere_reference::*;
 use crate::common::*;
 use std::path::PathBuf;
@@ -54,75 +53,12 @@ fn clearcoated_sphere_matches_mitsuba() {
         Some(DEPTH as u64 + 1)
     );
     check_scene_file(&info);
-    let scene = std::sync::Arc::new(
-        raykin::scene::load_gltf(dir().join("clearcoat.gltf"), &Default::default())
-            .expect("clearcoat.gltf loads"),
+    sphere_matches_mitsuba(
+        "clearcoated sphere",
+        &dir(),
+        &info,
+        "clearcoat",
+        (DEPTH, SPP),
+        SPHERE_TOLERANCE,
     );
-    let (ctx, _gpu) = gpu();
-    let choice = camera(&info);
-    let start = std::time::Instant::now();
-    let a = render(
-        &ctx,
-        &scene,
-        settings(&dir(), &info, DEPTH, 1),
-        &choice,
-        SPP,
-    );
-    let b = render(
-        &ctx,
-        &scene,
-        settings(&dir(), &info, DEPTH, 2),
-        &choice,
-        SPP,
-    );
-    eprintln!(
-        "clearcoat: 2 x {SPP} spp, depth {DEPTH}, in {:.1} s",
-        start.elapsed().as_secs_f64()
-    );
-    assert_all_finite(&a, "clearcoat half a");
-    assert_all_finite(&b, "clearcoat half b");
-    let read = |name: &str| {
-        let (w, h, img) = raykin::image_io::read_exr(&dir().join(name)).expect("reference image");
-        assert_eq!((w, h), (SIZE, SIZE));
-        img
-    };
-    let (ra, rb) = (read("clearcoat_a.exr"), read("clearcoat_b.exr"));
-
-    let view = raykin::headless::HeadlessApp::new(
-        ctx.clone(),
-        scene.clone(),
-        settings(&dir(), &info, DEPTH, 0),
-        &choice,
-    )
-    .unwrap()
-    .camera();
-    let sphere = &info["sphere"];
-    let pixels = sphere_pixels(
-        &view,
-        vec3(&sphere["center"]),
-        sphere["radius"].as_f64().unwrap() as f32,
-    );
-    assert_eq!(
-        pixels.len() as u64,
-        info["sphere_pixels"]["count"].as_u64().unwrap(),
-        "sphere pixel count: raykin's camera and the script's disagree"
-    );
-    let (ours, ours_se) = masked_mean(&a, &b, &pixels);
-    let (theirs, theirs_se) = masked_mean(&ra, &rb, &pixels);
-    eprintln!(
-        "clearcoated sphere ({} px): mean ours {ours:?} (se {ours_se:?}), Mitsuba {theirs:?} (se {theirs_se:?}), ratio {:?}",
-        pixels.len(),
-        [0, 1, 2].map(|c| ours[c] / theirs[c])
-    );
-
-    assert_agree_within_noise("clearcoated sphere vs Mitsuba", (&a, &b), (&ra, &rb));
-    for c in 0..3 {
-        let tolerance = SPHERE_TOLERANCE + 4.0 * (ours_se[c].hypot(theirs_se[c])) / theirs[c];
-        assert!(
-            (ours[c] / theirs[c] - 1.0).abs() < tolerance,
-            "clearcoated sphere's pixels, channel {c}: mean {} vs Mitsuba {} (tolerance {tolerance:.3})",
-            ours[c],
-            theirs[c]
-        );
-    }
 }
