@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Same-call A/B of trace time on a device machine: each VARIANT (`binary` or `binary:shader-dir`, the binary under
 # rel/ as rel/NAME.xz, the optional folder given to RAYKIN_SHADER_DIR) runs the bench's frame loop on the bench
-# scenes (SCENES, default "cornell flight-helmet spheres crowd"), variants alternating ROUNDS times. Writes $OUT/bench.log and $OUT/ab.txt (variant, round, scene,
+# scenes (SCENES, default "cornell flight-helmet spheres crowd"; BENCH_ARGS: more bench options, e.g.
+# "--spp-per-frame 16"), variants alternating ROUNDS times. Writes $OUT/bench.log and $OUT/ab.txt (variant, round, scene,
 # width, height, trace ms median) and prints each scene/size/variant mean. Carry .gl and rel; shared/assets holds
 # the scenes. Usage: bash scripts/gpu-ab-frames.sh ROUNDS VARIANT...
 set -u
@@ -16,7 +17,7 @@ for round in $(seq "$rounds"); do
     b=${v%%:*}; dir=/nonexistent
     [[ $v == *:* ]] && dir=${v#*:}
     w=$(mktemp -d)
-    RAYKIN_SHADER_DIR=$dir rel/$b bench --suite full --parts frames --frames 40 "${scenes[@]}" \
+    RAYKIN_SHADER_DIR=$dir rel/$b bench --suite full --parts frames --frames ${FRAMES:-40} ${BENCH_ARGS:-} "${scenes[@]}" \
       --assets shared/assets --out "$w" --cache "$w/c" >> "$OUT/bench.log" 2>&1
     python3 -c "
 import json; r=json.load(open('$w/results.json'))

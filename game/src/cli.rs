@@ -220,6 +220,10 @@ pub struct BenchArgs {
     pub frames: Option<usize>,
     #[arg(long, default_value_t = 6)]
     pub max_depth: u32,
+    /// Samples per pixel per frame of the frame loop and of the error part's default curve (an offline
+    /// render's dispatch: `render --spp-per-dispatch`).
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=1024))]
+    pub spp_per_frame: u32,
     /// Shorthand for --scene crowd (64 CesiumMan + 32 Fox, animated, through the frame loop).
     #[arg(long)]
     pub crowd: bool,

@@ -87,6 +87,8 @@ pub struct CurveResult {
     /// Trace ms until the tone-mapped relMSE (reference noise subtracted) first reaches 0.01, where the curve
     /// got there: how curves compare (importance sampling vs BSDF sampling only, light samplers).
     pub ms_to_rel_mse_0_01: Option<f64>,
+    /// Trace ms of every frame, per repeat, in order: where the time of a curve went (runs of slow frames).
+    pub frame_trace_ms: Vec<Vec<f64>>,
 }
 
 #[derive(Clone, Debug, serde::Serialize)]
@@ -147,6 +149,7 @@ pub fn measure(
         let checkpoints = checkpoints(spf, suite.error_max_spp);
         // runs[r][k] = (time, relMSE, FLIP, linear relMSE, wall time) at checkpoint k of repeat r.
         let mut runs: Vec<Vec<[f64; 5]>> = Vec::new();
+        let mut frame_trace_ms = Vec::new();
         let oidn = settings.denoise && settings.denoiser == DenoiserKind::Oidn;
         for repeat in 0..suite.error_repeats {
             settings.seed = 1000 + 100 * index as u32 + repeat as u32;
@@ -158,25 +161,44 @@ pub fn measure(
                 );
                 break;
             }
-            // The first dispatch also compiles the kernel on some drivers (lavapipe): trace one untimed frame
-            // and start the curve from a cleared accumulation.
-            app.step();
-            app.restart_accumulation();
-            let (mut elapsed_ms, mut wall_ms, mut run) = (0.0, 0.0, Vec::new());
+            // The first dispatch also compiles the kernel on some drivers (lavapipe): trace untimed frames and
+            // start the curve from a cleared accumulation. A GPU also needs its clocks back: after the previous
+            // repeat's error computation (seconds of idle) the H200 runs its first ~0.3 s of work at 345 of
+            // 1980 MHz, which made the first 100 frames of a curve 5x slower (docs/BENCHMARKS.md); Mitsuba's
+            // renders are timed after a warm-up render too.
+            let warm_up = super::gpu_warm_up(ctx);
+            let start = std::time::Instant::now();
+            loop {
+                app.step();
+                app.ctx.wait_idle();
+                app.restart_accumulation();
+                if start.elapsed() >= warm_up {
+                    break;
+                }
+            }
+            // The images are only read back during the run; their errors (tone mapping, FLIP: seconds on the CPU
+            // at 960x540) are computed after it, so that the GPU never idles long between checkpoints: an idle
+            // GPU drops its clocks, and the frames after a pause then ran 3-4x slower on the H200.
+            let (mut elapsed_ms, mut wall_ms) = (0.0, 0.0);
+            let mut images = Vec::new();
             let mut denoise_times = Vec::new();
+            let mut frame_times = Vec::new();
             for &target in &checkpoints {
                 while app.samples() < target {
                     let start = std::time::Instant::now();
                     app.step();
                     app.ctx.wait_idle();
-                    wall_ms += start.elapsed().as_secs_f64() * 1e3;
-                    match app.pass_times() {
-                        Some(p) => elapsed_ms += p.trace_ms,
+                    let frame_wall = start.elapsed().as_secs_f64() * 1e3;
+                    wall_ms += frame_wall;
+                    let trace_ms = match app.pass_times() {
+                        Some(p) => p.trace_ms,
                         None => {
-                            elapsed_ms += start.elapsed().as_secs_f64() * 1e3;
                             timing_source = "cpu-wall";
+                            frame_wall
                         }
-                    }
+                    };
+                    elapsed_ms += trace_ms;
+                    frame_times.push(trace_ms);
                 }
                 let (image, denoise_ms) = if oidn {
                     let o = app.oidn_denoised()?;
@@ -190,12 +212,20 @@ pub fn measure(
                 } else {
                     (app.radiance(), 0.0)
                 };
-                let display = tonemap(&image);
-                let err = rel_mse(&display, &reference_display);
-                let flip = flip_mean(&reference_srgb8, &srgb8(&display), w, h);
                 denoise_times.push(denoise_ms);
-                run.push([elapsed_ms, err, flip, rel_mse(&image, &r.mean), wall_ms]);
+                images.push((elapsed_ms, wall_ms, image));
             }
+            drop(app);
+            frame_trace_ms.push(frame_times);
+            let mut run: Vec<[f64; 5]> = images
+                .into_iter()
+                .map(|(elapsed_ms, wall_ms, image)| {
+                    let display = tonemap(&image);
+                    let err = rel_mse(&display, &reference_display);
+                    let flip = flip_mean(&reference_srgb8, &srgb8(&display), w, h);
+                    [elapsed_ms, err, flip, rel_mse(&image, &r.mean), wall_ms]
+                })
+                .collect();
             // A denoise costs the same at any spp: its median time is added to every point (one pass's
             // jitter would otherwise outweigh the trace time between the first checkpoints).
             let denoise_ms = median(&denoise_times);
@@ -238,6 +268,7 @@ pub fn measure(
             name: c.name.to_string(),
             ms_to_rel_mse_0_01: time_to_reach(&reached, 0.01),
             points,
+            frame_trace_ms,
         });
     }
     // Fits on the default curve, reference noise subtracted; the first two points (1-2 spp) are left out of

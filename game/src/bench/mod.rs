@@ -88,6 +88,17 @@ struct Results {
     load_average_end: Option<String>,
 }
 
+/// Untimed work before anything is timed: on a GPU, long enough for its clocks to come back from idle (the H200
+/// drops to 345 of 1980 MHz after about 1.5 s without work and needs ~0.3 s of work to climb back); none on a
+/// CPU adapter, which has no such state.
+fn gpu_warm_up(ctx: &GpuContext) -> std::time::Duration {
+    if ctx.info.device_type == raykin::gpu::DeviceType::Cpu {
+        std::time::Duration::ZERO
+    } else {
+        std::time::Duration::from_millis(600)
+    }
+}
+
 /// A headless app on `scene` with its fixed camera and environment, players attached, GPU passes timed.
 fn open_app(ctx: &GpuContext, scene: &BenchScene, settings: RenderSettings) -> Result<HeadlessApp> {
     let settings = RenderSettings {
@@ -193,7 +204,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     std::fs::create_dir_all(&charts_dir)
         .with_context(|| format!("{}: cannot create the output folder", charts_dir.display()))?;
     let base = RenderSettings {
-        spp_per_frame: 1,
+        spp_per_frame: args.spp_per_frame,
         max_depth: args.max_depth,
         static_bvh: args.static_bvh.into(),
         deform: args.deform.into(),
