@@ -5,8 +5,8 @@
 # sh-a = c4aef18's path loop and sample loop, sh-b = the resumable path (path_advance) in the old sample loop,
 # built-in = path regeneration; at 16 spp per frame and at 1. Carry .gl, rel and ab-shaders (made with `git show
 # c4aef18:shaders/integrator/path.wgsl` and `...:engine/src/render/passes/trace/trace.wgsl` into ab-shaders/sh-a/
-# integrator/path.wgsl and sh-a/trace.wgsl; sh-b: the regeneration commit's path.wgsl with sh-a's trace.wgsl; the
-# regeneration kernel itself was not kept: its text is in this commit's parent's history only as this A/B).
+# integrator/path.wgsl and sh-a/trace.wgsl; sh-b: c4aef18 with regeneration.patch's path.wgsl and sh-a's trace.wgsl;
+# the binary: c4aef18 with the whole patch (regeneration was not kept, so the patch is its only record).
 set -u
 OUT=${OUT:-gpu-out}; mkdir -p "$OUT"
 for f in .gl/*.deb; do dpkg -x "$f" / ; done; ldconfig
