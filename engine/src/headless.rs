@@ -401,6 +401,8 @@ impl HeadlessApp {
             .reset_requested = true;
     }
 
+    /// The first-hit AOVs of the accumulation: recorded while the denoiser's inputs are kept
+    /// ([`Self::set_keep_denoiser_inputs`], the default) or a denoiser is on; otherwise what the targets held.
     pub fn aovs(&self) -> Aovs {
         self.view().read_aovs(&self.ctx, self.samples())
     }

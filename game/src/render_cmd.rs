@@ -318,8 +318,9 @@ fn render_to_file(
         .map(str::to_ascii_lowercase);
     let settings = settings_from(args, &scene)?;
     let mut app = HeadlessApp::new(ctx, scene.clone(), settings.clone(), &camera)?;
-    // The denoiser is on or off for the whole render: its inputs accumulate only when it runs.
-    app.set_keep_denoiser_inputs(false);
+    // The denoiser is on or off for the whole render: its inputs (moments, first-hit AOVs) accumulate only when
+    // it runs, or when the AOVs are written.
+    app.set_keep_denoiser_inputs(outputs.aovs);
     for n in &app.notes {
         eprintln!("raykin: warning: {}: {n}", scene.source);
     }

@@ -6,6 +6,12 @@
 
 var<private> rays_traced: u32;
 
+// Whether paths record the denoisers' inputs (`PathResult`'s first-hit albedo, normal and depth, and the light
+// no surface scattered). The trace pass compiles them out where nothing reads them (renders without a
+// denoiser): their state is live across every traversal of the path, and cost 3-9% of the H200's trace time
+// (docs/BENCHMARKS.md). The real-time kernels keep the default.
+override PATH_AOVS: bool = true;
+
 // Sample dimensions (sampler.wgsl): the camera's, then a fixed block per bounce, so every decision of a path
 // has its own dimension whatever the path did before.
 const DIM_FILM: u32 = 0u; // 2D
@@ -185,23 +191,23 @@ fn trace_path_from(start: PathStart, forward: vec3<f32>, sampler: Sampler) -> Pa
         if hit.instance == NONE {
             // The lights at infinity are in the light list too: ReSTIR counted them at the first hit.
             if depth == 1u && start.primary_direct_elsewhere { break; }
-            if (aov & AOV_FOLLOWING) != 0u {
+            if PATH_AOVS && (aov & AOV_FOLLOWING) != 0u {
                 result.albedo = vec3<f32>(0.0);
                 result.normal = vec3<f32>(0.0);
             }
             let escaped = throughput * escaped_radiance(ray.dir, last_vertex, last_bsdf_pdf, nee);
             result.radiance += escaped;
-            if depth == 0u { result.unscattered += escaped; }
+            if PATH_AOVS && depth == 0u { result.unscattered += escaped; }
             break;
         }
         let s = resolve_hit(hit, ray);
-        if depth == 0u && !result.hit {
+        if PATH_AOVS && depth == 0u && !result.hit {
             result.hit = true;
             result.albedo = s.bsdf.base_color;
             result.normal = s.n;
             result.depth = hit.t * dot(ray.dir, forward);
             aov = AOV_OPEN;
-        } else if (aov & AOV_FOLLOWING) != 0u {
+        } else if PATH_AOVS && (aov & AOV_FOLLOWING) != 0u {
             result.albedo *= s.bsdf.base_color;
             result.normal = s.n;
             aov = (aov & ~AOV_FOLLOWING) | AOV_OPEN;
@@ -221,7 +227,7 @@ fn trace_path_from(start: PathStart, forward: vec3<f32>, sampler: Sampler) -> Pa
             }
             if depth == 1u && start.primary_direct_elsewhere { weight = 0.0; }
             result.radiance += throughput * s.emission * weight;
-            if depth == 0u { result.unscattered += throughput * s.emission * weight; }
+            if PATH_AOVS && depth == 0u { result.unscattered += throughput * s.emission * weight; }
         }
         // An unlit surface scatters nothing.
         if MATERIAL_LOBES != 0u && (s.flags & MATERIAL_UNLIT) != 0u { break; }
@@ -241,7 +247,7 @@ fn trace_path_from(start: PathStart, forward: vec3<f32>, sampler: Sampler) -> Pa
         // below the geometry's would leak light (and a transmission the other way round).
         let transmitted = (bs.flags & BSDF_TRANSMISSION) != 0u;
         path_alive = bs.pdf > 0.0 && (dot(dir, s.ng) > 0.0) != transmitted;
-        if (aov & AOV_OPEN) != 0u && path_alive && (bs.flags & BSDF_GLOSSY) != 0u && aov_is_mirror(s.bsdf)
+        if PATH_AOVS && (aov & AOV_OPEN) != 0u && path_alive && (bs.flags & BSDF_GLOSSY) != 0u && aov_is_mirror(s.bsdf)
             && aov < AOV_MAX_MIRRORS * AOV_MIRROR_COUNT {
             // The reflectance so far: 1 at the first mirror; at a later one, what reached it (its base colour
             // divided back out).

@@ -240,8 +240,9 @@ impl Recorder {
             ..settings.frame.render.clone()
         };
         let mut app = HeadlessApp::new(ctx, self.job.scene.clone(), render, &camera)?;
-        // `--denoise` holds for the whole recording: the denoiser's inputs accumulate only when it runs.
-        app.set_keep_denoiser_inputs(false);
+        // `--denoise` holds for the whole recording: the denoiser's inputs (moments, first-hit AOVs) accumulate
+        // only when it runs, or when the AOVs are written.
+        app.set_keep_denoiser_inputs(!settings.frame.aovs.is_empty());
         summary.notes.append(&mut app.notes);
         if let Some(Err(e)) = app.resolve_denoiser() {
             let note = format!("{e}; frames are denoised with svgf instead");

@@ -126,7 +126,9 @@ pub fn render_frame(
                 keep_denoiser_inputs: accumulation.keep_denoiser_inputs,
             },
         );
-        trace.prepare(&ctx, &view, MaterialLobes::of(&scene.material_data));
+        // The denoisers' inputs where a denoiser may read them (the moments' rule, frame_constants.rs).
+        let aovs = settings.denoise || accumulation.keep_denoiser_inputs;
+        trace.prepare(&ctx, &view, MaterialLobes::of(&scene.material_data), aovs);
         trace.encode(
             &mut encoder,
             bindings.group(&ctx, &scene),

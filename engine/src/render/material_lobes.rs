@@ -108,6 +108,8 @@ pub struct LobeKernels {
     label: &'static str,
     entry: &'static str,
     module: ComputeModule,
+    /// Pipeline constants of the module's own, the same for every lobe choice.
+    constants: &'static [(&'static str, f64)],
     pipelines: [Option<wgpu::ComputePipeline>; 5],
 }
 
@@ -123,15 +125,25 @@ impl LobeKernels {
             label,
             entry,
             module: ComputeModule::new(ctx, source, layouts),
+            constants: &[],
             pipelines: Default::default(),
         }
+    }
+
+    /// The same kernels compiled with these values of the module's other pipeline constants.
+    pub fn with_constants(self, constants: &'static [(&'static str, f64)]) -> Self {
+        Self { constants, ..self }
     }
 
     /// The kernel for `lobes`, compiled now if it has not been.
     pub fn get(&mut self, lobes: MaterialLobes) -> &wgpu::ComputePipeline {
         self.pipelines[lobes.index()].get_or_insert_with(|| {
-            self.module
-                .pipeline(self.label, self.entry, &lobes.constants())
+            let constants: Vec<_> = lobes
+                .constants()
+                .into_iter()
+                .chain(self.constants.iter().copied())
+                .collect();
+            self.module.pipeline(self.label, self.entry, &constants)
         })
     }
 

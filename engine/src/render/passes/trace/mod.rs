@@ -23,8 +23,10 @@ pub const KERNEL: ShaderModule = ShaderModule {
 
 #[derive(Resource)]
 pub struct TracePass {
-    kernels: LobeKernels,
+    /// Per lobe choice: the kernels without the denoisers' inputs (`PATH_AOVS` off), then with them.
+    kernels: [LobeKernels; 2],
     lobes: MaterialLobes,
+    aovs: bool,
     view_layout: wgpu::BindGroupLayout,
     view_group: CachedGroup<u64>,
 }
@@ -40,26 +42,41 @@ impl TracePass {
                 Params, ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite,
             ],
         );
-        let kernels = LobeKernels::new(
-            ctx,
-            "path trace",
-            compose(&KERNEL),
-            &[Some(scene_layout), Some(&view_layout)],
-            "trace_pixels",
-        );
+        let kernels = |aovs: &'static [(&'static str, f64)]| {
+            LobeKernels::new(
+                ctx,
+                "path trace",
+                compose(&KERNEL),
+                &[Some(scene_layout), Some(&view_layout)],
+                "trace_pixels",
+            )
+            .with_constants(aovs)
+        };
         Self {
-            kernels,
+            kernels: [
+                kernels(&[("PATH_AOVS", 0.0)]),
+                kernels(&[("PATH_AOVS", 1.0)]),
+            ],
             lobes: MaterialLobes::Core,
+            aovs: true,
             view_layout,
             view_group: CachedGroup::default(),
         }
     }
 
     /// Binds the view's targets (again only when they were replaced) and picks the kernel for the lobes the
-    /// scene's materials use (compiling it the first time).
-    pub fn prepare(&mut self, ctx: &GpuContext, view: &ViewTargets, lobes: MaterialLobes) {
-        self.kernels.get(lobes);
+    /// scene's materials use, with the denoisers' inputs (first-hit AOVs, moments) when `aovs` (compiling it the
+    /// first time). Without them the view's AOV targets keep what they held.
+    pub fn prepare(
+        &mut self,
+        ctx: &GpuContext,
+        view: &ViewTargets,
+        lobes: MaterialLobes,
+        aovs: bool,
+    ) {
+        self.kernels[aovs as usize].get(lobes);
         self.lobes = lobes;
+        self.aovs = aovs;
         let layout = &self.view_layout;
         self.view_group.get_or_make(view.generation, || {
             bind_group(
@@ -98,7 +115,7 @@ impl TracePass {
             timestamp_writes,
         });
         pass.set_pipeline(
-            self.kernels
+            self.kernels[self.aovs as usize]
                 .compiled(self.lobes)
                 .expect("TracePass::prepare compiled this kernel"),
         );

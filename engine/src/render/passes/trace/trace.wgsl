@@ -1,6 +1,6 @@
 // The trace pass's kernel: one invocation per pixel runs `frame.spp` paths through the path integrator and adds
 // them to the view's accumulation targets (engine/src/render/view.rs), with the first-hit AOVs and the
-// denoiser's moments.
+// denoiser's moments where the kernel is compiled with them (`PATH_AOVS`).
 
 @group(1) @binding(1) var<storage, read_write> accum: array<vec4<f32>>;
 // rgb: first-hit albedo sum, w: camera-space depth sum.
@@ -53,16 +53,19 @@ fn trace_pixel(gid: vec2<u32>) {
         // A non-finite sample would poison the pixel forever; it is dropped (it should never happen).
         if finite3(r.radiance) {
             radiance += r.radiance;
-            // Capped so that a firefly's square cannot overflow the sum.
-            let l = min(max(luminance(r.radiance - r.unscattered), 0.0), 1e15);
-            unscattered_m2 += vec4<f32>(r.unscattered, l * l);
+            if PATH_AOVS {
+                // Capped so that a firefly's square cannot overflow the sum.
+                let l = min(max(luminance(r.radiance - r.unscattered), 0.0), 1e15);
+                unscattered_m2 += vec4<f32>(r.unscattered, l * l);
+            }
         }
-        if r.hit {
+        if PATH_AOVS && r.hit {
             albedo_depth += vec4<f32>(r.albedo, r.depth);
             normal_hits += vec4<f32>(r.normal, 1.0);
         }
     }
     accum[pixel] += vec4<f32>(radiance, f32(frame.spp));
+    if !PATH_AOVS { return; }
     aov_albedo_depth[pixel] += albedo_depth;
     aov_normal[pixel] += normal_hits;
     if (frame.flags & FRAME_MOMENTS) != 0u {
