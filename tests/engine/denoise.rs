@@ -423,3 +423,36 @@ fn denoise_switch_never_touches_accumulation() {
         "display follows the denoised image in {agree}/{total} pixels"
     );
 }
+
+/// Without the denoisers' inputs the trace pass runs a kernel compiled without them (`PATH_AOVS`): the same
+/// radiance to the bit, and no first-hit AOVs recorded; with them (the default) the AOVs are there.
+#[test]
+fn dropping_the_denoiser_inputs_changes_no_radiance() {
+    let (ctx, _gpu) = gpu();
+    let render = |keep: bool| {
+        let mut app = cornell::app(ctx.clone(), true, 16, 5);
+        app.set_keep_denoiser_inputs(keep);
+        app.accumulate(8, 4, |_| {});
+        (app.radiance(), app.aovs())
+    };
+    let (with, aovs) = render(true);
+    let (without, no_aovs) = render(false);
+    assert_all_finite(&with, "Cornell box");
+    assert!(
+        with.iter().flatten().map(|&v| v as f64).sum::<f64>() > 0.0,
+        "the box is lit"
+    );
+    assert!(
+        with.iter()
+            .flatten()
+            .zip(without.iter().flatten())
+            .all(|(a, b)| a.to_bits() == b.to_bits()),
+        "radiance differs without the denoisers' inputs"
+    );
+    let lit = |a: &raykin::render::Aovs| a.albedo.iter().flatten().filter(|&&v| v > 0.0).count();
+    assert!(
+        lit(&aovs) > 16 * 16,
+        "the albedo AOV is recorded when the inputs are kept"
+    );
+    assert_eq!(lit(&no_aovs), 0, "no albedo AOV without the inputs");
+}
