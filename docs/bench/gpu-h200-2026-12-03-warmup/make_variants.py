@@ -1,3 +1,8 @@
+# Makes the kernel variants of run5.sh from the repository's shaders (run at aee5f83, from the repository root):
+# ab-shaders/noaov (the path without AOVs), ab-shaders/wrap and ab-shaders/nearest (texture lookups).
+import os
+for d in ['ab-shaders/noaov/integrator', 'ab-shaders/wrap/scene', 'ab-shaders/nearest/scene']:
+    os.makedirs(d, exist_ok=True)
 src=open('shaders/integrator/path.wgsl').read()
 s=src
 reps=[('''            if (aov & AOV_FOLLOWING) != 0u {
@@ -33,34 +38,14 @@ for a,b in reps:
 open('ab-shaders/noaov/integrator/path.wgsl','w').write(s)
 
 t=open('shaders/scene/texture.wgsl').read()
-old=t[t.index('fn texel('):t.index('// A tangent-space normal')]
-wrap='''fn texel_at(info: TextureInfo, x: i32, y: i32) -> vec4<f32> {
+# `wrap`: a texel fetch without wrapping, and the bilinear lookup wrapping each of its two columns and rows once.
+fetch = """fn texel_at(info: TextureInfo, x: i32, y: i32) -> vec4<f32> {
     return unpack4x8unorm(texels[info.offset + u32(y) * info.width + u32(x)]);
 }
 
-fn texel(info: TextureInfo, x: i32, y: i32) -> vec4<f32> {
-    let wx = wrap_coord(x, i32(info.width), info.flags & 3u);
-    let wy = wrap_coord(y, i32(info.height), (info.flags >> 2u) & 3u);
-    return texel_at(info, wx, wy);
-}
-
-fn sample_texture(texture: u32, uv_in: vec2<f32>) -> vec4<f32> {
-    let info = texture_infos[texture & 0xffffffu];
-    var uv = uv_in;
-    if (info.flags & TEXTURE_TRANSFORMED) != 0u {
-        let h = vec3<f32>(uv_in, 1.0);
-        uv = vec2<f32>(dot(info.uv_u.xyz, h), dot(info.uv_v.xyz, h));
-    }
-    let size = vec2<f32>(f32(info.width), f32(info.height));
-    let st = uv * size - 0.5;
-    if (info.flags & TEXTURE_NEAREST) != 0u {
-        let p = vec2<i32>(floor(st + 0.5));
-        return texel(info, p.x, p.y);
-    }
-    let base = floor(st);
-    let f = st - base;
-    let p = vec2<i32>(base);
-    // Each coordinate wrapped once: the four texels share two columns and two rows.
+"""
+bilinear_before = t[t.index('    let a = mix(texel(info, p.x, p.y)'):t.index('// A tangent-space normal')]
+bilinear_after = """    // Each coordinate wrapped once: the four texels share two columns and two rows.
     let w = i32(info.width);
     let h = i32(info.height);
     let x0 = wrap_coord(p.x, w, info.flags & 3u);
@@ -72,7 +57,11 @@ fn sample_texture(texture: u32, uv_in: vec2<f32>) -> vec4<f32> {
     return mix(a, b, f.y);
 }
 
-'''
-open('ab-shaders/wrap/scene/texture.wgsl','w').write(t.replace(old,wrap))
+"""
+wrap = (t.replace('fn texel(', fetch + 'fn texel(', 1)
+        .replace('return unpack4x8unorm(texels[info.offset + u32(wy) * info.width + u32(wx)]);',
+                 'return texel_at(info, wx, wy);', 1)
+        .replace(bilinear_before, bilinear_after, 1))
+open('ab-shaders/wrap/scene/texture.wgsl','w').write(wrap)
 near=t.replace('''    if (info.flags & TEXTURE_NEAREST) != 0u {''','''    if true {''')
 open('ab-shaders/nearest/scene/texture.wgsl','w').write(near)
