@@ -265,7 +265,12 @@ pub fn measure(
             .map(|p| (p.time_ms, (p.rel_mse - r.noise).max(1e-12)))
             .collect();
         curves.push(CurveResult {
-            name: c.name.to_string(),
+            // The default curve runs at the bench's samples per frame (`--spp-per-frame`).
+            name: if index == 0 {
+                format!("default ({spf} spp/frame, RR, NEE+MIS)")
+            } else {
+                c.name.to_string()
+            },
             ms_to_rel_mse_0_01: time_to_reach(&reached, 0.01),
             points,
             frame_trace_ms,
