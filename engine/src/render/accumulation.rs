@@ -44,6 +44,11 @@ impl Default for Accumulation {
 }
 
 impl Accumulation {
+    /// Whether this frame's trace records the denoisers' inputs: a denoiser is on, or they are kept for one.
+    pub fn records_denoiser_inputs(&self, settings: &RenderSettings) -> bool {
+        settings.denoise || self.keep_denoiser_inputs
+    }
+
     /// The image changed: the next frame starts a new accumulation.
     pub fn restart(&mut self) {
         self.restart = true;

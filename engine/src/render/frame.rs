@@ -123,12 +123,14 @@ pub fn render_frame(
                 sample_base: accumulation.samples,
                 spp,
                 max_depth: settings.max_depth,
-                keep_denoiser_inputs: accumulation.keep_denoiser_inputs,
             },
         );
-        // The denoisers' inputs where a denoiser may read them (the moments' rule, frame_constants.rs).
-        let aovs = settings.denoise || accumulation.keep_denoiser_inputs;
-        trace.prepare(&ctx, &view, MaterialLobes::of(&scene.material_data), aovs);
+        trace.prepare(
+            &ctx,
+            &view,
+            MaterialLobes::of(&scene.material_data),
+            accumulation.records_denoiser_inputs(&settings),
+        );
         trace.encode(
             &mut encoder,
             bindings.group(&ctx, &scene),
@@ -244,7 +246,6 @@ pub fn encode_realtime_frame(
             sample_base: state.frame_index,
             spp: 1,
             max_depth: settings.max_depth,
-            keep_denoiser_inputs: false,
         },
     );
     ctx.queue

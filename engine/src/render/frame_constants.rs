@@ -1,7 +1,7 @@
 //! The per-dispatch constants of a view (`shaders/view.wgsl` `Frame`), written before each trace.
 
 use super::gpu_scene::GpuScene;
-use super::layout::{FRAME_HIT_AOV, FRAME_MOMENTS, FRAME_NEE, GpuFrame};
+use super::layout::{FRAME_HIT_AOV, FRAME_NEE, GpuFrame};
 use super::settings::{LightSampler, RenderSettings};
 use super::view::ViewTargets;
 use crate::camera::CameraView;
@@ -13,7 +13,6 @@ pub struct FrameConstants {
     pub sample_base: u32,
     pub spp: u32,
     pub max_depth: u32,
-    pub keep_denoiser_inputs: bool,
 }
 
 /// Writes the view's per-dispatch constants (`shaders/view.wgsl` `Frame`).
@@ -46,11 +45,6 @@ pub fn write_frame_constants(
         flags: if settings.nee { FRAME_NEE } else { 0 }
             | if view.hit_aov && c.sample_base == 0 {
                 FRAME_HIT_AOV
-            } else {
-                0
-            }
-            | if settings.denoise || c.keep_denoiser_inputs {
-                FRAME_MOMENTS
             } else {
                 0
             },

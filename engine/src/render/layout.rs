@@ -221,7 +221,6 @@ pub const WGSL_CONSTANTS: &[(&str, u32)] = &[
     ("WIDE_BLAS", WIDE_BLAS),
     ("FRAME_NEE", FRAME_NEE),
     ("FRAME_HIT_AOV", FRAME_HIT_AOV),
-    ("FRAME_MOMENTS", FRAME_MOMENTS),
     ("LIGHT_TRIANGLE", LIGHT_TRIANGLE),
     ("LIGHT_POINT", LIGHT_POINT),
     ("LIGHT_SPOT", LIGHT_SPOT),
@@ -374,8 +373,6 @@ pub struct GpuFrame {
 pub const FRAME_NEE: u32 = 1;
 /// Bit 1: write the primary-hit AOV (first dispatch after a reset only).
 pub const FRAME_HIT_AOV: u32 = 2;
-/// Bit 2: accumulate the denoiser's moments (its variance and unscattered-light inputs).
-pub const FRAME_MOMENTS: u32 = 4;
 
 /// Octahedral encoding of a unit vector into two snorm16 values (WGSL `unpack2x16snorm` decodes it).
 pub fn oct_encode(v: Vec3) -> u32 {

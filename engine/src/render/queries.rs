@@ -85,7 +85,6 @@ pub fn cast_rays(world: &World, diffuse_bounce: bool) -> Option<RayCastTiming> {
             sample_base: world.resource::<Accumulation>().samples,
             spp: 1,
             max_depth: u32::from(diffuse_bounce),
-            keep_denoiser_inputs: false,
         },
     );
     let mut encoder = ctx.device.create_command_encoder(&Default::default());

@@ -68,7 +68,5 @@ fn trace_pixel(gid: vec2<u32>) {
     if !PATH_AOVS { return; }
     aov_albedo_depth[pixel] += albedo_depth;
     aov_normal[pixel] += normal_hits;
-    if (frame.flags & FRAME_MOMENTS) != 0u {
-        moments[pixel] += unscattered_m2;
-    }
+    moments[pixel] += unscattered_m2;
 }
