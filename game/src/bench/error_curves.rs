@@ -166,16 +166,8 @@ pub fn measure(
             // repeat's error computation (seconds of idle) the H200 runs its first ~0.3 s of work at 345 of
             // 1980 MHz, which made the first 100 frames of a curve 5x slower (docs/BENCHMARKS.md); Mitsuba's
             // renders are timed after a warm-up render too.
-            let warm_up = super::gpu_warm_up(ctx);
-            let start = std::time::Instant::now();
-            loop {
-                app.step();
-                app.ctx.wait_idle();
-                app.restart_accumulation();
-                if start.elapsed() >= warm_up {
-                    break;
-                }
-            }
+            super::warm_up(&mut app, 1);
+            app.restart_accumulation();
             // The images are only read back during the run; their errors (tone mapping, FLIP: seconds on the CPU
             // at 960x540) are computed after it, so that the GPU never idles long between checkpoints: an idle
             // GPU drops its clocks, and the frames after a pause then ran 3-4x slower on the H200.

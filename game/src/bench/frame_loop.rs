@@ -96,7 +96,7 @@ pub struct FrameRow {
     pub raycast_diffuse_rays_per_s: f64,
 }
 
-/// A frame loop over `scene` at `settings`' size: `warmup` frames (more on a GPU: [`super::gpu_warm_up`]), then
+/// A frame loop over `scene` at `settings`' size: `warmup` frames (more on a GPU: [`super::warm_up`]), then
 /// `frames` measured.
 pub fn measure(
     ctx: &GpuContext,
@@ -110,13 +110,7 @@ pub fn measure(
     app.accumulation_mut().display_each_frame = true;
     let mut samples: Vec<[f64; SAMPLE_COLUMNS]> = Vec::with_capacity(frames);
     let mut rays = 0u64;
-    // At least `warmup` frames, and on a GPU until its clocks are back from the idle of loading the scene.
-    let warm_up = std::time::Instant::now();
-    let mut warmed = 0;
-    while warmed < warmup || warm_up.elapsed() < super::gpu_warm_up(ctx) {
-        app.step();
-        warmed += 1;
-    }
+    super::warm_up(&mut app, warmup);
     for _ in 0..frames {
         let start = std::time::Instant::now();
         app.step();

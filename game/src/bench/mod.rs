@@ -88,14 +88,17 @@ struct Results {
     load_average_end: Option<String>,
 }
 
-/// Untimed work before anything is timed: on a GPU, long enough for its clocks to come back from idle (the H200
-/// drops to 345 of 1980 MHz after about 1.5 s without work and needs ~0.3 s of work to climb back); none on a
-/// CPU adapter, which has no such state.
-fn gpu_warm_up(ctx: &GpuContext) -> std::time::Duration {
-    if ctx.info.device_type == raykin::gpu::DeviceType::Cpu {
-        std::time::Duration::ZERO
-    } else {
-        std::time::Duration::from_millis(600)
+/// Untimed frames before anything is timed: at least `frames`, and on a GPU 0.6 s of them, long enough for its
+/// clocks to come back from idle (the H200 drops to 345 of 1980 MHz after about 1.5 s without work and needs
+/// ~0.3 s of work to climb back); a CPU adapter has no such state.
+fn warm_up(app: &mut HeadlessApp, frames: usize) {
+    let gpu = app.ctx.info.device_type != raykin::gpu::DeviceType::Cpu;
+    let start = std::time::Instant::now();
+    let mut done = 0;
+    while done < frames || (gpu && start.elapsed() < std::time::Duration::from_millis(600)) {
+        app.step();
+        app.ctx.wait_idle();
+        done += 1;
     }
 }
 
