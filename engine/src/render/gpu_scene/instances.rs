@@ -198,6 +198,7 @@ impl GpuScene {
                         light,
                         power,
                         bounds: Some(bounds),
+                        next_event: true,
                     });
                     inst.light_count += 1;
                 }

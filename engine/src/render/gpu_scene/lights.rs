@@ -30,14 +30,20 @@ pub struct WeightedLight {
     pub light: GpuLight,
     pub power: f64,
     pub bounds: Option<LightBounds>,
+    /// Whether next-event estimation samples it. A uniform environment is left to BSDF sampling (pbrt-v4's
+    /// `UniformInfiniteLight` with `allowIncompletePDF`): cosine or glossy-lobe directions sample its light at
+    /// least as well as uniform directions on the sphere, half of which point into the surface, and the path
+    /// saves the shadow ray. The power CDF (ReSTIR's candidates) keeps it.
+    pub next_event: bool,
 }
 
 /// The lights at infinity of the current environment, before their power (which needs the scene's size).
 #[derive(Clone, Debug, Default)]
 pub struct InfiniteLights {
-    /// The environment map light (`None`: black).
-    environment: Option<(GpuLight, f64)>,
-    sun: Option<(GpuLight, f64)>,
+    /// The environment map light (`None`: black), its power, and whether next-event estimation samples it
+    /// (not when it is uniform).
+    environment: Option<(GpuLight, f64, bool)>,
+    sun: Option<(GpuLight, f64, bool)>,
 }
 
 /// The light list's parts and upload state, inside [`GpuScene`].
@@ -126,6 +132,7 @@ pub fn punctual_light(world: Mat4, light: &PunctualLight) -> WeightedLight {
         light: gpu,
         power,
         bounds,
+        next_event: true,
     }
 }
 
@@ -187,8 +194,11 @@ impl GpuScene {
                 radiance: [baked.strength; 3],
                 cos_inner: 0.0,
             };
-            self.lights.infinite.environment =
-                Some((light, dist.luminance_integral * baked.strength as f64));
+            self.lights.infinite.environment = Some((
+                light,
+                dist.luminance_integral * baked.strength as f64,
+                !map.is_uniform(),
+            ));
         }
         if let Some(sun) = &baked.sun {
             let light = GpuLight {
@@ -205,7 +215,7 @@ impl GpuScene {
             };
             let solid_angle = 2.0 * PI * sun.one_minus_cos as f64;
             let power = luminance(Vec3::from(sun.radiance)) as f64 * solid_angle;
-            self.lights.infinite.sun = Some((light, power));
+            self.lights.infinite.sun = Some((light, power, true));
         }
     }
 
@@ -229,7 +239,7 @@ impl GpuScene {
             ..w
         }));
         let infinite_first = all.len() as u32;
-        for (light, power) in [list.infinite.environment, list.infinite.sun]
+        for (light, power, next_event) in [list.infinite.environment, list.infinite.sun]
             .into_iter()
             .flatten()
         {
@@ -237,10 +247,13 @@ impl GpuScene {
                 light,
                 power: power * disc,
                 bounds: None,
+                next_event,
             });
         }
         let infinite_count = all.len() as u32 - infinite_first;
-        let cdf = power_cdf(&all);
+        // Two CDFs in one buffer: by power over every light, then next-event estimation's.
+        let mut cdf = power_cdf(&all);
+        cdf.extend(next_event_cdf(&all));
         // The tree over the lights at finite distance; each light's bit trail goes in its flags.
         let bounded: Vec<(u32, LightBounds)> = all[..tree_lights]
             .iter()
@@ -324,6 +337,40 @@ pub fn power_cdf(lights: &[WeightedLight]) -> Vec<f32> {
         .collect()
 }
 
+/// Next-event estimation's CDF: [`power_cdf`] over the lights it samples, the others never chosen (probability 0);
+/// all zeros when it samples none (then it picks nothing and BSDF sampling alone lights the scene).
+pub fn next_event_cdf(lights: &[WeightedLight]) -> Vec<f32> {
+    let sampled: Vec<WeightedLight> = lights
+        .iter()
+        .map(|w| WeightedLight {
+            power: if w.next_event { w.power.max(0.0) } else { 0.0 },
+            ..*w
+        })
+        .collect();
+    let Some(last) = sampled.iter().rposition(|w| w.next_event) else {
+        return vec![0.0; lights.len()];
+    };
+    let total: f64 = sampled.iter().map(|w| w.power).sum();
+    if total <= 0.0 {
+        // Uniform over the sampled lights, as power_cdf does when every power is zero.
+        let count = sampled.iter().filter(|w| w.next_event).count();
+        let mut seen = 0;
+        return sampled
+            .iter()
+            .map(|w| {
+                seen += w.next_event as usize;
+                seen as f32 / count as f32
+            })
+            .collect();
+    }
+    let mut cdf = power_cdf(&sampled);
+    // The last sampled light ends the CDF at exactly 1, so no u < 1 reaches a light after it.
+    for entry in &mut cdf[last..] {
+        *entry = 1.0;
+    }
+    cdf
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -346,9 +393,32 @@ mod tests {
                 light: GpuLight::zeroed(),
                 power: p,
                 bounds: None,
+                next_event: true,
             })
             .to_vec();
         assert_eq!(power_cdf(&lights), vec![0.125, 0.5, 0.5, 1.0]);
+    }
+
+    #[test]
+    fn next_event_estimation_never_picks_what_it_leaves_to_bsdf_sampling() {
+        let light = |power, next_event| WeightedLight {
+            light: GpuLight::zeroed(),
+            power,
+            bounds: None,
+            next_event,
+        };
+        // A lamp, a uniform environment, a sun: the environment's share goes to the others.
+        let lights = [light(1.0, true), light(6.0, false), light(3.0, true)];
+        assert_eq!(power_cdf(&lights), vec![0.1, 0.7, 1.0]);
+        assert_eq!(next_event_cdf(&lights), vec![0.25, 0.25, 1.0]);
+        // Trailing lights it skips sit at 1: no u < 1 reaches them.
+        let lights = [light(1.0, true), light(6.0, false)];
+        assert_eq!(next_event_cdf(&lights), vec![1.0, 1.0]);
+        // Only a uniform environment: nothing to pick (every probability 0).
+        assert_eq!(next_event_cdf(&[light(6.0, false)]), vec![0.0]);
+        // Sampled lights without power: uniform among them.
+        let lights = [light(0.0, true), light(6.0, false), light(0.0, true)];
+        assert_eq!(next_event_cdf(&lights), vec![0.5, 0.5, 1.0]);
     }
 
     #[test]
