@@ -51,7 +51,7 @@ fn sample_direct(s: SurfaceInteraction, wo: vec3<f32>, tbn: mat3x3<f32>, sampler
     let ctx = LightSampleContext(s.p, s.ng);
     let choice = light_sampler_sample_at(ctx, get_1d(sampler, dims + DIM_LIGHT_CHOICE));
     if choice.pmf <= 0.0 { return none; }
-    let ls = light_sample_li(choice.light, ctx, get_2d(sampler, dims + DIM_LIGHT_POINT));
+    let ls = light_sample_li(choice.light, ctx, get_2d(sampler, dims + DIM_LIGHT_POINT), true);
     if ls.pdf <= 0.0 || choice.pmf <= 0.0 { return none; }
     // Light from behind the surface counts only through a transmitting lobe.
     let behind = dot(ls.wi, s.ng) <= 0.0;
@@ -75,7 +75,7 @@ fn sample_direct(s: SurfaceInteraction, wo: vec3<f32>, tbn: mat3x3<f32>, sampler
 fn direct_pdf_of_hit(hit: Hit, p: vec3<f32>, last_vertex: LightSampleContext, dir: vec3<f32>) -> f32 {
     let light = triangle_light_index(hit.instance, hit.triangle);
     if light == NONE { return 0.0; }
-    return light_sampler_pmf_at(last_vertex, light) * light_pdf_li(light, last_vertex, dir, distance(p, last_vertex.p));
+    return light_sampler_pmf_at(last_vertex, light) * light_pdf_li(light, last_vertex, dir, distance(p, last_vertex.p), true);
 }
 
 // What a ray leaving the scene along `dir` sees of the lights at infinity, each weighed against next-event
@@ -89,7 +89,7 @@ fn escaped_radiance(dir: vec3<f32>, last_vertex: LightSampleContext, bsdf_pdf: f
         if all(le == vec3<f32>(0.0)) { continue; }
         var weight = 1.0;
         if nee && bsdf_pdf > 0.0 {
-            weight = power_heuristic(bsdf_pdf, light_sampler_pmf_at(last_vertex, light) * light_pdf_li(light, last_vertex, dir, MISS));
+            weight = power_heuristic(bsdf_pdf, light_sampler_pmf_at(last_vertex, light) * light_pdf_li(light, last_vertex, dir, MISS, true));
         }
         sum += le * weight;
     }

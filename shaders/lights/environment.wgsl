@@ -6,8 +6,10 @@
 // twin: engine/src/environment/sampling.rs.
 //
 // Fields: index_a = map width W, index_b = map height H, position.xy = (cos, sin) of the rotation about +Y,
-// radiance = strength, flags: LIGHT_ENVIRONMENT_BILINEAR. `environment_map` holds 3 W H texel values, then W (H - 1) conditional CDF entries (row
-// by row), then H - 1 marginal CDF entries.
+// range = the compensated distribution's offset, radiance = strength, flags: LIGHT_ENVIRONMENT_BILINEAR,
+// LIGHT_ENVIRONMENT_COMPENSATED_BILINEAR. `environment_map` holds 3 W H texel values, then W (H - 1)
+// conditional CDF entries (row by row) and H - 1 marginal CDF entries, then the same two for the compensated
+// distribution where the map has one (not a uniform map, which next-event estimation never picks).
 
 // A world direction in the map's frame.
 fn environment_to_map(light: Light, d: vec3<f32>) -> vec3<f32> {
@@ -74,22 +76,47 @@ fn environment_cdf_search(base: u32, count: u32, u: f32) -> u32 {
     return lo;
 }
 
-// Density of the cell (column i, row j) in (u, v), times the map's cell count.
-fn environment_cell_density(w: u32, rows: u32, i: u32, j: u32) -> f32 {
-    let conditional = 3u * w * (rows + 1u);
-    let marginal = conditional + w * rows;
-    return environment_cdf_step(marginal, j) * environment_cdf_step(conditional + j * w, i) * f32(w * rows);
+// One of the map's two sampling distributions (engine/src/environment/sampling.rs): in proportion to the
+// luminance (ReSTIR's candidates), or MIS-compensated, in proportion to the luminance above the map's mean
+// (next-event estimation, whose light samples BSDF sampling completes: pbrt-v4's `allowIncompletePDF`).
+struct EnvironmentDistribution {
+    // Where its conditional CDF (rows x W entries) and marginal CDF (rows entries) start in environment_map.
+    conditional: u32,
+    marginal: u32,
+    // Luminance subtracted from each corner before the clamp at 0.
+    offset: f32,
+    bilinear: bool,
 }
 
-// Luminance at the corners of cell (i, j): (i, j), (i + 1, j), (i, j + 1), (i + 1, j + 1), columns wrapping.
-fn environment_corners(w: u32, i: u32, j: u32) -> vec4<f32> {
+fn environment_distribution(light: Light, compensated: bool) -> EnvironmentDistribution {
+    let w = light.index_a;
+    let rows = light.index_b - 1u;
+    let conditional = 3u * w * (rows + 1u);
+    let marginal = conditional + w * rows;
+    if compensated {
+        let compensated_conditional = marginal + rows;
+        return EnvironmentDistribution(compensated_conditional, compensated_conditional + w * rows, light.range,
+            (light.flags & LIGHT_ENVIRONMENT_COMPENSATED_BILINEAR) != 0u);
+    }
+    return EnvironmentDistribution(conditional, marginal, 0.0, (light.flags & LIGHT_ENVIRONMENT_BILINEAR) != 0u);
+}
+
+// Density of the cell (column i, row j) in (u, v), times the map's cell count.
+fn environment_cell_density(dist: EnvironmentDistribution, w: u32, rows: u32, i: u32, j: u32) -> f32 {
+    return environment_cdf_step(dist.marginal, j) * environment_cdf_step(dist.conditional + j * w, i) * f32(w * rows);
+}
+
+// The distribution's values at the corners of cell (i, j): (i, j), (i + 1, j), (i, j + 1), (i + 1, j + 1),
+// columns wrapping.
+fn environment_corners(dist: EnvironmentDistribution, w: u32, i: u32, j: u32) -> vec4<f32> {
     let i1 = (i + 1u) % w;
-    return vec4<f32>(
+    let l = vec4<f32>(
         luminance(environment_texel(w, i, j)),
         luminance(environment_texel(w, i1, j)),
         luminance(environment_texel(w, i, j + 1u)),
         luminance(environment_texel(w, i1, j + 1u)),
     );
+    return max(l - vec4<f32>(dist.offset), vec4<f32>(0.0));
 }
 
 // The bilinear density of corners `c` at f inside the cell, relative to their mean (1 where all are 0).
@@ -108,9 +135,10 @@ fn environment_sample_linear(r: f32, a: f32, b: f32) -> f32 {
 }
 
 // Solid-angle density with which `environment_sample_li` gives world direction `dir`.
-fn environment_pdf(light: Light, dir: vec3<f32>) -> f32 {
+fn environment_pdf(light: Light, dir: vec3<f32>, compensated: bool) -> f32 {
     let w = light.index_a;
     let rows = light.index_b - 1u;
+    let dist = environment_distribution(light, compensated);
     let d = environment_to_map(light, dir);
     let sin_theta = sqrt(max(0.0, 1.0 - d.y * d.y));
     if sin_theta <= 0.0 { return 0.0; }
@@ -120,29 +148,29 @@ fn environment_pdf(light: Light, dir: vec3<f32>) -> f32 {
     let y = uv.y * f32(rows);
     let j = min(u32(y), rows - 1u);
     var inside = 1.0;
-    if (light.flags & LIGHT_ENVIRONMENT_BILINEAR) != 0u {
+    if dist.bilinear {
         let f = vec2<f32>(x - floor(x), clamp(y - f32(j), 0.0, 1.0));
-        inside = environment_bilinear_density(environment_corners(w, i, j), f);
+        inside = environment_bilinear_density(environment_corners(dist, w, i, j), f);
     }
-    return environment_cell_density(w, rows, i, j) * inside / (2.0 * PI * PI * sin_theta);
+    return environment_cell_density(dist, w, rows, i, j) * inside / (2.0 * PI * PI * sin_theta);
 }
 
-fn environment_sample_li(light: Light, u: vec2<f32>) -> LightLiSample {
+fn environment_sample_li(light: Light, u: vec2<f32>, compensated: bool) -> LightLiSample {
     let w = light.index_a;
     let rows = light.index_b - 1u;
-    let conditional = 3u * w * (rows + 1u);
-    let marginal = conditional + w * rows;
+    let dist = environment_distribution(light, compensated);
+    let marginal = dist.marginal;
     let j = environment_cdf_search(marginal, rows, u.y);
-    let row = conditional + j * w;
+    let row = dist.conditional + j * w;
     let i = environment_cdf_search(row, w, u.x);
     // Where u falls inside the chosen entries places the point inside the cell, through the bilinear density
     // of the cell's corner luminances: v by its linear marginal, then u by the linear conditional.
     let ry = clamp((u.y - (environment_map[marginal + j] - environment_cdf_step(marginal, j))) / environment_cdf_step(marginal, j), 0.0, 0.99999994);
     let rx = clamp((u.x - (environment_map[row + i] - environment_cdf_step(row, i))) / environment_cdf_step(row, i), 0.0, 0.99999994);
-    let bilinear = (light.flags & LIGHT_ENVIRONMENT_BILINEAR) != 0u;
+    let bilinear = dist.bilinear;
     var f = vec2<f32>(rx, ry);
     if bilinear {
-        let c = environment_corners(w, i, j);
+        let c = environment_corners(dist, w, i, j);
         f.y = environment_sample_linear(ry, c.x + c.y, c.z + c.w);
         f.x = environment_sample_linear(rx, mix(c.x, c.z, f.y), mix(c.y, c.w, f.y));
     }
@@ -154,11 +182,11 @@ fn environment_sample_li(light: Light, u: vec2<f32>) -> LightLiSample {
         // The density from the direction, as BSDF-sampled rays that reach the map get it: where the bilinear
         // density is steep (a sun texel beside dark ones) the point's round trip through the direction moves it
         // by enough to change its density by more than 0.2%, and both must agree for MIS.
-        pdf = environment_pdf(light, dir);
+        pdf = environment_pdf(light, dir, compensated);
     } else {
         let sin_theta = sqrt(max(0.0, 1.0 - d.y * d.y));
         if sin_theta <= 0.0 { return no_light_sample(); }
-        pdf = environment_cell_density(w, rows, i, j) / (2.0 * PI * PI * sin_theta);
+        pdf = environment_cell_density(dist, w, rows, i, j) / (2.0 * PI * PI * sin_theta);
     }
     if pdf <= 0.0 { return no_light_sample(); }
     return LightLiSample(dir, MISS, environment_le(light, dir), pdf, false);

@@ -25,7 +25,7 @@ fn no_light_eval() -> LightEval {
 
 fn evaluate_light_sample(sp: ShadingPoint, light: u32, u: vec2<f32>) -> LightEval {
     if light >= light_count() { return no_light_eval(); }
-    let ls = light_sample_li(light, LightSampleContext(sp.p, sp.ng), u);
+    let ls = light_sample_li(light, LightSampleContext(sp.p, sp.ng), u, false);
     if ls.pdf <= 0.0 { return no_light_eval(); }
     // As next-event estimation: light from behind the surface counts only through a transmitting lobe.
     let behind = dot(ls.wi, sp.ng) <= 0.0;

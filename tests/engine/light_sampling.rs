@@ -15,7 +15,7 @@ use raykin::render::{Environment, GpuScene, RenderSettings, ViewTargets};
 use std::sync::Arc;
 
 const PROBE: &str = r#"
-struct Probe { p: vec3<f32>, light: u32, n: vec3<f32>, count: u32, grid_w: u32, grid_h: u32, seed: u32, _pad: u32 }
+struct Probe { p: vec3<f32>, light: u32, n: vec3<f32>, count: u32, grid_w: u32, grid_h: u32, seed: u32, incomplete: u32 }
 @group(1) @binding(1) var<uniform> probe: Probe;
 @group(1) @binding(2) var<storage, read_write> out: array<vec4<f32>>;
 
@@ -26,9 +26,9 @@ fn sample_light(@builtin(global_invocation_id) gid: vec3<u32>) {
     if i >= probe.count { return; }
     let u = get_2d(sampler_start(i, 0u, probe.seed), 0u);
     let ctx = LightSampleContext(probe.p, probe.n);
-    let s = light_sample_li(probe.light, ctx, u);
+    let s = light_sample_li(probe.light, ctx, u, probe.incomplete != 0u);
     out[2u * i] = vec4<f32>(s.wi, s.pdf);
-    out[2u * i + 1u] = vec4<f32>(luminance(s.li), light_pdf_li(probe.light, ctx, s.wi, s.distance), s.distance, 0.0);
+    out[2u * i + 1u] = vec4<f32>(luminance(s.li), light_pdf_li(probe.light, ctx, s.wi, s.distance, probe.incomplete != 0u), s.distance, 0.0);
 }
 
 // Grid cell i (theta rows, phi columns, midpoints): (pdf, luminance of what a ray leaving along it sees, 0, 0).
@@ -40,7 +40,7 @@ fn pdf_grid(@builtin(global_invocation_id) gid: vec3<u32>) {
     let phi = (f32(i % probe.grid_w) + 0.5) / f32(probe.grid_w) * 2.0 * PI;
     let dir = vec3<f32>(sin(theta) * cos(phi), cos(theta), sin(theta) * sin(phi));
     let ctx = LightSampleContext(probe.p, probe.n);
-    out[i] = vec4<f32>(light_pdf_li(probe.light, ctx, dir, MISS), luminance(infinite_light_le(probe.light, dir)), 0.0, 0.0);
+    out[i] = vec4<f32>(light_pdf_li(probe.light, ctx, dir, MISS, probe.incomplete != 0u), luminance(infinite_light_le(probe.light, dir)), 0.0, 0.0);
 }
 
 // Light i's probability from (probe.p, probe.n): the light sampler NEE uses, and by power alone.
@@ -97,7 +97,8 @@ struct Probe {
     grid_w: u32,
     grid_h: u32,
     seed: u32,
-    _pad: u32,
+    /// The density next-event estimation samples (`allow_incomplete_pdf`), else the full one.
+    incomplete: u32,
 }
 
 /// Runs one probe entry point over `invocations` against `app`'s scene and view; returns the output.
@@ -178,7 +179,15 @@ fn sunny_environment() -> Environment {
 
 /// Integrates a light's density over the sphere (midpoint rule on a theta-phi grid) and returns it with the
 /// integral of the luminance seen along the same directions.
-fn integrate_over_sphere(app: &HeadlessApp, light: u32, w: u32, h: u32) -> (f64, f64) {
+/// The integrals over the sphere of `light`'s density (the full one, or next-event estimation's with
+/// `incomplete`) and of its luminance where that density is positive, by the midpoint rule on a w x h grid.
+fn integrate_over_sphere(
+    app: &HeadlessApp,
+    light: u32,
+    incomplete: bool,
+    w: u32,
+    h: u32,
+) -> (f64, f64) {
     let cells = run_probe(
         app,
         Probe {
@@ -189,7 +198,7 @@ fn integrate_over_sphere(app: &HeadlessApp, light: u32, w: u32, h: u32) -> (f64,
             grid_w: w,
             grid_h: h,
             seed: 0,
-            _pad: 0,
+            incomplete: incomplete as u32,
         },
         "pdf_grid",
         w * h,
@@ -202,7 +211,9 @@ fn integrate_over_sphere(app: &HeadlessApp, light: u32, w: u32, h: u32) -> (f64,
             * (std::f64::consts::PI / h as f64)
             * (2.0 * std::f64::consts::PI / w as f64);
         pdf_sum += c[0] as f64 * d_omega;
-        le_sum += c[1] as f64 * d_omega;
+        if c[0] > 0.0 {
+            le_sum += c[1] as f64 * d_omega;
+        }
     }
     (pdf_sum, le_sum)
 }
@@ -255,46 +266,69 @@ fn environment_map_density_integrates_to_one_and_samples_match_it() {
     let lights = &app.gpu_scene().lights;
     assert_eq!(lights.infinite_count, 1, "the map is one light at infinity");
     let env = lights.infinite_first;
-    // The map is 64 x 33 texels: a 2048 x 1024 grid resolves its cells 32 times over.
-    let (pdf_integral, le_integral) = integrate_over_sphere(&app, env, 2048, 1024);
-    eprintln!("environment: integral of the pdf {pdf_integral:.5}, of luminance {le_integral:.4}");
-    assert!(
-        (pdf_integral - 1.0).abs() < 2e-3,
-        "the density integrates to {pdf_integral}"
-    );
-
-    let count = 1 << 18;
-    let samples = samples_consistent(
-        &app,
-        Probe {
-            p: [0.0; 3],
-            light: env,
-            n: [0.0; 3],
-            count,
-            grid_w: 0,
-            grid_h: 0,
-            seed: 11,
-            _pad: 0,
-        },
-        "environment map",
-    );
-    // E[L / pdf] is the integral of L over the sphere: the sampler draws from the density it reports.
-    let estimates: Vec<f64> = samples
-        .iter()
-        .map(|(a, b)| {
-            if a[3] > 0.0 {
-                b[0] as f64 / a[3] as f64
-            } else {
-                0.0
-            }
-        })
-        .collect();
-    let (mean, error) = mean_and_error(&estimates);
-    eprintln!("E[L/pdf] = {mean:.4} +- {error:.4}, quadrature {le_integral:.4}");
-    assert!(
-        (mean - le_integral).abs() < 4.0 * error + 3e-3 * le_integral,
-        "importance-sampled integral {mean} vs quadrature {le_integral}"
-    );
+    // Both densities: the full one (ReSTIR's candidates) and next-event estimation's MIS-compensated one, which
+    // leaves the map's darker half to BSDF sampling (zero there) and so integrates L only where it is positive.
+    let mut full = (0.0, 0.0, 0.0);
+    for incomplete in [false, true] {
+        let what = if incomplete {
+            "compensated environment map"
+        } else {
+            "environment map"
+        };
+        // The map is 64 x 33 texels: a 2048 x 1024 grid resolves its cells 32 times over.
+        let (pdf_integral, le_integral) = integrate_over_sphere(&app, env, incomplete, 2048, 1024);
+        eprintln!(
+            "{what}: integral of the pdf {pdf_integral:.5}, of luminance where it is positive {le_integral:.4}"
+        );
+        assert!(
+            (pdf_integral - 1.0).abs() < 2e-3,
+            "{what}: the density integrates to {pdf_integral}"
+        );
+        let count = 1 << 18;
+        let samples = samples_consistent(
+            &app,
+            Probe {
+                p: [0.0; 3],
+                light: env,
+                n: [0.0; 3],
+                count,
+                grid_w: 0,
+                grid_h: 0,
+                seed: 11,
+                incomplete: incomplete as u32,
+            },
+            what,
+        );
+        // E[L / pdf] is the integral of L where the density is positive: the sampler draws from the density
+        // it reports.
+        let estimates: Vec<f64> = samples
+            .iter()
+            .map(|(a, b)| {
+                if a[3] > 0.0 {
+                    b[0] as f64 / a[3] as f64
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        let (mean, error) = mean_and_error(&estimates);
+        eprintln!("{what}: E[L/pdf] = {mean:.4} +- {error:.4}, quadrature {le_integral:.4}");
+        assert!(
+            (mean - le_integral).abs() < 4.0 * error + 3e-3 * le_integral,
+            "{what}: importance-sampled integral {mean} vs quadrature {le_integral}"
+        );
+        if incomplete {
+            // The sun and the bright sky are above the mean, the dark sky below: part of the light, not all.
+            assert!(
+                le_integral < 0.99 * full.1 && le_integral > 0.5 * full.1,
+                "{what}: covers {le_integral} of the map's {}",
+                full.1
+            );
+        } else {
+            full = (mean, le_integral, error * (count as f64).sqrt());
+        }
+    }
+    let (mean, _, deviation) = full;
     // Importance sampling pays: the estimator's relative spread is far below uniform sphere sampling's.
     let uniform_rel = {
         let cells = run_probe(
@@ -307,7 +341,7 @@ fn environment_map_density_integrates_to_one_and_samples_match_it() {
                 grid_w: 512,
                 grid_h: 256,
                 seed: 0,
-                _pad: 0,
+                incomplete: 0,
             },
             "pdf_grid",
             512 * 256,
@@ -326,7 +360,7 @@ fn environment_map_density_integrates_to_one_and_samples_match_it() {
         let (m1, m2) = (m1 / wsum, m2 / wsum);
         (m2 - m1 * m1).sqrt() / m1
     };
-    let importance_rel = error * (count as f64).sqrt() / mean;
+    let importance_rel = deviation / mean;
     eprintln!(
         "relative standard deviation: importance {importance_rel:.3}, uniform {uniform_rel:.3}"
     );
@@ -350,7 +384,7 @@ fn sun_and_sky_sample_inside_the_disc_and_the_sky_integrates_to_one() {
     let lights = &app.gpu_scene().lights;
     assert_eq!(lights.infinite_count, 2, "sky map and sun");
     let (sky_light, sun_light) = (lights.infinite_first, lights.infinite_first + 1);
-    let (pdf_integral, _) = integrate_over_sphere(&app, sky_light, 2048, 1024);
+    let (pdf_integral, _) = integrate_over_sphere(&app, sky_light, false, 2048, 1024);
     assert!(
         (pdf_integral - 1.0).abs() < 2e-3,
         "sky density integrates to {pdf_integral}"
@@ -366,7 +400,7 @@ fn sun_and_sky_sample_inside_the_disc_and_the_sky_integrates_to_one() {
             grid_w: 0,
             grid_h: 0,
             seed: 5,
-            _pad: 0,
+            incomplete: 0,
         },
         "sun",
     );
@@ -417,7 +451,7 @@ fn triangle_lights_sample_their_solid_angle_near_and_far() {
         grid_w: 0,
         grid_h: 0,
         seed,
-        _pad: 0,
+        incomplete: 0,
     };
     let tri = run_probe(
         &app,
@@ -522,7 +556,7 @@ fn light_tree_probabilities_sum_to_one_and_match_its_choices() {
             grid_w: 0,
             grid_h: 0,
             seed: 9,
-            _pad: 0,
+            incomplete: 0,
         };
         let pmfs = run_probe(&app, probe, "pmf_all", count, count as usize);
         let total: f64 = pmfs.iter().map(|p| p[0] as f64).sum();

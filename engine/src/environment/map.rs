@@ -59,11 +59,6 @@ impl EnvironmentMap {
         Self::new(1, 2, vec![rgb; 2])
     }
 
-    /// Whether every texel holds the same radiance (a constant environment, or a map of one colour).
-    pub fn is_uniform(&self) -> bool {
-        self.texels.windows(2).all(|pair| pair[0] == pair[1])
-    }
-
     /// Reads a `.hdr` or `.exr` file (any format the `image` crate decodes, converted to linear f32 RGB;
     /// 8-bit formats are taken as sRGB-encoded). Negative and non-finite texels become 0, with a note.
     pub fn load(path: &Path) -> Result<(Self, Vec<String>), EnvironmentError> {

@@ -66,6 +66,8 @@ impl SunSkySettings {
 pub struct BakedEnvironment {
     pub map: EnvironmentMap,
     pub distribution: EnvironmentDistribution,
+    /// Next-event estimation's MIS-compensated distribution (`None`: a uniform map, left to BSDF sampling).
+    pub next_event: Option<EnvironmentDistribution>,
     pub rotation_degrees: f32,
     pub strength: f32,
     pub sun: Option<SunDisc>,
@@ -76,9 +78,11 @@ pub struct BakedEnvironment {
 impl BakedEnvironment {
     pub fn from_map(map: EnvironmentMap, rotation_degrees: f32, strength: f32) -> Self {
         let distribution = EnvironmentDistribution::new(&map);
+        let next_event = EnvironmentDistribution::compensated(&map, &distribution);
         Self {
             map,
             distribution,
+            next_event,
             rotation_degrees,
             strength,
             sun: None,
@@ -106,8 +110,8 @@ impl BakedEnvironment {
     pub fn load_map(settings: &MapSettings, byte_limit: u64) -> Result<Self, EnvironmentError> {
         let (mut map, mut notes) = EnvironmentMap::load(&settings.path)?;
         let (w, h) = (map.width, map.height);
-        // Texels (3 f32) and their conditional CDF (1 f32).
-        let halvings = map.fit_to(16, byte_limit);
+        // Texels (3 f32) and the two distributions' conditional CDFs (1 f32 each).
+        let halvings = map.fit_to(20, byte_limit);
         if halvings > 0 {
             notes.push(format!(
                 "{}: {w}x{h} is over this GPU's buffer limit; downscaled to {}x{}",

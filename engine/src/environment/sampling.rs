@@ -16,6 +16,13 @@
 //! u), reusing where the uniform numbers fell inside the CDF entries. The density of a direction is computed
 //! from the same CDFs and corner luminances, so it is exactly the density the sampler draws from, and it
 //! integrates to 1 over the sphere (`tests`). The WGSL twin is `shaders/lights/environment.wgsl`.
+//!
+//! Next-event estimation samples a second distribution, MIS-compensated (Karlik et al. 2019, "MIS
+//! compensation"; pbrt-v4's `ImageInfiniteLight::compensatedDistribution`): the same construction over the
+//! luminance less the map's mean, clamped at 0. Where the map is darker than its mean, BSDF sampling, which the
+//! path combines with it by MIS, does at least as well, so light samples go only where they add to it; a
+//! uniform map leaves nothing (`None`), and next-event estimation then never picks it. ReSTIR's candidates,
+//! which no BSDF sample completes, keep the full distribution.
 
 use super::map::{EnvironmentMap, direction_to_uv, uv_to_direction};
 use glam::Vec3;
@@ -38,19 +45,38 @@ pub struct EnvironmentDistribution {
     /// Whether points inside a cell follow its bilinear luminance (else uniform): some cell's brightest corner
     /// exceeds [`BILINEAR_CONTRAST`] times its darkest.
     pub bilinear: bool,
+    /// The luminance subtracted from every texel before the clamp at 0 (0: the full distribution; the map's
+    /// mean luminance: the compensated one).
+    pub offset: f32,
 }
 
 /// The corner contrast within one cell above which a map is sampled bilinearly inside its cells.
 pub const BILINEAR_CONTRAST: f32 = 2.0;
 
 impl EnvironmentDistribution {
+    /// In proportion to the map's luminance (what ReSTIR's candidates and the power estimate use).
     pub fn new(map: &EnvironmentMap) -> Self {
+        Self::with_offset(map, 0.0)
+    }
+
+    /// Next-event estimation's: in proportion to the luminance above the map's mean (solid-angle weighted);
+    /// `None` where that leaves less than 1e-4 of the map's light (a uniform map).
+    pub fn compensated(map: &EnvironmentMap, full: &Self) -> Option<Self> {
+        let mean = full.luminance_integral / (4.0 * PI);
+        let compensated = Self::with_offset(map, mean as f32);
+        (compensated.luminance_integral > 1e-4 * full.luminance_integral).then_some(compensated)
+    }
+
+    fn with_offset(map: &EnvironmentMap, offset: f32) -> Self {
         let (w, h) = (map.width as usize, map.height as usize);
         let rows = h - 1;
-        let luminance = |x: usize, y: usize| {
+        let texel_luminance = |x: usize, y: usize| {
             let t = map.texel(x as u32, y as u32);
             0.2126 * t[0] as f64 + 0.7152 * t[1] as f64 + 0.0722 * t[2] as f64
         };
+        // As `corners` computes it, in f32 from the f32 luminance, so the CDFs and the densities agree.
+        let luminance =
+            |x: usize, y: usize| (texel_luminance(x, y) as f32 - offset).max(0.0) as f64;
         let mut conditional_cdf = Vec::with_capacity(w * rows);
         let mut row_weights = Vec::with_capacity(rows);
         let mut luminance_integral = 0.0;
@@ -80,7 +106,7 @@ impl EnvironmentDistribution {
         push_cdf(&mut marginal_cdf, &row_weights, total);
         let texel_luminance = (0..h)
             .flat_map(|y| (0..w).map(move |x| (x, y)))
-            .map(|(x, y)| luminance(x, y) as f32)
+            .map(|(x, y)| texel_luminance(x, y) as f32)
             .collect();
         let mut dist = Self {
             columns: w as u32,
@@ -90,6 +116,7 @@ impl EnvironmentDistribution {
             luminance_integral,
             texel_luminance,
             bilinear: false,
+            offset,
         };
         dist.bilinear = (0..rows as u32).any(|j| {
             (0..w as u32).any(|i| {
@@ -107,7 +134,7 @@ impl EnvironmentDistribution {
     fn corners(&self, i: u32, j: u32) -> [f32; 4] {
         let w = self.columns as usize;
         let (i0, i1, j0) = (i as usize, (i as usize + 1) % w, j as usize);
-        let at = |x: usize, y: usize| self.texel_luminance[y * w + x];
+        let at = |x: usize, y: usize| (self.texel_luminance[y * w + x] - self.offset).max(0.0);
         [at(i0, j0), at(i1, j0), at(i0, j0 + 1), at(i1, j0 + 1)]
     }
 
@@ -331,6 +358,61 @@ mod tests {
         assert!(!EnvironmentDistribution::new(&EnvironmentMap::constant([1.0; 3])).bilinear);
         let gradient = (0..65).map(|j| [1.0 + j as f32 / 64.0; 3]).collect();
         assert!(!EnvironmentDistribution::new(&EnvironmentMap::new(1, 65, gradient)).bilinear);
+    }
+
+    /// The compensated distribution: a density (integrates to 1) that is zero exactly where the map is darker
+    /// than its mean, whose samples carry it; none for a uniform map.
+    #[test]
+    fn compensated_samples_only_the_light_above_the_mean() {
+        let constant = EnvironmentMap::constant([1.0, 2.0, 3.0]);
+        let full = EnvironmentDistribution::new(&constant);
+        assert!(EnvironmentDistribution::compensated(&constant, &full).is_none());
+        // Brighter towards +y (v = 0): the upper half is above the mean.
+        let gradient = EnvironmentMap::new(
+            4,
+            33,
+            (0..33)
+                .flat_map(|j| [[2.0 - j as f32 / 32.0; 3]; 4])
+                .collect(),
+        );
+        // Where every corner of the cell is below the mean: the sunny map's sky away from the sun's cells
+        // (the sun alone lifts the mean above the sky), the gradient's lower half (v > 0.5) with a margin.
+        let sun = uv_to_direction(7.5 / 32.0, 5.0 / 16.0);
+        let away_from_sun = move |d: Vec3, _: f32| d.dot(sun) < 0.9;
+        let dark_half = |d: Vec3, offset: f32| d.y < -0.1 && offset > 1.0;
+        let cases: [(EnvironmentMap, &dyn Fn(Vec3, f32) -> bool); 2] =
+            [(sunny_map(), &away_from_sun), (gradient, &dark_half)];
+        for (map, below_mean) in cases {
+            let full = EnvironmentDistribution::new(&map);
+            let dist = EnvironmentDistribution::compensated(&map, &full).expect("not uniform");
+            assert!(
+                dist.luminance_integral > 0.0 && dist.luminance_integral < full.luminance_integral
+            );
+            let (nt, np) = (600, 1200);
+            let mut sum = 0.0f64;
+            for a in 0..nt {
+                let theta = (a as f64 + 0.5) / nt as f64 * PI;
+                for b in 0..np {
+                    let phi = (b as f64 + 0.5) / np as f64 * 2.0 * PI;
+                    let d = uv_to_direction((phi / (2.0 * PI)) as f32, (theta / PI) as f32);
+                    let pdf = dist.pdf(d) as f64;
+                    if below_mean(d, dist.offset) {
+                        assert_eq!(pdf, 0.0, "density {pdf} at {d} below the mean");
+                    }
+                    sum += pdf * theta.sin() * (PI / nt as f64) * (2.0 * PI / np as f64);
+                }
+            }
+            assert!((sum - 1.0).abs() < 3e-3, "integral of the pdf {sum}");
+            let mut rand = uniforms(7);
+            for _ in 0..5000 {
+                let (d, pdf) = dist.sample([rand(), rand()]);
+                assert!(pdf > 0.0 && (pdf - dist.pdf(d)).abs() <= 1e-3 * pdf);
+                assert!(
+                    !below_mean(d, dist.offset),
+                    "a sample at {d}, below the mean"
+                );
+            }
+        }
     }
 
     #[test]

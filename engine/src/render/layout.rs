@@ -150,6 +150,9 @@ pub const LIGHT_SUN: u32 = 5;
 /// corners' luminance (set where some cell's corners differ enough for it to pay; see
 /// `environment::EnvironmentDistribution::bilinear`).
 pub const LIGHT_ENVIRONMENT_BILINEAR: u32 = 1;
+/// The same for next-event estimation's MIS-compensated distribution (set when the map has one; see
+/// `environment::EnvironmentDistribution::compensated`).
+pub const LIGHT_ENVIRONMENT_COMPENSATED_BILINEAR: u32 = 2;
 
 /// One light of any kind (`shaders/scene/types.wgsl` `Light`; `shaders/lights/` reads it). What each field
 /// holds per kind:
@@ -160,8 +163,8 @@ pub const LIGHT_ENVIRONMENT_BILINEAR: u32 = 1;
 /// | point | - | world position, range (0: none) | - | intensity (W/sr) |
 /// | spot | - | world position, range | axis it shines along, cos outer cone | intensity, cos inner cone |
 /// | directional | - | - | direction it travels | irradiance (W/m^2) |
-/// | environment | map width, height | (cos, sin) of the turn about +Y | - | strength |
-/// (an environment's `flags`: [`LIGHT_ENVIRONMENT_BILINEAR`])
+/// | environment | map width, height | (cos, sin) of the turn about +Y, compensation offset | - | strength |
+/// (an environment's `flags`: [`LIGHT_ENVIRONMENT_BILINEAR`], [`LIGHT_ENVIRONMENT_COMPENSATED_BILINEAR`])
 /// | sun | - | -, 1 - cos(angular radius) | towards the sun | radiance |
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
@@ -228,6 +231,10 @@ pub const WGSL_CONSTANTS: &[(&str, u32)] = &[
     ("LIGHT_ENVIRONMENT", LIGHT_ENVIRONMENT),
     ("LIGHT_SUN", LIGHT_SUN),
     ("LIGHT_ENVIRONMENT_BILINEAR", LIGHT_ENVIRONMENT_BILINEAR),
+    (
+        "LIGHT_ENVIRONMENT_COMPENSATED_BILINEAR",
+        LIGHT_ENVIRONMENT_COMPENSATED_BILINEAR,
+    ),
     ("LIGHT_TREE_LEAF", LIGHT_TREE_LEAF),
     ("LIGHT_TREE_TWO_SIDED", LIGHT_TREE_TWO_SIDED),
     // A BVH2 traversal stack needs at most one entry per level below the root; builds deeper than

@@ -198,7 +198,7 @@ impl GpuScene {
                         light,
                         power,
                         bounds: Some(bounds),
-                        next_event: true,
+                        next_event_power: Some(power),
                     });
                     inst.light_count += 1;
                 }

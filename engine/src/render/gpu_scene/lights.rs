@@ -30,20 +30,22 @@ pub struct WeightedLight {
     pub light: GpuLight,
     pub power: f64,
     pub bounds: Option<LightBounds>,
-    /// Whether next-event estimation samples it. A uniform environment is left to BSDF sampling (pbrt-v4's
-    /// `UniformInfiniteLight` with `allowIncompletePDF`): cosine or glossy-lobe directions sample its light at
+    /// The power next-event estimation's choice follows: `power`, except for an environment map, which it
+    /// samples MIS-compensated (`environment::EnvironmentDistribution::compensated`: only the light above the
+    /// map's mean), and `None` for a uniform environment, left to BSDF sampling alone (pbrt-v4's
+    /// `UniformInfiniteLight` with `allowIncompletePDF`: cosine or glossy-lobe directions sample its light at
     /// least as well as uniform directions on the sphere, half of which point into the surface, and the path
-    /// saves the shadow ray. The power CDF (ReSTIR's candidates) keeps it.
-    pub next_event: bool,
+    /// saves the shadow ray). The power CDF (ReSTIR's candidates) keeps every light at its full power.
+    pub next_event_power: Option<f64>,
 }
 
 /// The lights at infinity of the current environment, before their power (which needs the scene's size).
 #[derive(Clone, Debug, Default)]
 pub struct InfiniteLights {
-    /// The environment map light (`None`: black), its power, and whether next-event estimation samples it
-    /// (not when it is uniform).
-    environment: Option<(GpuLight, f64, bool)>,
-    sun: Option<(GpuLight, f64, bool)>,
+    /// The environment map light (`None`: black), its power, and the power of what next-event estimation
+    /// samples of it (`None`: nothing, a uniform map).
+    environment: Option<(GpuLight, f64, Option<f64>)>,
+    sun: Option<(GpuLight, f64, Option<f64>)>,
 }
 
 /// The light list's parts and upload state, inside [`GpuScene`].
@@ -132,7 +134,7 @@ pub fn punctual_light(world: Mat4, light: &PunctualLight) -> WeightedLight {
         light: gpu,
         power,
         bounds,
-        next_event: true,
+        next_event_power: Some(power),
     }
 }
 
@@ -163,12 +165,13 @@ impl GpuScene {
         if !baked.is_black() {
             let map = &baked.map;
             let dist = &baked.distribution;
-            let mut words: Vec<f32> = Vec::with_capacity(
-                map.texels.len() * 3 + dist.conditional_cdf.len() + dist.marginal_cdf.len(),
-            );
+            let cdf_words = dist.conditional_cdf.len() + dist.marginal_cdf.len();
+            let mut words: Vec<f32> = Vec::with_capacity(map.texels.len() * 3 + 2 * cdf_words);
             words.extend(map.texels.iter().flatten());
-            words.extend(&dist.conditional_cdf);
-            words.extend(&dist.marginal_cdf);
+            for d in std::iter::once(dist).chain(&baked.next_event) {
+                words.extend(&d.conditional_cdf);
+                words.extend(&d.marginal_cdf);
+            }
             if write_or_grow(
                 ctx,
                 &mut self.environment_map,
@@ -178,17 +181,21 @@ impl GpuScene {
                 self.generation += 1;
             }
             let (sin, cos) = baked.rotation_degrees.to_radians().sin_cos();
+            let compensated = baked.next_event.as_ref();
+            let mut flags = 0;
+            if dist.bilinear {
+                flags |= LIGHT_ENVIRONMENT_BILINEAR;
+            }
+            if compensated.is_some_and(|c| c.bilinear) {
+                flags |= LIGHT_ENVIRONMENT_COMPENSATED_BILINEAR;
+            }
             let light = GpuLight {
                 kind: LIGHT_ENVIRONMENT,
                 index_a: map.width,
                 index_b: map.height,
-                flags: if dist.bilinear {
-                    LIGHT_ENVIRONMENT_BILINEAR
-                } else {
-                    0
-                },
+                flags,
                 position: [cos, sin, 0.0],
-                range: 0.0,
+                range: compensated.map_or(0.0, |c| c.offset),
                 direction: [0.0; 3],
                 cos_outer: 0.0,
                 radiance: [baked.strength; 3],
@@ -197,7 +204,7 @@ impl GpuScene {
             self.lights.infinite.environment = Some((
                 light,
                 dist.luminance_integral * baked.strength as f64,
-                !map.is_uniform(),
+                compensated.map(|c| c.luminance_integral * baked.strength as f64),
             ));
         }
         if let Some(sun) = &baked.sun {
@@ -215,7 +222,7 @@ impl GpuScene {
             };
             let solid_angle = 2.0 * PI * sun.one_minus_cos as f64;
             let power = luminance(Vec3::from(sun.radiance)) as f64 * solid_angle;
-            self.lights.infinite.sun = Some((light, power, true));
+            self.lights.infinite.sun = Some((light, power, Some(power)));
         }
     }
 
@@ -236,10 +243,11 @@ impl GpuScene {
         let tree_lights = all.len();
         all.extend(directional.into_iter().map(|w| WeightedLight {
             power: w.power * disc,
+            next_event_power: w.next_event_power.map(|p| p * disc),
             ..w
         }));
         let infinite_first = all.len() as u32;
-        for (light, power, next_event) in [list.infinite.environment, list.infinite.sun]
+        for (light, power, next_event_power) in [list.infinite.environment, list.infinite.sun]
             .into_iter()
             .flatten()
         {
@@ -247,7 +255,7 @@ impl GpuScene {
                 light,
                 power: power * disc,
                 bounds: None,
-                next_event,
+                next_event_power: next_event_power.map(|p| p * disc),
             });
         }
         let infinite_count = all.len() as u32 - infinite_first;
@@ -337,28 +345,32 @@ pub fn power_cdf(lights: &[WeightedLight]) -> Vec<f32> {
         .collect()
 }
 
-/// Next-event estimation's CDF: [`power_cdf`] over the lights it samples, the others never chosen (probability 0);
+/// Next-event estimation's CDF: [`power_cdf`] over the power it samples of each light
+/// ([`WeightedLight::next_event_power`]), the lights it leaves to BSDF sampling never chosen (probability 0);
 /// all zeros when it samples none (then it picks nothing and BSDF sampling alone lights the scene).
 pub fn next_event_cdf(lights: &[WeightedLight]) -> Vec<f32> {
     let sampled: Vec<WeightedLight> = lights
         .iter()
         .map(|w| WeightedLight {
-            power: if w.next_event { w.power.max(0.0) } else { 0.0 },
+            power: w.next_event_power.unwrap_or(0.0).max(0.0),
             ..*w
         })
         .collect();
-    let Some(last) = sampled.iter().rposition(|w| w.next_event) else {
+    let Some(last) = lights.iter().rposition(|w| w.next_event_power.is_some()) else {
         return vec![0.0; lights.len()];
     };
     let total: f64 = sampled.iter().map(|w| w.power).sum();
     if total <= 0.0 {
         // Uniform over the sampled lights, as power_cdf does when every power is zero.
-        let count = sampled.iter().filter(|w| w.next_event).count();
+        let count = lights
+            .iter()
+            .filter(|w| w.next_event_power.is_some())
+            .count();
         let mut seen = 0;
-        return sampled
+        return lights
             .iter()
             .map(|w| {
-                seen += w.next_event as usize;
+                seen += w.next_event_power.is_some() as usize;
                 seen as f32 / count as f32
             })
             .collect();
@@ -393,7 +405,7 @@ mod tests {
                 light: GpuLight::zeroed(),
                 power: p,
                 bounds: None,
-                next_event: true,
+                next_event_power: Some(p),
             })
             .to_vec();
         assert_eq!(power_cdf(&lights), vec![0.125, 0.5, 0.5, 1.0]);
@@ -401,23 +413,34 @@ mod tests {
 
     #[test]
     fn next_event_estimation_never_picks_what_it_leaves_to_bsdf_sampling() {
-        let light = |power, next_event| WeightedLight {
+        let light = |power, next_event_power| WeightedLight {
             light: GpuLight::zeroed(),
             power,
             bounds: None,
-            next_event,
+            next_event_power,
         };
         // A lamp, a uniform environment, a sun: the environment's share goes to the others.
-        let lights = [light(1.0, true), light(6.0, false), light(3.0, true)];
+        let lights = [
+            light(1.0, Some(1.0)),
+            light(6.0, None),
+            light(3.0, Some(3.0)),
+        ];
         assert_eq!(power_cdf(&lights), vec![0.1, 0.7, 1.0]);
         assert_eq!(next_event_cdf(&lights), vec![0.25, 0.25, 1.0]);
+        // A compensated environment map: chosen by the power it samples.
+        let lights = [light(1.0, Some(1.0)), light(6.0, Some(3.0))];
+        assert_eq!(next_event_cdf(&lights), vec![0.25, 1.0]);
         // Trailing lights it skips sit at 1: no u < 1 reaches them.
-        let lights = [light(1.0, true), light(6.0, false)];
+        let lights = [light(1.0, Some(1.0)), light(6.0, None)];
         assert_eq!(next_event_cdf(&lights), vec![1.0, 1.0]);
         // Only a uniform environment: nothing to pick (every probability 0).
-        assert_eq!(next_event_cdf(&[light(6.0, false)]), vec![0.0]);
+        assert_eq!(next_event_cdf(&[light(6.0, None)]), vec![0.0]);
         // Sampled lights without power: uniform among them.
-        let lights = [light(0.0, true), light(6.0, false), light(0.0, true)];
+        let lights = [
+            light(0.0, Some(0.0)),
+            light(6.0, None),
+            light(0.0, Some(0.0)),
+        ];
         assert_eq!(next_event_cdf(&lights), vec![0.5, 0.5, 1.0]);
     }
 
