@@ -380,7 +380,8 @@ mod tests {
         let sun = uv_to_direction(7.5 / 32.0, 5.0 / 16.0);
         let away_from_sun = move |d: Vec3, _: f32| d.dot(sun) < 0.9;
         let dark_half = |d: Vec3, offset: f32| d.y < -0.1 && offset > 1.0;
-        let cases: [(EnvironmentMap, &dyn Fn(Vec3, f32) -> bool); 2] =
+        type BelowMean<'a> = &'a dyn Fn(Vec3, f32) -> bool;
+        let cases: [(EnvironmentMap, BelowMean); 2] =
             [(sunny_map(), &away_from_sun), (gradient, &dark_half)];
         for (map, below_mean) in cases {
             let full = EnvironmentDistribution::new(&map);
