@@ -7,9 +7,9 @@
 //
 // Fields: index_a = map width W, index_b = map height H, position.xy = (cos, sin) of the rotation about +Y,
 // range = the compensated distribution's offset, radiance = strength, flags: LIGHT_ENVIRONMENT_BILINEAR,
-// LIGHT_ENVIRONMENT_COMPENSATED_BILINEAR. `environment_map` holds 3 W H texel values, then W (H - 1)
+// LIGHT_ENVIRONMENT_COMPENSATED, LIGHT_ENVIRONMENT_COMPENSATED_BILINEAR. `environment_map` holds 3 W H texel values, then W (H - 1)
 // conditional CDF entries (row by row) and H - 1 marginal CDF entries, then the same two for the compensated
-// distribution where the map has one (not a uniform map, which next-event estimation never picks).
+// distribution where next-event estimation uses one (LIGHT_ENVIRONMENT_COMPENSATED).
 
 // A world direction in the map's frame.
 fn environment_to_map(light: Light, d: vec3<f32>) -> vec3<f32> {
@@ -77,8 +77,9 @@ fn environment_cdf_search(base: u32, count: u32, u: f32) -> u32 {
 }
 
 // One of the map's two sampling distributions (engine/src/environment/sampling.rs): in proportion to the
-// luminance (ReSTIR's candidates), or MIS-compensated, in proportion to the luminance above the map's mean
-// (next-event estimation, whose light samples BSDF sampling completes: pbrt-v4's `allowIncompletePDF`).
+// luminance (ReSTIR's candidates, and next-event estimation on smooth maps), or MIS-compensated, in proportion
+// to the luminance above the map's mean (next-event estimation, whose light samples BSDF sampling completes:
+// pbrt-v4's `allowIncompletePDF`, on maps whose light is concentrated: LIGHT_ENVIRONMENT_COMPENSATED).
 struct EnvironmentDistribution {
     // Where its conditional CDF (rows x W entries) and marginal CDF (rows entries) start in environment_map.
     conditional: u32,
@@ -93,7 +94,7 @@ fn environment_distribution(light: Light, compensated: bool) -> EnvironmentDistr
     let rows = light.index_b - 1u;
     let conditional = 3u * w * (rows + 1u);
     let marginal = conditional + w * rows;
-    if compensated {
+    if compensated && (light.flags & LIGHT_ENVIRONMENT_COMPENSATED) != 0u {
         let compensated_conditional = marginal + rows;
         return EnvironmentDistribution(compensated_conditional, compensated_conditional + w * rows, light.range,
             (light.flags & LIGHT_ENVIRONMENT_COMPENSATED_BILINEAR) != 0u);

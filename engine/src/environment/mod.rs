@@ -14,7 +14,7 @@ pub mod sampling;
 pub mod sun_sky;
 
 pub use map::{EnvironmentError, EnvironmentMap};
-pub use sampling::EnvironmentDistribution;
+pub use sampling::{EnvironmentDistribution, NextEventSampling};
 pub use sun_sky::{SunDisc, SunSkyParams};
 
 use serde::{Deserialize, Serialize};
@@ -66,8 +66,8 @@ impl SunSkySettings {
 pub struct BakedEnvironment {
     pub map: EnvironmentMap,
     pub distribution: EnvironmentDistribution,
-    /// Next-event estimation's MIS-compensated distribution (`None`: a uniform map, left to BSDF sampling).
-    pub next_event: Option<EnvironmentDistribution>,
+    /// How next-event estimation samples the map (none, the full distribution, or compensated).
+    pub next_event: NextEventSampling,
     pub rotation_degrees: f32,
     pub strength: f32,
     pub sun: Option<SunDisc>,
@@ -78,7 +78,7 @@ pub struct BakedEnvironment {
 impl BakedEnvironment {
     pub fn from_map(map: EnvironmentMap, rotation_degrees: f32, strength: f32) -> Self {
         let distribution = EnvironmentDistribution::new(&map);
-        let next_event = EnvironmentDistribution::compensated(&map, &distribution);
+        let next_event = sampling::next_event_sampling(&map, &distribution);
         Self {
             map,
             distribution,

@@ -17,12 +17,16 @@
 //! from the same CDFs and corner luminances, so it is exactly the density the sampler draws from, and it
 //! integrates to 1 over the sphere (`tests`). The WGSL twin is `shaders/lights/environment.wgsl`.
 //!
-//! Next-event estimation samples a second distribution, MIS-compensated (Karlik et al. 2019, "MIS
+//! Next-event estimation may sample a second distribution, MIS-compensated (Karlik et al. 2019, "MIS
 //! compensation"; pbrt-v4's `ImageInfiniteLight::compensatedDistribution`): the same construction over the
 //! luminance less the map's mean, clamped at 0. Where the map is darker than its mean, BSDF sampling, which the
-//! path combines with it by MIS, does at least as well, so light samples go only where they add to it; a
-//! uniform map leaves nothing (`None`), and next-event estimation then never picks it. ReSTIR's candidates,
-//! which no BSDF sample completes, keep the full distribution.
+//! path combines with it by MIS, covers it alone, so light samples go where they add most. That pays on maps
+//! whose light is concentrated (the env-lit bench scene's one-texel sun: 0.57x the time to equal error on the
+//! H200) and costs on smooth ones, where two samples (light and BSDF) of the dim part beat one (the sky
+//! gradient: 1.12x on FlightHelmet), so [`next_event_sampling`] compensates only maps with at least
+//! [`COMPENSATION_MIN_SHARE`] of their light above the mean. A uniform map is left to BSDF sampling entirely
+//! (pbrt-v4's `UniformInfiniteLight`). ReSTIR's candidates, which no BSDF sample completes, always use the full
+//! distribution. Figures: docs/BENCHMARKS.md.
 
 use super::map::{EnvironmentMap, direction_to_uv, uv_to_direction};
 use glam::Vec3;
@@ -52,6 +56,36 @@ pub struct EnvironmentDistribution {
 
 /// The corner contrast within one cell above which a map is sampled bilinearly inside its cells.
 pub const BILINEAR_CONTRAST: f32 = 2.0;
+
+/// The share of a map's light above its mean from which next-event estimation samples it MIS-compensated
+/// (the sky gradient has 0.05, the env-lit scene's sunny map 0.70).
+pub const COMPENSATION_MIN_SHARE: f64 = 0.25;
+
+/// How next-event estimation samples an environment map.
+#[derive(Clone, Debug, PartialEq)]
+pub enum NextEventSampling {
+    /// Not at all: the map is uniform, BSDF sampling covers it (next-event estimation never picks it).
+    None,
+    /// From the full distribution, as ReSTIR's candidates.
+    Full,
+    /// From the compensated distribution.
+    Compensated(EnvironmentDistribution),
+}
+
+/// [`NextEventSampling`] for `map`, whose full distribution is `full`: none for a uniform map (less than 1e-4
+/// of its light above the mean), compensated from [`COMPENSATION_MIN_SHARE`] of it, else full.
+pub fn next_event_sampling(
+    map: &EnvironmentMap,
+    full: &EnvironmentDistribution,
+) -> NextEventSampling {
+    match EnvironmentDistribution::compensated(map, full) {
+        None => NextEventSampling::None,
+        Some(c) if c.luminance_integral >= COMPENSATION_MIN_SHARE * full.luminance_integral => {
+            NextEventSampling::Compensated(c)
+        }
+        Some(_) => NextEventSampling::Full,
+    }
+}
 
 impl EnvironmentDistribution {
     /// In proportion to the map's luminance (what ReSTIR's candidates and the power estimate use).
@@ -414,6 +448,35 @@ mod tests {
                 );
             }
         }
+    }
+
+    /// Compensation where the light is concentrated (a sun), the full distribution for a smooth sky, none for
+    /// a uniform map.
+    #[test]
+    fn next_event_sampling_follows_how_concentrated_the_light_is() {
+        let rule = |map: EnvironmentMap| {
+            let full = EnvironmentDistribution::new(&map);
+            next_event_sampling(&map, &full)
+        };
+        assert!(matches!(
+            rule(sunny_map()),
+            NextEventSampling::Compensated(_)
+        ));
+        assert_eq!(
+            rule(EnvironmentMap::constant([1.0, 2.0, 3.0])),
+            NextEventSampling::None
+        );
+        // The sky gradient (render::environment): white at the nadir to (0.5, 0.7, 1) at the zenith.
+        let sky = (0..65)
+            .map(|j| {
+                let t = 0.5 * ((std::f32::consts::PI * j as f32 / 64.0).cos() + 1.0);
+                [1.0 - 0.5 * t, 1.0 - 0.3 * t, 1.0]
+            })
+            .collect();
+        assert_eq!(
+            rule(EnvironmentMap::new(1, 65, sky)),
+            NextEventSampling::Full
+        );
     }
 
     #[test]

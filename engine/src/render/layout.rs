@@ -150,9 +150,11 @@ pub const LIGHT_SUN: u32 = 5;
 /// corners' luminance (set where some cell's corners differ enough for it to pay; see
 /// `environment::EnvironmentDistribution::bilinear`).
 pub const LIGHT_ENVIRONMENT_BILINEAR: u32 = 1;
-/// The same for next-event estimation's MIS-compensated distribution (set when the map has one; see
-/// `environment::EnvironmentDistribution::compensated`).
+/// The same for next-event estimation's MIS-compensated distribution.
 pub const LIGHT_ENVIRONMENT_COMPENSATED_BILINEAR: u32 = 2;
+/// Next-event estimation samples the map MIS-compensated (its second distribution follows the first in
+/// `environment_map`; see `environment::NextEventSampling`); else it samples the full distribution.
+pub const LIGHT_ENVIRONMENT_COMPENSATED: u32 = 4;
 
 /// One light of any kind (`shaders/scene/types.wgsl` `Light`; `shaders/lights/` reads it). What each field
 /// holds per kind:
@@ -164,7 +166,8 @@ pub const LIGHT_ENVIRONMENT_COMPENSATED_BILINEAR: u32 = 2;
 /// | spot | - | world position, range | axis it shines along, cos outer cone | intensity, cos inner cone |
 /// | directional | - | - | direction it travels | irradiance (W/m^2) |
 /// | environment | map width, height | (cos, sin) of the turn about +Y, compensation offset | - | strength |
-/// (an environment's `flags`: [`LIGHT_ENVIRONMENT_BILINEAR`], [`LIGHT_ENVIRONMENT_COMPENSATED_BILINEAR`])
+/// (an environment's `flags`: [`LIGHT_ENVIRONMENT_BILINEAR`], [`LIGHT_ENVIRONMENT_COMPENSATED`],
+/// [`LIGHT_ENVIRONMENT_COMPENSATED_BILINEAR`])
 /// | sun | - | -, 1 - cos(angular radius) | towards the sun | radiance |
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
@@ -234,6 +237,10 @@ pub const WGSL_CONSTANTS: &[(&str, u32)] = &[
     (
         "LIGHT_ENVIRONMENT_COMPENSATED_BILINEAR",
         LIGHT_ENVIRONMENT_COMPENSATED_BILINEAR,
+    ),
+    (
+        "LIGHT_ENVIRONMENT_COMPENSATED",
+        LIGHT_ENVIRONMENT_COMPENSATED,
     ),
     ("LIGHT_TREE_LEAF", LIGHT_TREE_LEAF),
     ("LIGHT_TREE_TWO_SIDED", LIGHT_TREE_TWO_SIDED),

@@ -16,7 +16,7 @@
 use super::GpuScene;
 use super::light_tree::{self, LightBounds};
 use super::packing::luminance;
-use crate::environment::BakedEnvironment;
+use crate::environment::{BakedEnvironment, EnvironmentDistribution, NextEventSampling};
 use crate::gpu::GpuContext;
 use crate::gpu::bind::write_or_grow;
 use crate::render::layout::*;
@@ -30,8 +30,8 @@ pub struct WeightedLight {
     pub light: GpuLight,
     pub power: f64,
     pub bounds: Option<LightBounds>,
-    /// The power next-event estimation's choice follows: `power`, except for an environment map, which it
-    /// samples MIS-compensated (`environment::EnvironmentDistribution::compensated`: only the light above the
+    /// The power next-event estimation's choice follows: `power`, except for an environment map that it
+    /// samples MIS-compensated (`environment::NextEventSampling`: then the power of its light above the
     /// map's mean), and `None` for a uniform environment, left to BSDF sampling alone (pbrt-v4's
     /// `UniformInfiniteLight` with `allowIncompletePDF`: cosine or glossy-lobe directions sample its light at
     /// least as well as uniform directions on the sphere, half of which point into the surface, and the path
@@ -168,7 +168,11 @@ impl GpuScene {
             let cdf_words = dist.conditional_cdf.len() + dist.marginal_cdf.len();
             let mut words: Vec<f32> = Vec::with_capacity(map.texels.len() * 3 + 2 * cdf_words);
             words.extend(map.texels.iter().flatten());
-            for d in std::iter::once(dist).chain(&baked.next_event) {
+            let compensated = match &baked.next_event {
+                NextEventSampling::Compensated(c) => Some(c),
+                _ => None,
+            };
+            for d in std::iter::once(dist).chain(compensated) {
                 words.extend(&d.conditional_cdf);
                 words.extend(&d.marginal_cdf);
             }
@@ -181,13 +185,15 @@ impl GpuScene {
                 self.generation += 1;
             }
             let (sin, cos) = baked.rotation_degrees.to_radians().sin_cos();
-            let compensated = baked.next_event.as_ref();
             let mut flags = 0;
             if dist.bilinear {
                 flags |= LIGHT_ENVIRONMENT_BILINEAR;
             }
-            if compensated.is_some_and(|c| c.bilinear) {
-                flags |= LIGHT_ENVIRONMENT_COMPENSATED_BILINEAR;
+            if let Some(c) = compensated {
+                flags |= LIGHT_ENVIRONMENT_COMPENSATED;
+                if c.bilinear {
+                    flags |= LIGHT_ENVIRONMENT_COMPENSATED_BILINEAR;
+                }
             }
             let light = GpuLight {
                 kind: LIGHT_ENVIRONMENT,
@@ -201,11 +207,13 @@ impl GpuScene {
                 radiance: [baked.strength; 3],
                 cos_inner: 0.0,
             };
-            self.lights.infinite.environment = Some((
-                light,
-                dist.luminance_integral * baked.strength as f64,
-                compensated.map(|c| c.luminance_integral * baked.strength as f64),
-            ));
+            let power = |d: &EnvironmentDistribution| d.luminance_integral * baked.strength as f64;
+            let next_event_power = match &baked.next_event {
+                NextEventSampling::None => None,
+                NextEventSampling::Full => Some(power(dist)),
+                NextEventSampling::Compensated(c) => Some(power(c)),
+            };
+            self.lights.infinite.environment = Some((light, power(dist), next_event_power));
         }
         if let Some(sun) = &baked.sun {
             let light = GpuLight {
