@@ -197,6 +197,8 @@ struct RenderReport {
     /// OIDN: the device, and milliseconds from the GPU buffers to the denoised host image.
     oidn_device: Option<String>,
     oidn_ms: Option<f64>,
+    /// The part of `oidn_ms` that reads the accumulation and AOVs back to the host and makes them means.
+    oidn_readback_ms: Option<f64>,
     triangles: usize,
     bvh_build_and_upload_s: f64,
     gpu_memory_geometry_bvh_bytes: u64,
@@ -408,6 +410,7 @@ fn render_to_file(
             denoiser: denoiser.map(str::to_string),
             oidn_device: oidn.as_ref().map(|o| o.device.clone()),
             oidn_ms: oidn.as_ref().map(|o| o.total_ms()),
+            oidn_readback_ms: oidn.as_ref().map(|o| o.readback_ms),
             triangles: scene.triangle_count(),
             bvh_build_and_upload_s: gpu_scene.build_seconds,
             gpu_memory_geometry_bvh_bytes: gpu_scene.memory.geometry_and_bvh(),

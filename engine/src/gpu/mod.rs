@@ -162,6 +162,40 @@ impl GpuContext {
         self.read_buffer_range(src, 0, size)
     }
 
+    /// Copies the whole of each buffer, back to back, into one staging buffer (one submission, one wait) and
+    /// hands the mapped bytes to `read`, which sees them in place (no copy; aligned for any 16-byte type).
+    pub fn read_buffers_with<R>(
+        &self,
+        sources: &[&wgpu::Buffer],
+        read: impl FnOnce(&[u8]) -> R,
+    ) -> R {
+        let size: u64 = sources.iter().map(|b| b.size()).sum();
+        let staging = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("readback"),
+            size: size.max(wgpu::COPY_BUFFER_ALIGNMENT),
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut encoder = self.device.create_command_encoder(&Default::default());
+        let mut offset = 0;
+        for src in sources {
+            encoder.copy_buffer_to_buffer(src, 0, &staging, offset, src.size());
+            offset += src.size();
+        }
+        self.queue.submit([encoder.finish()]);
+        let slice = staging.slice(..size.max(wgpu::COPY_BUFFER_ALIGNMENT));
+        slice.map_async(wgpu::MapMode::Read, |_| {});
+        self.wait_idle();
+        let result = {
+            let mapped = slice
+                .get_mapped_range()
+                .expect("readback buffer was mapped above");
+            read(&mapped[..size as usize])
+        };
+        staging.unmap();
+        result
+    }
+
     /// Copies `size` bytes of `src` from `offset` to the CPU (blocking).
     pub fn read_buffer_range(&self, src: &wgpu::Buffer, offset: u64, size: u64) -> Vec<u8> {
         let staging = self.device.create_buffer(&wgpu::BufferDescriptor {

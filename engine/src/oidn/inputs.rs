@@ -34,10 +34,14 @@ impl OidnInputs {
         albedo_depth: &[[f32; 4]],
         normal_hits: &[[f32; 4]],
     ) -> Self {
+        let pixels = accum.len();
         let mut inputs = Self {
             width,
             height,
-            ..Default::default()
+            color: Vec::with_capacity(pixels),
+            albedo: Vec::with_capacity(pixels),
+            normal: Vec::with_capacity(pixels),
+            samples: 0,
         };
         for ((a, ad), nh) in accum.iter().zip(albedo_depth).zip(normal_hits) {
             let n = a[3].max(1.0);
@@ -60,22 +64,36 @@ impl OidnInputs {
     }
 }
 
-/// Reads the view's current accumulation back (blocking) as OIDN inputs; also returns the seconds the
-/// GPU-to-host copy took.
+/// Reads the view's current accumulation back (blocking) as OIDN inputs: its three planes in one staging copy,
+/// one submission and one wait, turned into means straight from the mapped memory. Also returns the seconds
+/// that took (the GPU-to-host copy and the means).
 pub fn read_inputs(ctx: &GpuContext, view: &ViewTargets) -> (OidnInputs, f64) {
     let start = std::time::Instant::now();
-    let read = |b: &wgpu::Buffer| -> Vec<[f32; 4]> {
-        bytemuck::cast_slice(&ctx.read_buffer(b, b.size())).to_vec()
+    let planes = [&view.accum, &view.albedo_depth, &view.normal_hits];
+    let inputs = ctx.read_buffers_with(&planes, |bytes| {
+        inputs_from_planes(view.width, view.height, bytes)
+    });
+    (inputs, start.elapsed().as_secs_f64())
+}
+
+/// OIDN inputs from the accumulation, albedo + depth and normal + hits planes, back to back in `bytes`.
+pub(crate) fn inputs_from_planes(width: u32, height: u32, bytes: &[u8]) -> OidnInputs {
+    let planes: Vec<[f32; 4]>;
+    // Mapped GPU memory is aligned; a copy is made only for bytes that are not.
+    let planes: &[[f32; 4]] = match bytemuck::try_cast_slice(bytes) {
+        Ok(p) => p,
+        Err(_) => {
+            planes = bytemuck::pod_collect_to_vec(bytes);
+            &planes
+        }
     };
-    let (accum, albedo, normal) = (
-        read(&view.accum),
-        read(&view.albedo_depth),
-        read(&view.normal_hits),
-    );
-    let seconds = start.elapsed().as_secs_f64();
-    (
-        OidnInputs::from_sums(view.width, view.height, &accum, &albedo, &normal),
-        seconds,
+    let n = planes.len() / 3;
+    OidnInputs::from_sums(
+        width,
+        height,
+        &planes[..n],
+        &planes[n..2 * n],
+        &planes[2 * n..],
     )
 }
 
@@ -98,6 +116,33 @@ mod tests {
         assert_eq!(inputs.normal, vec![[0.0, 0.0, 1.0], [0.25, 0.0, 0.0]]);
         assert_eq!(inputs.samples, 4);
         assert!(inputs.images().validate().is_ok());
+    }
+
+    #[test]
+    fn planes_back_to_back_read_as_from_sums_aligned_or_not() {
+        let accum = [[4.0, 8.0, 12.0, 4.0], [2.0, 2.0, 2.0, 4.0]];
+        let albedo = [[2.0, 2.0, 2.0, 7.0], [0.2, 0.2, 0.2, 1.0]];
+        let normal = [[0.0, 0.0, 4.0, 4.0], [1.0, 0.0, 0.0, 1.0]];
+        let expected = OidnInputs::from_sums(2, 1, &accum, &albedo, &normal);
+        let planes: Vec<[f32; 4]> = [accum, albedo, normal].concat();
+        let bytes: &[u8] = bytemuck::cast_slice(&planes);
+        let got = inputs_from_planes(2, 1, bytes);
+        assert_eq!(
+            (got.color, got.albedo, got.normal),
+            (
+                expected.color.clone(),
+                expected.albedo.clone(),
+                expected.normal.clone()
+            )
+        );
+        // The same bytes one byte into a buffer: not aligned for f32, read through a copy.
+        let mut shifted = vec![0u8; bytes.len() + 1];
+        shifted[1..].copy_from_slice(bytes);
+        let got = inputs_from_planes(2, 1, &shifted[1..]);
+        assert_eq!(
+            (got.color, got.albedo, got.normal, got.samples),
+            (expected.color, expected.albedo, expected.normal, 4)
+        );
     }
 
     #[test]

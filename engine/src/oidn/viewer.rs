@@ -6,7 +6,7 @@
 
 use super::device::{AdapterIdentity, DeviceRequest};
 use super::worker::{Job, OidnWorker};
-use super::{OidnInputs, Timings};
+use super::Timings;
 use crate::FrameSet;
 use crate::gpu::GpuContext;
 use crate::gpu::readback::AsyncReadback;
@@ -149,7 +149,7 @@ pub fn denoise_still_image(
             if (key.0, key.1) == current {
                 let job = Job {
                     tag: key,
-                    inputs: inputs_from_bytes(view.width, view.height, &bytes),
+                    inputs: super::inputs::inputs_from_planes(view.width, view.height, &bytes),
                     options: settings.oidn,
                 };
                 if !worker.submit(job) {
@@ -178,19 +178,6 @@ pub fn denoise_still_image(
         oidn.readback = Some((key, readback));
         oidn.status = OidnStatus::Denoising(key.2);
     }
-}
-
-/// OIDN inputs from one staging copy: accumulation, albedo + depth and normal + hits planes, back to back.
-fn inputs_from_bytes(width: u32, height: u32, bytes: &[u8]) -> OidnInputs {
-    let planes: &[[f32; 4]] = bytemuck::cast_slice(bytes);
-    let n = planes.len() / 3;
-    OidnInputs::from_sums(
-        width,
-        height,
-        &planes[..n],
-        &planes[n..2 * n],
-        &planes[2 * n..],
-    )
 }
 
 #[cfg(test)]
