@@ -310,6 +310,18 @@ mod tests {
         }
     }
 
+    /// Calls `f(direction, solid angle)` at the midpoints of an nt x np (theta, phi) grid over the sphere.
+    fn for_sphere_grid(nt: usize, np: usize, mut f: impl FnMut(Vec3, f64)) {
+        for a in 0..nt {
+            let theta = (a as f64 + 0.5) / nt as f64 * PI;
+            for b in 0..np {
+                let phi = (b as f64 + 0.5) / np as f64 * 2.0 * PI;
+                let d = uv_to_direction((phi / (2.0 * PI)) as f32, (theta / PI) as f32);
+                f(d, theta.sin() * (PI / nt as f64) * (2.0 * PI / np as f64));
+            }
+        }
+    }
+
     /// Integrates the density over the sphere with a fine (theta, phi) midpoint rule.
     #[test]
     fn pdf_integrates_to_one() {
@@ -319,19 +331,8 @@ mod tests {
             EnvironmentMap::new(3, 4, (0..12).map(|i| [i as f32; 3]).collect()),
         ] {
             let dist = EnvironmentDistribution::new(&map);
-            let (nt, np) = (1200, 2400);
             let mut sum = 0.0f64;
-            for a in 0..nt {
-                let theta = (a as f64 + 0.5) / nt as f64 * PI;
-                for b in 0..np {
-                    let phi = (b as f64 + 0.5) / np as f64 * 2.0 * PI;
-                    let d = uv_to_direction((phi / (2.0 * PI)) as f32, (theta / PI) as f32);
-                    sum += dist.pdf(d) as f64
-                        * theta.sin()
-                        * (PI / nt as f64)
-                        * (2.0 * PI / np as f64);
-                }
-            }
+            for_sphere_grid(1200, 2400, |d, d_omega| sum += dist.pdf(d) as f64 * d_omega);
             assert!((sum - 1.0).abs() < 2e-3, "integral of the pdf {sum}");
         }
     }
@@ -423,20 +424,14 @@ mod tests {
             assert!(
                 dist.luminance_integral > 0.0 && dist.luminance_integral < full.luminance_integral
             );
-            let (nt, np) = (600, 1200);
             let mut sum = 0.0f64;
-            for a in 0..nt {
-                let theta = (a as f64 + 0.5) / nt as f64 * PI;
-                for b in 0..np {
-                    let phi = (b as f64 + 0.5) / np as f64 * 2.0 * PI;
-                    let d = uv_to_direction((phi / (2.0 * PI)) as f32, (theta / PI) as f32);
-                    let pdf = dist.pdf(d) as f64;
-                    if below_mean(d, dist.offset) {
-                        assert_eq!(pdf, 0.0, "density {pdf} at {d} below the mean");
-                    }
-                    sum += pdf * theta.sin() * (PI / nt as f64) * (2.0 * PI / np as f64);
+            for_sphere_grid(600, 1200, |d, d_omega| {
+                let pdf = dist.pdf(d) as f64;
+                if below_mean(d, dist.offset) {
+                    assert_eq!(pdf, 0.0, "density {pdf} at {d} below the mean");
                 }
-            }
+                sum += pdf * d_omega;
+            });
             assert!((sum - 1.0).abs() < 3e-3, "integral of the pdf {sum}");
             let mut rand = uniforms(7);
             for _ in 0..5000 {

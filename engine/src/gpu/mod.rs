@@ -163,7 +163,8 @@ impl GpuContext {
     }
 
     /// Copies the whole of each buffer, back to back, into one staging buffer (one submission, one wait) and
-    /// hands the mapped bytes to `read`, which sees them in place (no copy; aligned for any 16-byte type).
+    /// hands the mapped bytes to `read`, which sees them in place (no copy; wgpu maps at 8-byte alignment at
+    /// least, so `[f32; 4]` sums cast without one).
     pub fn read_buffers_with<R>(
         &self,
         sources: &[&wgpu::Buffer],

@@ -4,9 +4,9 @@
 //! again each time the sample count doubles, and once more at the sample limit. While the camera or an
 //! animation moves, the display shows svgf's image: OIDN is never waited for by the frame loop.
 
+use super::Timings;
 use super::device::{AdapterIdentity, DeviceRequest};
 use super::worker::{Job, OidnWorker};
-use super::Timings;
 use crate::FrameSet;
 use crate::gpu::GpuContext;
 use crate::gpu::readback::AsyncReadback;
