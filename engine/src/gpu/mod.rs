@@ -170,21 +170,39 @@ impl GpuContext {
         sources: &[&wgpu::Buffer],
         read: impl FnOnce(&[u8]) -> R,
     ) -> R {
-        let size: u64 = sources.iter().map(|b| b.size()).sum();
+        let ranges: Vec<_> = sources.iter().map(|b| (*b, 0, b.size())).collect();
+        self.read_ranges_with(&ranges, read)
+    }
+
+    /// Copies `size` bytes of `src` from `offset` to the CPU (blocking).
+    pub fn read_buffer_range(&self, src: &wgpu::Buffer, offset: u64, size: u64) -> Vec<u8> {
+        self.read_ranges_with(&[(src, offset, size)], <[u8]>::to_vec)
+    }
+
+    /// The readback behind the two above: each (buffer, offset, size) range copied, back to back, into one
+    /// staging buffer, one submission, one wait, and `read` called on the mapped bytes.
+    fn read_ranges_with<R>(
+        &self,
+        ranges: &[(&wgpu::Buffer, u64, u64)],
+        read: impl FnOnce(&[u8]) -> R,
+    ) -> R {
+        let size: u64 = ranges.iter().map(|r| r.2).sum();
+        // A mapped slice may not be empty.
+        let staging_size = size.max(wgpu::COPY_BUFFER_ALIGNMENT);
         let staging = self.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("readback"),
-            size: size.max(wgpu::COPY_BUFFER_ALIGNMENT),
+            size: staging_size,
             usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
         let mut encoder = self.device.create_command_encoder(&Default::default());
-        let mut offset = 0;
-        for src in sources {
-            encoder.copy_buffer_to_buffer(src, 0, &staging, offset, src.size());
-            offset += src.size();
+        let mut at = 0;
+        for &(src, offset, size) in ranges {
+            encoder.copy_buffer_to_buffer(src, offset, &staging, at, size);
+            at += size;
         }
         self.queue.submit([encoder.finish()]);
-        let slice = staging.slice(..size.max(wgpu::COPY_BUFFER_ALIGNMENT));
+        let slice = staging.slice(..staging_size);
         slice.map_async(wgpu::MapMode::Read, |_| {});
         self.wait_idle();
         let result = {
@@ -195,28 +213,6 @@ impl GpuContext {
         };
         staging.unmap();
         result
-    }
-
-    /// Copies `size` bytes of `src` from `offset` to the CPU (blocking).
-    pub fn read_buffer_range(&self, src: &wgpu::Buffer, offset: u64, size: u64) -> Vec<u8> {
-        let staging = self.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("readback"),
-            size,
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let mut encoder = self.device.create_command_encoder(&Default::default());
-        encoder.copy_buffer_to_buffer(src, offset, &staging, 0, size);
-        self.queue.submit([encoder.finish()]);
-        let slice = staging.slice(..);
-        slice.map_async(wgpu::MapMode::Read, |_| {});
-        self.wait_idle();
-        let data = slice
-            .get_mapped_range()
-            .expect("readback buffer was mapped above")
-            .to_vec();
-        staging.unmap();
-        data
     }
 }
 

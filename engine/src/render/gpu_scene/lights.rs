@@ -39,13 +39,25 @@ pub struct WeightedLight {
     pub next_event_power: Option<f64>,
 }
 
-/// The lights at infinity of the current environment, before their power (which needs the scene's size).
+impl WeightedLight {
+    /// The same light with both its powers times `factor` (the lights at infinity and directional lights get
+    /// pi r^2 once the scene's size is known).
+    fn scaled(self, factor: f64) -> Self {
+        Self {
+            power: self.power * factor,
+            next_event_power: self.next_event_power.map(|p| p * factor),
+            ..self
+        }
+    }
+}
+
+/// The lights at infinity of the current environment, their powers before [`WeightedLight::scaled`] by the
+/// scene's size.
 #[derive(Clone, Debug, Default)]
 pub struct InfiniteLights {
-    /// The environment map light (`None`: black), its power, and the power of what next-event estimation
-    /// samples of it (`None`: nothing, a uniform map).
-    environment: Option<(GpuLight, f64, Option<f64>)>,
-    sun: Option<(GpuLight, f64, Option<f64>)>,
+    /// The environment map light (`None`: black).
+    environment: Option<WeightedLight>,
+    sun: Option<WeightedLight>,
 }
 
 /// The light list's parts and upload state, inside [`GpuScene`].
@@ -213,7 +225,12 @@ impl GpuScene {
                 NextEventSampling::Full => Some(power(dist)),
                 NextEventSampling::Compensated(c) => Some(power(c)),
             };
-            self.lights.infinite.environment = Some((light, power(dist), next_event_power));
+            self.lights.infinite.environment = Some(WeightedLight {
+                light,
+                power: power(dist),
+                bounds: None,
+                next_event_power,
+            });
         }
         if let Some(sun) = &baked.sun {
             let light = GpuLight {
@@ -230,7 +247,12 @@ impl GpuScene {
             };
             let solid_angle = 2.0 * PI * sun.one_minus_cos as f64;
             let power = luminance(Vec3::from(sun.radiance)) as f64 * solid_angle;
-            self.lights.infinite.sun = Some((light, power, Some(power)));
+            self.lights.infinite.sun = Some(WeightedLight {
+                light,
+                power,
+                bounds: None,
+                next_event_power: Some(power),
+            });
         }
     }
 
@@ -249,23 +271,14 @@ impl GpuScene {
             .partition(|w| w.light.kind != LIGHT_DIRECTIONAL);
         all.extend(finite);
         let tree_lights = all.len();
-        all.extend(directional.into_iter().map(|w| WeightedLight {
-            power: w.power * disc,
-            next_event_power: w.next_event_power.map(|p| p * disc),
-            ..w
-        }));
+        all.extend(directional.into_iter().map(|w| w.scaled(disc)));
         let infinite_first = all.len() as u32;
-        for (light, power, next_event_power) in [list.infinite.environment, list.infinite.sun]
-            .into_iter()
-            .flatten()
-        {
-            all.push(WeightedLight {
-                light,
-                power: power * disc,
-                bounds: None,
-                next_event_power: next_event_power.map(|p| p * disc),
-            });
-        }
+        all.extend(
+            [list.infinite.environment, list.infinite.sun]
+                .into_iter()
+                .flatten()
+                .map(|w| w.scaled(disc)),
+        );
         let infinite_count = all.len() as u32 - infinite_first;
         // Two CDFs in one buffer: by power over every light, then next-event estimation's.
         let mut cdf = power_cdf(&all);
@@ -334,61 +347,47 @@ impl GpuScene {
 /// Cumulative selection probabilities in proportion to power; the last entry is exactly 1 (a list whose
 /// powers are all zero is sampled uniformly).
 pub fn power_cdf(lights: &[WeightedLight]) -> Vec<f32> {
-    let total: f64 = lights.iter().map(|w| w.power.max(0.0)).sum();
-    let n = lights.len();
-    let mut running = 0.0;
-    lights
+    cdf_by(lights, |w| Some(w.power))
+}
+
+/// Next-event estimation's CDF: in proportion to the power it samples of each light
+/// ([`WeightedLight::next_event_power`]), the lights it leaves to BSDF sampling never chosen (probability 0);
+/// all zeros when it samples none (then it picks nothing and BSDF sampling alone lights the scene).
+pub fn next_event_cdf(lights: &[WeightedLight]) -> Vec<f32> {
+    cdf_by(lights, |w| w.next_event_power)
+}
+
+/// Cumulative probabilities in proportion to `weight` over the lights it gives one (`None`: never chosen);
+/// uniform over those when their weights are all zero; exactly 1 from the last chosen light on, so no u < 1
+/// reaches a light after it; all zeros when none is chosen.
+fn cdf_by(lights: &[WeightedLight], weight: impl Fn(&WeightedLight) -> Option<f64>) -> Vec<f32> {
+    let weights: Vec<Option<f64>> = lights
+        .iter()
+        .map(|w| weight(w).map(|p| p.max(0.0)))
+        .collect();
+    let Some(last) = weights.iter().rposition(Option::is_some) else {
+        return vec![0.0; lights.len()];
+    };
+    let total: f64 = weights.iter().flatten().sum();
+    let chosen = weights.iter().flatten().count();
+    let (mut running, mut seen) = (0.0, 0);
+    weights
         .iter()
         .enumerate()
         .map(|(k, w)| {
-            running += w.power.max(0.0);
-            if k + 1 == n {
+            if let Some(p) = w {
+                running += p;
+                seen += 1;
+            }
+            if k >= last {
                 1.0
             } else if total > 0.0 {
                 ((running / total) as f32).min(1.0)
             } else {
-                (k + 1) as f32 / n as f32
+                seen as f32 / chosen as f32
             }
         })
         .collect()
-}
-
-/// Next-event estimation's CDF: [`power_cdf`] over the power it samples of each light
-/// ([`WeightedLight::next_event_power`]), the lights it leaves to BSDF sampling never chosen (probability 0);
-/// all zeros when it samples none (then it picks nothing and BSDF sampling alone lights the scene).
-pub fn next_event_cdf(lights: &[WeightedLight]) -> Vec<f32> {
-    let sampled: Vec<WeightedLight> = lights
-        .iter()
-        .map(|w| WeightedLight {
-            power: w.next_event_power.unwrap_or(0.0).max(0.0),
-            ..*w
-        })
-        .collect();
-    let Some(last) = lights.iter().rposition(|w| w.next_event_power.is_some()) else {
-        return vec![0.0; lights.len()];
-    };
-    let total: f64 = sampled.iter().map(|w| w.power).sum();
-    if total <= 0.0 {
-        // Uniform over the sampled lights, as power_cdf does when every power is zero.
-        let count = lights
-            .iter()
-            .filter(|w| w.next_event_power.is_some())
-            .count();
-        let mut seen = 0;
-        return lights
-            .iter()
-            .map(|w| {
-                seen += w.next_event_power.is_some() as usize;
-                seen as f32 / count as f32
-            })
-            .collect();
-    }
-    let mut cdf = power_cdf(&sampled);
-    // The last sampled light ends the CDF at exactly 1, so no u < 1 reaches a light after it.
-    for entry in &mut cdf[last..] {
-        *entry = 1.0;
-    }
-    cdf
 }
 
 #[cfg(test)]
