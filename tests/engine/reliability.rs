@@ -608,3 +608,26 @@ fn save_as_gltf_copies_outside_files_without_replacing_any() {
         "the scene file, then what it read"
     );
 }
+
+/// Readbacks keep their staging buffer for the next one: each still returns exactly its own bytes, whether the
+/// kept buffer is larger (a stale tail must not show), smaller (it is replaced) or read in place.
+#[test]
+fn readbacks_reuse_their_staging_buffer_without_stale_bytes() {
+    let (ctx, _lock) = gpu();
+    let big: Vec<u8> = (0..4096u32).map(|i| (i * 7 + 3) as u8).collect();
+    let small: Vec<u8> = (0..256u32).map(|i| (i * 13 + 1) as u8).collect();
+    let big_buffer = raykin::gpu::bind::storage_with(&ctx, "big", &big);
+    let small_buffer = raykin::gpu::bind::storage_with(&ctx, "small", &small);
+    assert_eq!(ctx.read_buffer(&small_buffer, 256), small);
+    assert_eq!(ctx.read_buffer(&big_buffer, 4096), big);
+    assert_eq!(ctx.read_buffer(&small_buffer, 256), small);
+    assert_eq!(
+        ctx.read_buffer_range(&big_buffer, 1024, 512),
+        big[1024..1536]
+    );
+    let both = ctx.read_buffers_with(&[&small_buffer, &big_buffer], |bytes| bytes.to_vec());
+    assert_eq!(both.len(), 256 + 4096);
+    assert_eq!(both[..256], small);
+    assert_eq!(both[256..], big);
+    assert_eq!(ctx.read_buffer(&small_buffer, 256), small);
+}

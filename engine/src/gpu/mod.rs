@@ -64,6 +64,9 @@ pub struct GpuContext {
     /// tracer) for every new image size, depth or camera; storage buffers are never specialised. GPUs keep
     /// uniforms (the constant bank): storage parameters made the H200's trace kernel up to 13% slower.
     pub params_in_storage: bool,
+    /// The staging buffer of the last readback, kept for the next: allocating (and on discrete GPUs pinning)
+    /// host memory for every readback cost more than the copy.
+    readback_staging: Arc<std::sync::Mutex<Option<wgpu::Buffer>>>,
 }
 
 impl GpuContext {
@@ -111,6 +114,7 @@ impl GpuContext {
         Ok(Self {
             pipelines: PipelineCache::new(device.clone()),
             params_in_storage: info.device_type == wgpu::DeviceType::Cpu,
+            readback_staging: Arc::default(),
             device,
             queue,
             adapter: Arc::new(adapter),
@@ -186,25 +190,35 @@ impl GpuContext {
         ranges: &[(&wgpu::Buffer, u64, u64)],
         read: impl FnOnce(&[u8]) -> R,
     ) -> R {
+        let start = std::time::Instant::now();
         let size: u64 = ranges.iter().map(|r| r.2).sum();
         // A mapped slice may not be empty.
         let staging_size = size.max(wgpu::COPY_BUFFER_ALIGNMENT);
-        let staging = self.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("readback"),
-            size: staging_size,
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
+        let mut kept = self
+            .readback_staging
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
+        let staging = match kept.take() {
+            Some(b) if b.size() >= staging_size => b,
+            _ => self.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("readback"),
+                size: staging_size,
+                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            }),
+        };
         let mut encoder = self.device.create_command_encoder(&Default::default());
         let mut at = 0;
         for &(src, offset, size) in ranges {
             encoder.copy_buffer_to_buffer(src, offset, &staging, at, size);
             at += size;
         }
+        let created = start.elapsed();
         self.queue.submit([encoder.finish()]);
         let slice = staging.slice(..staging_size);
         slice.map_async(wgpu::MapMode::Read, |_| {});
         self.wait_idle();
+        let mapped_at = start.elapsed();
         let result = {
             let mapped = slice
                 .get_mapped_range()
@@ -212,6 +226,14 @@ impl GpuContext {
             read(&mapped[..size as usize])
         };
         staging.unmap();
+        *kept = Some(staging);
+        tracing::debug!(
+            "readback of {:.1} MiB: staging buffer {:.2} ms, copy and map {:.2} ms, read {:.2} ms",
+            size as f64 / 1048576.0,
+            created.as_secs_f64() * 1e3,
+            (mapped_at - created).as_secs_f64() * 1e3,
+            (start.elapsed() - mapped_at).as_secs_f64() * 1e3
+        );
         result
     }
 }

@@ -51,6 +51,11 @@ impl AsyncReadback {
         Self { slots, size }
     }
 
+    /// Bytes per slot.
+    pub fn size(&self) -> u64 {
+        self.size
+    }
+
     /// Records copies of `sources` (buffer, offset in the slot, byte count; each from the buffer's start)
     /// into a free slot tagged `tag`; false when every slot is still in flight (the frame goes unreported).
     pub fn encode(

@@ -34,23 +34,26 @@ impl OidnInputs {
         albedo_depth: &[[f32; 4]],
         normal_hits: &[[f32; 4]],
     ) -> Self {
-        let pixels = accum.len();
-        let mut inputs = Self {
+        // Means in parallel: at 1440p these are 11 million pixels' divisions over 180 MB of mapped memory.
+        use rayon::prelude::*;
+        let means = |plane: &[[f32; 4]]| -> Vec<[f32; 3]> {
+            plane
+                .par_iter()
+                .zip(accum)
+                .map(|(p, a)| {
+                    let n = a[3].max(1.0);
+                    [p[0] / n, p[1] / n, p[2] / n]
+                })
+                .collect()
+        };
+        Self {
             width,
             height,
-            color: Vec::with_capacity(pixels),
-            albedo: Vec::with_capacity(pixels),
-            normal: Vec::with_capacity(pixels),
-            samples: 0,
-        };
-        for ((a, ad), nh) in accum.iter().zip(albedo_depth).zip(normal_hits) {
-            let n = a[3].max(1.0);
-            inputs.color.push([a[0] / n, a[1] / n, a[2] / n]);
-            inputs.albedo.push([ad[0] / n, ad[1] / n, ad[2] / n]);
-            inputs.normal.push([nh[0] / n, nh[1] / n, nh[2] / n]);
+            color: means(accum),
+            albedo: means(albedo_depth),
+            normal: means(normal_hits),
+            samples: accum.first().map_or(0, |a| a[3] as u32),
         }
-        inputs.samples = accum.first().map_or(0, |a| a[3] as u32);
-        inputs
     }
 
     pub fn images(&self) -> super::Images<'_> {
