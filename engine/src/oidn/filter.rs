@@ -1,6 +1,8 @@
-//! [`Oidn`]: OIDN's `RT` filter over host images, through OIDN buffers (written from and read back to host
-//! memory, which every device type supports; the copies are timed). Filters and buffers are made once per
-//! image size and options and reused, as OIDN recommends: committing a filter is its expensive step.
+//! [`Oidn`]: OIDN's `RT` filter over host images. The inputs go through OIDN's copies into device buffers (the
+//! network and prefilters read them many times); the output is a host-storage buffer (pinned host memory a GPU
+//! writes once, directly) read in place, where the device offers one, else a device buffer read back. Filters
+//! and buffers are made once per image size and options and reused, as OIDN recommends: committing a filter is
+//! its expensive step.
 
 use super::device::{self, DeviceKind, DeviceRequest};
 use super::library::{self, Library};
@@ -13,13 +15,13 @@ use std::time::Instant;
 pub struct Timings {
     /// Creating and committing filters and buffers (only when the size or options changed).
     pub setup_ms: f64,
-    /// Host to OIDN buffers (a memcpy on the CPU device, a host-to-device copy on a GPU).
+    /// Sanitising the images and copying them into OIDN's buffers (a host-to-device copy on a GPU).
     pub upload_ms: f64,
     /// Denoising the albedo and normal images (with [`super::AuxMode::Prefilter`]).
     pub prefilter_ms: f64,
     /// The main filter.
     pub filter_ms: f64,
-    /// OIDN buffer back to the host.
+    /// The output from OIDN's buffer into a host image.
     pub download_ms: f64,
 }
 
@@ -51,6 +53,8 @@ struct Filters {
     albedo: Option<library::Buffer>,
     normal: Option<library::Buffer>,
     output: library::Buffer,
+    /// `output` is in host storage and its data pointer valid: read in place.
+    output_in_host_memory: bool,
 }
 
 /// An OIDN device and the filters made on it. Use it from one thread at a time (it is `Send`).
@@ -157,6 +161,17 @@ impl Oidn {
 
     /// Copies `pixels` FLOAT3 pixels of an OIDN buffer to the host.
     fn read(&self, buffer: library::Buffer, pixels: usize) -> Result<Vec<[f32; 3]>, OidnError> {
+        if self
+            .filters
+            .as_ref()
+            .is_some_and(|f| f.output_in_host_memory && f.output == buffer)
+        {
+            use rayon::prelude::*;
+            // SAFETY: the host-storage output of `pixels` FLOAT3 pixels; the filter that writes it has returned
+            // (oidnExecuteFilter is synchronous) and nothing else touches it.
+            let source = unsafe { host_pixels(self.lib, buffer, pixels) };
+            return Ok(source.par_iter().copied().collect());
+        }
         let mut out = vec![[0.0f32; 3]; pixels];
         let bytes: &mut [u8] = bytemuck::cast_slice_mut(&mut out);
         // SAFETY: the buffer holds exactly `bytes.len()` bytes; the call blocks until copied.
@@ -188,12 +203,12 @@ impl Oidn {
         }
         timings.setup_ms = ms_since(start);
 
-        let color = sanitized(images.color, 0.0, MAX_RADIANCE);
-        let albedo = images.albedo.map(|a| sanitized(a, 0.0, 1.0));
-        let normal = images.normal.map(|n| sanitized(n, -1.0, 1.0));
         let lib = self.lib;
         let filters = self.filters.as_ref().expect("made above");
         let start = Instant::now();
+        let color = sanitized(images.color, 0.0, MAX_RADIANCE);
+        let albedo = images.albedo.map(|a| sanitized(a, 0.0, 1.0));
+        let normal = images.normal.map(|n| sanitized(n, -1.0, 1.0));
         for (buffer, data) in [
             (Some(filters.color), Some(&color)),
             (filters.albedo, albedo.as_ref()),
@@ -228,6 +243,19 @@ impl Oidn {
         let bytes = width as usize * height as usize * 12;
         // SAFETY: `dev` is a committed device; every handle made here is released in `release_filters`.
         let new_buffer = || unsafe { (lib.new_buffer)(dev, bytes) };
+        // SAFETY: as above; a null buffer or data pointer means no host storage here (the error is cleared).
+        let mut output =
+            unsafe { (lib.new_buffer_with_storage)(dev, bytes, library::STORAGE_HOST) };
+        let output_in_host_memory = lib.take_error(dev).is_none()
+            && !output.is_null()
+            && !unsafe { (lib.get_buffer_data)(output) }.is_null();
+        if !output_in_host_memory {
+            if !output.is_null() {
+                // SAFETY: made above, never used.
+                unsafe { (lib.release_buffer)(output) };
+            }
+            output = new_buffer();
+        }
         let mut filters = Filters {
             key,
             beauty: std::ptr::null_mut(),
@@ -235,7 +263,8 @@ impl Oidn {
             color: new_buffer(),
             albedo: has_albedo.then(new_buffer),
             normal: has_normal.then(new_buffer),
-            output: new_buffer(),
+            output,
+            output_in_host_memory,
         };
         let image = |filter, name: &'static CStr, buffer| {
             // SAFETY: a live filter and a buffer of width x height FLOAT3 pixels, tightly packed.
@@ -353,10 +382,21 @@ fn release(lib: &Library, f: &Filters) {
 /// Radiance above this is clamped before denoising: OIDN's HDR transfer must not overflow to infinity.
 const MAX_RADIANCE: f32 = 1e30;
 
+/// A host-storage buffer's pixels.
+///
+/// # Safety
+/// `buffer` is a live host-storage buffer of at least `pixels` FLOAT3 pixels that nothing writes while
+/// the slice lives.
+unsafe fn host_pixels<'a>(lib: &Library, buffer: library::Buffer, pixels: usize) -> &'a [[f32; 3]] {
+    // SAFETY: per the contract; OIDN's host allocations are aligned far beyond f32's 4 bytes.
+    unsafe { std::slice::from_raw_parts((lib.get_buffer_data)(buffer).cast(), pixels) }
+}
+
 /// Each channel clamped to [lo, hi]; NaN becomes 0.
 fn sanitized(image: &[[f32; 3]], lo: f32, hi: f32) -> Vec<[f32; 3]> {
+    use rayon::prelude::*;
     image
-        .iter()
+        .par_iter()
         .map(|p| p.map(|v| if v.is_nan() { 0.0 } else { v.clamp(lo, hi) }))
         .collect()
 }

@@ -60,6 +60,8 @@ pub const DEVICE_TYPE_SYCL: c_int = 2;
 pub const DEVICE_TYPE_CUDA: c_int = 3;
 pub const DEVICE_TYPE_HIP: c_int = 4;
 pub const DEVICE_TYPE_METAL: c_int = 5;
+/// `OIDN_STORAGE_HOST`: host memory the device can read and write (pinned memory on GPUs).
+pub const STORAGE_HOST: c_int = 1;
 /// `OIDN_FORMAT_FLOAT3`.
 pub const FORMAT_FLOAT3: c_int = 3;
 /// `OIDN_ERROR_NONE`.
@@ -83,6 +85,8 @@ pub struct Library {
     pub sync_device: unsafe extern "C" fn(Device),
     pub release_device: unsafe extern "C" fn(Device),
     pub new_buffer: unsafe extern "C" fn(Device, usize) -> Buffer,
+    pub new_buffer_with_storage: unsafe extern "C" fn(Device, usize, c_int) -> Buffer,
+    pub get_buffer_data: unsafe extern "C" fn(Buffer) -> *mut c_void,
     pub write_buffer: unsafe extern "C" fn(Buffer, usize, usize, *const c_void),
     pub read_buffer: unsafe extern "C" fn(Buffer, usize, usize, *mut c_void),
     pub release_buffer: unsafe extern "C" fn(Buffer),
@@ -229,6 +233,8 @@ fn load_symbols(file: &Path) -> Result<Library, OidnError> {
         sync_device: symbol!("oidnSyncDevice"),
         release_device: symbol!("oidnReleaseDevice"),
         new_buffer: symbol!("oidnNewBuffer"),
+        new_buffer_with_storage: symbol!("oidnNewBufferWithStorage"),
+        get_buffer_data: symbol!("oidnGetBufferData"),
         write_buffer: symbol!("oidnWriteBuffer"),
         read_buffer: symbol!("oidnReadBuffer"),
         release_buffer: symbol!("oidnReleaseBuffer"),
