@@ -183,6 +183,12 @@ impl GpuContext {
         self.read_ranges_with(&[(src, offset, size)], <[u8]>::to_vec)
     }
 
+    fn kept_staging(&self) -> std::sync::MutexGuard<'_, Option<wgpu::Buffer>> {
+        self.readback_staging
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner)
+    }
+
     /// The readback behind the two above: each (buffer, offset, size) range copied, back to back, into one
     /// staging buffer, one submission, one wait, and `read` called on the mapped bytes.
     fn read_ranges_with<R>(
@@ -194,11 +200,9 @@ impl GpuContext {
         let size: u64 = ranges.iter().map(|r| r.2).sum();
         // A mapped slice may not be empty.
         let staging_size = size.max(wgpu::COPY_BUFFER_ALIGNMENT);
-        let mut kept = self
-            .readback_staging
-            .lock()
-            .unwrap_or_else(std::sync::PoisonError::into_inner);
-        let staging = match kept.take() {
+        // Taken out of the cache (not locked across the wait): a concurrent readback makes its own.
+        let kept = self.kept_staging().take();
+        let staging = match kept {
             Some(b) if b.size() >= staging_size => b,
             _ => self.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("readback"),
@@ -226,7 +230,12 @@ impl GpuContext {
             read(&mapped[..size as usize])
         };
         staging.unmap();
-        *kept = Some(staging);
+        // Kept unless a concurrent readback put back a larger one.
+        let mut kept = self.kept_staging();
+        if kept.as_ref().is_none_or(|b| b.size() < staging.size()) {
+            *kept = Some(staging);
+        }
+        drop(kept);
         tracing::debug!(
             "readback of {:.1} MiB: staging buffer {:.2} ms, copy and map {:.2} ms, read {:.2} ms",
             size as f64 / 1048576.0,
