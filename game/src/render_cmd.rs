@@ -197,8 +197,11 @@ struct RenderReport {
     /// OIDN: the device, and milliseconds from the GPU buffers to the denoised host image.
     oidn_device: Option<String>,
     oidn_ms: Option<f64>,
-    /// The part of `oidn_ms` that reads the accumulation and AOVs back to the host and makes them means.
+    /// The part of `oidn_ms` that reads the accumulation and AOVs back to the host and makes them means (0
+    /// with shared GPU memory).
     oidn_readback_ms: Option<f64>,
+    /// OIDN read its inputs from GPU memory shared with wgpu, not from host copies.
+    oidn_shared_memory: Option<bool>,
     triangles: usize,
     bvh_build_and_upload_s: f64,
     gpu_memory_geometry_bvh_bytes: u64,
@@ -377,8 +380,14 @@ fn render_to_file(
     let gpu_scene = app.gpu_scene();
     let denoised = match (denoiser, &oidn) {
         (Some("oidn"), Some(o)) => format!(
-            ", denoised by Open Image Denoise on {} in {:.2} s",
-            o.device, denoise_s
+            ", denoised by Open Image Denoise on {}{} in {:.2} s",
+            o.device,
+            if o.shared_memory {
+                " (GPU memory shared with wgpu)"
+            } else {
+                ""
+            },
+            denoise_s
         ),
         (Some(d), _) => format!(", denoised by {d} in {denoise_s:.2} s"),
         (None, _) => String::new(),
@@ -411,6 +420,7 @@ fn render_to_file(
             oidn_device: oidn.as_ref().map(|o| o.device.clone()),
             oidn_ms: oidn.as_ref().map(|o| o.total_ms()),
             oidn_readback_ms: oidn.as_ref().map(|o| o.readback_ms),
+            oidn_shared_memory: oidn.as_ref().map(|o| o.shared_memory),
             triangles: scene.triangle_count(),
             bvh_build_and_upload_s: gpu_scene.build_seconds,
             gpu_memory_geometry_bvh_bytes: gpu_scene.memory.geometry_and_bvh(),

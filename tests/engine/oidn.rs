@@ -501,3 +501,139 @@ fn mirror_aovs_show_the_mirrored_surface() {
     assert!(red > 50 && green > 50, "red {red}, green {green}");
     assert!(sky > 10, "the floor near the camera mirrors the sky: {sky}");
 }
+
+/// The GPU pass that writes OIDN's inputs into shared GPU memory (`render::queries::write_denoiser_inputs`)
+/// writes what the host path hands OIDN: per pixel the sums divided by the sample count, then NaN -> 0,
+/// radiance clamped to [0, 1e30], albedo to [0, 1], normal to [-1, 1] (computed here from the sums the GPU
+/// holds, with poisoned pixels written into them to reach every rule), within 2 ulps (the GPU's division).
+#[test]
+fn denoiser_inputs_pass_writes_the_host_paths_inputs() {
+    let (ctx, _gpu) = gpu();
+    let mut app = cornell::app(ctx, true, 16, 5);
+    app.accumulate(3, 3, |_| {});
+    let view = app.view();
+    let poison: [(&wgpu::Buffer, usize, [f32; 4]); 5] = [
+        (&view.accum, 0, [f32::NAN, f32::INFINITY, -2.0, 3.0]),
+        (&view.accum, 1, [3e38, 1.0, 0.5, 0.0]),
+        (&view.albedo_depth, 2, [4.5, -1.0, f32::NAN, 7.0]),
+        (&view.normal_hits, 3, [9.0, -9.0, f32::NEG_INFINITY, 3.0]),
+        (&view.normal_hits, 4, [f32::NAN, 0.3, -0.6, 3.0]),
+    ];
+    for (buffer, pixel, value) in poison {
+        app.ctx
+            .queue
+            .write_buffer(buffer, pixel as u64 * 16, bytemuck::bytes_of(&value));
+    }
+    let sums = |b: &wgpu::Buffer| -> Vec<[f32; 4]> {
+        bytemuck::pod_collect_to_vec(&app.ctx.read_buffer(b, b.size()))
+    };
+    let (accum, albedo, normal) = (
+        sums(&view.accum),
+        sums(&view.albedo_depth),
+        sums(&view.normal_hits),
+    );
+    let expected = |plane: &[[f32; 4]], lo: f32, hi: f32| -> Vec<[f32; 3]> {
+        plane
+            .iter()
+            .zip(&accum)
+            .map(|(p, a)| {
+                let n = a[3].max(1.0);
+                [0, 1, 2].map(|c| {
+                    let v = p[c] / n;
+                    if v.is_nan() { 0.0 } else { v.clamp(lo, hi) }
+                })
+            })
+            .collect()
+    };
+    let pixels = view.pixels();
+    let planes: Vec<wgpu::Buffer> = (0..3)
+        .map(|_| {
+            app.ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("test plane"),
+                size: pixels * 12,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            })
+        })
+        .collect();
+    raykin::render::queries::write_denoiser_inputs(
+        &app.ctx,
+        view,
+        [&planes[0], &planes[1], &planes[2]],
+    );
+    let written = |b: &wgpu::Buffer| -> Vec<[f32; 3]> {
+        bytemuck::pod_collect_to_vec(&app.ctx.read_buffer(b, b.size()))
+    };
+    for (name, plane, want) in [
+        ("colour", &planes[0], expected(&accum, 0.0, 1e30)),
+        ("albedo", &planes[1], expected(&albedo, 0.0, 1.0)),
+        ("normal", &planes[2], expected(&normal, -1.0, 1.0)),
+    ] {
+        let got = written(plane);
+        assert_eq!(got.len(), want.len());
+        for (i, (g, w)) in got.iter().zip(&want).enumerate() {
+            for c in 0..3 {
+                let tolerance = 2.0 * f32::EPSILON * w[c].abs();
+                assert!(
+                    g[c].is_finite() && (g[c] - w[c]).abs() <= tolerance,
+                    "{name} pixel {i} channel {c}: GPU {} host {}",
+                    g[c],
+                    w[c]
+                );
+            }
+        }
+    }
+    // The poisoned pixels reached each rule.
+    let color = written(&planes[0]);
+    assert_eq!(color[0], [0.0, 1e30, 0.0]);
+    assert_eq!(color[1][0], 1e30);
+    assert_eq!(
+        written(&planes[1])[2],
+        [4.5 / accum[2][3].max(1.0), 0.0, 0.0].map(|v| v.min(1.0))
+    );
+    assert_eq!(written(&planes[2])[3], [1.0, -1.0, -1.0]);
+    assert_eq!(written(&planes[2])[4][0], 0.0);
+}
+
+/// Memory exported for another API (OIDN's CUDA device) behaves as any wgpu buffer (written, copied, read
+/// back) and comes with an open file descriptor of at least its size; an adapter that cannot export says so.
+#[test]
+fn exported_gpu_memory_is_a_working_wgpu_buffer() {
+    use raykin::gpu::external_memory::{exported_buffer, supported};
+    let (ctx, _gpu) = gpu();
+    let size = 3 * 1000 * 4;
+    if !supported(&ctx) {
+        let error = exported_buffer(&ctx, "test", size).err().expect("refused");
+        assert!(error.contains("VK_KHR_external_memory_fd"), "{error}");
+        return;
+    }
+    let exported = exported_buffer(&ctx, "test", size).expect("exports");
+    assert!(exported.allocation_size >= size);
+    assert_eq!(exported.buffer.size(), size);
+    #[cfg(unix)]
+    {
+        use std::os::fd::AsRawFd;
+        // SAFETY: fcntl on a descriptor we own; F_GETFD only reads its flags.
+        let flags = unsafe { libc::fcntl(exported.fd.as_raw_fd(), libc::F_GETFD) };
+        assert!(flags >= 0, "the exported descriptor is not open");
+    }
+    let data: Vec<f32> = (0..3000).map(|i| i as f32 * 0.5 - 7.0).collect();
+    ctx.queue
+        .write_buffer(&exported.buffer, 0, bytemuck::cast_slice(&data));
+    let back: Vec<f32> = bytemuck::pod_collect_to_vec(&ctx.read_buffer(&exported.buffer, size));
+    assert_eq!(back, data);
+}
+
+/// OIDN's CPU device never takes the shared-memory path (it imports no GPU memory): its images keep going
+/// through the host, and say so.
+#[test]
+fn cpu_device_denoises_through_host_copies() {
+    let (ctx, _gpu) = gpu();
+    let oidn = cpu_oidn();
+    assert!(!oidn.shares_memory_with(&ctx));
+    let mut app = cornell::app(ctx, true, 16, 9);
+    app.accumulate(2, 2, |_| {});
+    let image = app.oidn_denoised().expect("denoised");
+    assert!(!image.shared_memory);
+    assert!(image.readback_ms > 0.0);
+}

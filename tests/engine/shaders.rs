@@ -326,6 +326,7 @@ fn gpu_deform_structs_match_wgsl() {
 
 #[test]
 fn realtime_structs_match_wgsl() {
+    use passes::denoiser_inputs::DenoiserInputsParams;
     use passes::gradient::FilterStep;
     use passes::handover::HandoverParams;
     use raykin::render::layout::*;
@@ -377,6 +378,12 @@ fn realtime_structs_match_wgsl() {
         "Params",
         HandoverParams,
         [width, height, weight]
+    );
+    same_layout!(
+        WgslLayouts::of(&passes::denoiser_inputs::KERNEL),
+        "Params",
+        DenoiserInputsParams,
+        [width, height, max_radiance]
     );
     same_layout!(
         WgslLayouts::of(&passes::gradient::KERNEL),

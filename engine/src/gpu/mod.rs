@@ -1,6 +1,7 @@
 //! The wgpu device: one adapter picked at start-up, shared by every plugin as a resource.
 
 pub mod bind;
+pub mod external_memory;
 pub mod limits;
 mod pipeline_cache;
 pub mod readback;
@@ -91,7 +92,9 @@ impl GpuContext {
         let info = adapter.get_info();
         let wanted = wgpu::Features::TIMESTAMP_QUERY
             | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS
-            | wgpu::Features::SUBGROUP;
+            | wgpu::Features::SUBGROUP
+            // OIDN's GPU device reads the accumulation from memory it imports (external_memory.rs).
+            | wgpu::Features::VULKAN_EXTERNAL_MEMORY_FD;
         let features = adapter.features() & wanted;
         let limits = adapter.limits();
         if limits.max_storage_buffers_per_shader_stage < MIN_STORAGE_BUFFERS_PER_STAGE {

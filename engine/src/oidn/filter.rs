@@ -3,10 +3,16 @@
 //! writes once, directly) read in place, where the device offers one, else a device buffer read back. Filters
 //! and buffers are made once per image size and options and reused, as OIDN recommends: committing a filter is
 //! its expensive step.
+//!
+//! Where OIDN's GPU device and wgpu's Vulkan device are the same GPU and both can share memory, the images
+//! can instead live in Vulkan memory OIDN imports ([`Oidn::shared_images`]): a wgpu pass writes the inputs and
+//! the output is read where OIDN wrote it, with no copy through the host (`super::shared`).
 
 use super::device::{self, DeviceKind, DeviceRequest};
 use super::library::{self, Library};
 use super::{DenoiseOptions, Images, OidnError};
+use crate::gpu::GpuContext;
+use crate::render::passes::denoiser_inputs::{MAX_RADIANCE, plane_bytes};
 use std::ffi::CStr;
 use std::time::Instant;
 
@@ -15,7 +21,8 @@ use std::time::Instant;
 pub struct Timings {
     /// Creating and committing filters and buffers (only when the size or options changed).
     pub setup_ms: f64,
-    /// Sanitising the images and copying them into OIDN's buffers (a host-to-device copy on a GPU).
+    /// Sanitising the images and copying them into OIDN's buffers (a host-to-device copy on a GPU); with
+    /// shared GPU memory, the wgpu pass that writes them there.
     pub upload_ms: f64,
     /// Denoising the albedo and normal images (with [`super::AuxMode::Prefilter`]).
     pub prefilter_ms: f64,
@@ -28,6 +35,12 @@ pub struct Timings {
 impl Timings {
     pub fn total_ms(&self) -> f64 {
         self.setup_ms + self.upload_ms + self.prefilter_ms + self.filter_ms + self.download_ms
+    }
+
+    /// The denoise without the set-up and without bringing the output to the host: with shared GPU memory,
+    /// what a denoised image costs where it stays on the GPU (the viewer's display).
+    pub fn on_device_ms(&self) -> f64 {
+        self.upload_ms + self.prefilter_ms + self.filter_ms
     }
 }
 
@@ -43,9 +56,31 @@ pub struct Denoised {
     pub repaired: usize,
 }
 
+/// What a set of filters was made for.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct FilterKey {
+    width: u32,
+    height: u32,
+    options: DenoiseOptions,
+    albedo: bool,
+    normal: bool,
+    /// The images live in GPU memory shared with wgpu.
+    shared: bool,
+}
+
+/// The four FLOAT3 images (tightly packed, row-major from the top-left) as wgpu buffers whose memory OIDN's
+/// GPU device imported: a wgpu pass writes `color`, `albedo` and `normal`; OIDN writes `output`.
+#[derive(Clone, Debug)]
+pub struct SharedImages {
+    pub color: wgpu::Buffer,
+    pub albedo: wgpu::Buffer,
+    pub normal: wgpu::Buffer,
+    pub output: wgpu::Buffer,
+}
+
 /// Filters and buffers for one image size and set of options.
 struct Filters {
-    key: (u32, u32, DenoiseOptions, bool, bool),
+    key: FilterKey,
     beauty: library::Filter,
     /// In-place denoisers of the albedo and normal buffers (with [`super::AuxMode::Prefilter`]).
     prefilters: Vec<library::Filter>,
@@ -55,6 +90,9 @@ struct Filters {
     output: library::Buffer,
     /// `output` is in host storage and its data pointer valid: read in place.
     output_in_host_memory: bool,
+    /// The wgpu buffers whose memory the four buffers above imported; dropped after OIDN's imports are
+    /// released.
+    shared: Option<SharedImages>,
 }
 
 /// An OIDN device and the filters made on it. Use it from one thread at a time (it is `Send`).
@@ -106,32 +144,95 @@ impl Oidn {
         options: &DenoiseOptions,
     ) -> Result<Denoised, OidnError> {
         let (color, mut timings) = self.upload_and_prefilter(images, options)?;
-        let lib = self.lib;
-        let filters = self.filters.as_ref().expect("made by the upload");
+        timings.filter_ms = self.run_main_filter()?;
+        let output = self.filters.as_ref().expect("made by the upload").output;
         let start = Instant::now();
-        // SAFETY: a committed filter over live buffers.
-        unsafe { (lib.execute_filter)(filters.beauty) };
-        self.check("denoising")?;
-        timings.filter_ms = ms_since(start);
-
-        let start = Instant::now();
-        let mut out = self.read(filters.output, color.len())?;
+        let mut out = self.read(output, color.len())?;
         timings.download_ms = ms_since(start);
-
-        let mut repaired = 0;
-        for (o, i) in out.iter_mut().zip(&color) {
-            if !o.iter().all(|v| v.is_finite()) {
-                *o = *i;
-                repaired += 1;
-            } else {
-                *o = o.map(|v| v.max(0.0));
-            }
-        }
+        let repaired = repair(&mut out, || color);
         Ok(Denoised {
             color: out,
             timings,
             repaired,
         })
+    }
+
+    /// Whether this device can denoise images in `ctx`'s GPU memory ([`Self::shared_images`]): OIDN's device
+    /// is a GPU that imports opaque file descriptors (OIDN's `externalMemoryTypes`) and wgpu's device exports
+    /// them. The device was opened to match the adapter by its PCI address, so both are the same GPU.
+    pub fn shares_memory_with(&self, ctx: &GpuContext) -> bool {
+        if self.device.kind == DeviceKind::Cpu || !crate::gpu::external_memory::supported(ctx) {
+            return false;
+        }
+        // SAFETY: a committed device; an integer parameter OIDN documents.
+        let types = unsafe {
+            (self.lib.get_device_int)(self.device.raw, library::name(c"externalMemoryTypes"))
+        };
+        self.lib.take_error(self.device.raw);
+        types & library::EXTERNAL_MEMORY_OPAQUE_FD != 0
+    }
+
+    /// The filters for a `width` x `height` denoise with `options` over images in GPU memory shared with
+    /// `ctx`'s device (made when the size or options change), and the milliseconds making them took. Write
+    /// the inputs into the returned buffers, then [`Self::execute`], then read `output`.
+    pub fn shared_images(
+        &mut self,
+        ctx: &GpuContext,
+        width: u32,
+        height: u32,
+        options: &DenoiseOptions,
+    ) -> Result<(SharedImages, f64), OidnError> {
+        if width == 0 || height == 0 {
+            return Err(OidnError::Input(format!("empty image ({width}x{height})")));
+        }
+        let start = Instant::now();
+        let key = FilterKey {
+            width,
+            height,
+            options: *options,
+            albedo: true,
+            normal: true,
+            shared: true,
+        };
+        if self.filters.as_ref().is_none_or(|f| f.key != key) {
+            self.release_filters();
+            self.filters = Some(self.make_filters(key, Some(ctx))?);
+        }
+        let images = self.filters.as_ref().and_then(|f| f.shared.clone());
+        Ok((images.expect("made shared above"), ms_since(start)))
+    }
+
+    /// Runs the prefilters (with [`super::AuxMode::Prefilter`]) and the main filter over the images already in
+    /// OIDN's buffers; returns their milliseconds.
+    pub fn execute(&mut self) -> Result<(f64, f64), OidnError> {
+        let prefilter_ms = self.run_prefilters()?;
+        Ok((prefilter_ms, self.run_main_filter()?))
+    }
+
+    fn run_prefilters(&self) -> Result<f64, OidnError> {
+        let filters = self
+            .filters
+            .as_ref()
+            .expect("filters made before running them");
+        let start = Instant::now();
+        for &f in &filters.prefilters {
+            // SAFETY: a committed filter over live buffers.
+            unsafe { (self.lib.execute_filter)(f) };
+        }
+        self.check("prefiltering the albedo and normal")?;
+        Ok(ms_since(start))
+    }
+
+    fn run_main_filter(&self) -> Result<f64, OidnError> {
+        let filters = self
+            .filters
+            .as_ref()
+            .expect("filters made before running them");
+        let start = Instant::now();
+        // SAFETY: a committed filter over live buffers.
+        unsafe { (self.lib.execute_filter)(filters.beauty) };
+        self.check("denoising")?;
+        Ok(ms_since(start))
     }
 
     /// The albedo and normal images after OIDN's prefilters (what [`Self::denoise`] guides the main filter
@@ -190,16 +291,17 @@ impl Oidn {
         images.validate()?;
         let mut timings = Timings::default();
         let start = Instant::now();
-        let key = (
-            images.width,
-            images.height,
-            *options,
-            images.albedo.is_some(),
-            images.normal.is_some(),
-        );
+        let key = FilterKey {
+            width: images.width,
+            height: images.height,
+            options: *options,
+            albedo: images.albedo.is_some(),
+            normal: images.normal.is_some(),
+            shared: false,
+        };
         if self.filters.as_ref().is_none_or(|f| f.key != key) {
             self.release_filters();
-            self.filters = Some(self.make_filters(key)?);
+            self.filters = Some(self.make_filters(key, None)?);
         }
         timings.setup_ms = ms_since(start);
 
@@ -222,49 +324,142 @@ impl Oidn {
         }
         self.check("uploading the images")?;
         timings.upload_ms = ms_since(start);
-
-        let start = Instant::now();
-        for &f in &filters.prefilters {
-            // SAFETY: a committed filter over live buffers.
-            unsafe { (lib.execute_filter)(f) };
-        }
-        self.check("prefiltering the albedo and normal")?;
-        timings.prefilter_ms = ms_since(start);
+        timings.prefilter_ms = self.run_prefilters()?;
         Ok((color, timings))
     }
 
-    fn make_filters(
+    /// Four buffers of `bytes` whose memory is Vulkan memory of `ctx`'s device (colour, albedo, normal,
+    /// output), imported by OIDN's device, and the wgpu buffers over the same memory.
+    #[cfg(unix)]
+    fn import_shared(
         &self,
-        key: (u32, u32, DenoiseOptions, bool, bool),
-    ) -> Result<Filters, OidnError> {
-        let (width, height, options, has_albedo, has_normal) = key;
+        ctx: &GpuContext,
+        bytes: usize,
+    ) -> Result<([library::Buffer; 4], SharedImages), OidnError> {
+        use std::os::fd::{FromRawFd, IntoRawFd};
+        let (lib, dev) = (self.lib, self.device.raw);
+        let mut imported: Vec<library::Buffer> = Vec::new();
+        let mut exported = Vec::new();
+        let fail = |imported: &[library::Buffer], message: String| {
+            for &b in imported {
+                // SAFETY: imported below and not used by any filter yet.
+                unsafe { (lib.release_buffer)(b) };
+            }
+            OidnError::Device {
+                device: self.device_description(),
+                message: format!("sharing GPU memory with wgpu: {message}"),
+            }
+        };
+        for label in ["oidn colour", "oidn albedo", "oidn normal", "oidn output"] {
+            let e = crate::gpu::external_memory::exported_buffer(ctx, label, bytes as u64)
+                .map_err(|m| fail(&imported, m))?;
+            let fd = e.fd.into_raw_fd();
+            // SAFETY: a descriptor of `allocation_size` bytes of exported Vulkan memory; on success OIDN's
+            // device (CUDA) owns the descriptor.
+            let buffer = unsafe {
+                (lib.new_shared_buffer_from_fd)(
+                    dev,
+                    library::EXTERNAL_MEMORY_OPAQUE_FD,
+                    fd,
+                    e.allocation_size as usize,
+                )
+            };
+            if let Some(error) = lib.take_error(dev).or(buffer.is_null().then(String::new)) {
+                if buffer.is_null() {
+                    // SAFETY: the import failed, so the descriptor is still ours.
+                    drop(unsafe { std::os::fd::OwnedFd::from_raw_fd(fd) });
+                } else {
+                    imported.push(buffer);
+                }
+                return Err(fail(&imported, format!("importing {label}: {error}")));
+            }
+            imported.push(buffer);
+            exported.push(e.buffer);
+        }
+        let [color, albedo, normal, output] =
+            <[wgpu::Buffer; 4]>::try_from(exported).expect("four made above");
+        let buffers = <[library::Buffer; 4]>::try_from(imported).expect("four made above");
+        Ok((
+            buffers,
+            SharedImages {
+                color,
+                albedo,
+                normal,
+                output,
+            },
+        ))
+    }
+
+    #[cfg(not(unix))]
+    fn import_shared(
+        &self,
+        _ctx: &GpuContext,
+        _bytes: usize,
+    ) -> Result<([library::Buffer; 4], SharedImages), OidnError> {
+        Err(OidnError::Device {
+            device: self.device_description(),
+            message: "sharing GPU memory needs POSIX file descriptors".into(),
+        })
+    }
+
+    /// The filters for `key`, over new OIDN buffers or, for shared images, over Vulkan memory of `ctx`'s
+    /// device.
+    fn make_filters(&self, key: FilterKey, ctx: Option<&GpuContext>) -> Result<Filters, OidnError> {
+        let FilterKey {
+            width,
+            height,
+            options,
+            albedo: has_albedo,
+            normal: has_normal,
+            shared,
+        } = key;
         let lib = self.lib;
         let dev = self.device.raw;
-        let bytes = width as usize * height as usize * 12;
+        let bytes = plane_bytes(width as u64 * height as u64) as usize;
         // SAFETY: `dev` is a committed device; every handle made here is released in `release_filters`.
         let new_buffer = || unsafe { (lib.new_buffer)(dev, bytes) };
-        // SAFETY: as above; a null buffer or data pointer means no host storage here (the error is cleared).
-        let mut output =
-            unsafe { (lib.new_buffer_with_storage)(dev, bytes, library::STORAGE_HOST) };
-        let output_in_host_memory = lib.take_error(dev).is_none()
-            && !output.is_null()
-            && !unsafe { (lib.get_buffer_data)(output) }.is_null();
-        if !output_in_host_memory {
-            if !output.is_null() {
-                // SAFETY: made above, never used.
-                unsafe { (lib.release_buffer)(output) };
+        let mut filters = match (shared, ctx) {
+            (true, Some(ctx)) => {
+                let ([color, albedo, normal, output], images) = self.import_shared(ctx, bytes)?;
+                Filters {
+                    key,
+                    beauty: std::ptr::null_mut(),
+                    prefilters: Vec::new(),
+                    color,
+                    albedo: Some(albedo),
+                    normal: Some(normal),
+                    output,
+                    output_in_host_memory: false,
+                    shared: Some(images),
+                }
             }
-            output = new_buffer();
-        }
-        let mut filters = Filters {
-            key,
-            beauty: std::ptr::null_mut(),
-            prefilters: Vec::new(),
-            color: new_buffer(),
-            albedo: has_albedo.then(new_buffer),
-            normal: has_normal.then(new_buffer),
-            output,
-            output_in_host_memory,
+            _ => {
+                // SAFETY: as above; a null buffer or data pointer means no host storage here (the error is
+                // cleared).
+                let mut output =
+                    unsafe { (lib.new_buffer_with_storage)(dev, bytes, library::STORAGE_HOST) };
+                let output_in_host_memory = lib.take_error(dev).is_none()
+                    && !output.is_null()
+                    && !unsafe { (lib.get_buffer_data)(output) }.is_null();
+                if !output_in_host_memory {
+                    if !output.is_null() {
+                        // SAFETY: made above, never used.
+                        unsafe { (lib.release_buffer)(output) };
+                    }
+                    output = new_buffer();
+                }
+                Filters {
+                    key,
+                    beauty: std::ptr::null_mut(),
+                    prefilters: Vec::new(),
+                    color: new_buffer(),
+                    albedo: has_albedo.then(new_buffer),
+                    normal: has_normal.then(new_buffer),
+                    output,
+                    output_in_host_memory,
+                    shared: None,
+                }
+            }
         };
         let image = |filter, name: &'static CStr, buffer| {
             // SAFETY: a live filter and a buffer of width x height FLOAT3 pixels, tightly packed.
@@ -379,9 +574,6 @@ fn release(lib: &Library, f: &Filters) {
     }
 }
 
-/// Radiance above this is clamped before denoising: OIDN's HDR transfer must not overflow to infinity.
-const MAX_RADIANCE: f32 = 1e30;
-
 /// A host-storage buffer's pixels.
 ///
 /// # Safety
@@ -390,6 +582,23 @@ const MAX_RADIANCE: f32 = 1e30;
 unsafe fn host_pixels<'a>(lib: &Library, buffer: library::Buffer, pixels: usize) -> &'a [[f32; 3]] {
     // SAFETY: per the contract; OIDN's host allocations are aligned far beyond f32's 4 bytes.
     unsafe { std::slice::from_raw_parts((lib.get_buffer_data)(buffer).cast(), pixels) }
+}
+
+/// Replaces each non-finite output pixel by its input (`input` is called only when there is one) and clamps
+/// negative channels to 0; returns how many pixels were replaced.
+pub(crate) fn repair(out: &mut [[f32; 3]], input: impl FnOnce() -> Vec<[f32; 3]>) -> usize {
+    use rayon::prelude::*;
+    let finite = |p: &[f32; 3]| p.iter().all(|v| v.is_finite());
+    let broken = out.par_iter().filter(|p| !finite(p)).count();
+    let input = if broken > 0 { input() } else { Vec::new() };
+    out.par_iter_mut().enumerate().for_each(|(i, o)| {
+        *o = if finite(o) {
+            o.map(|v| v.max(0.0))
+        } else {
+            input[i]
+        };
+    });
+    broken
 }
 
 /// Each channel clamped to [lo, hi]; NaN becomes 0.
@@ -401,7 +610,7 @@ fn sanitized(image: &[[f32; 3]], lo: f32, hi: f32) -> Vec<[f32; 3]> {
         .collect()
 }
 
-fn ms_since(start: Instant) -> f64 {
+pub(crate) fn ms_since(start: Instant) -> f64 {
     start.elapsed().as_secs_f64() * 1e3
 }
 

@@ -14,11 +14,13 @@ use std::sync::{Arc, Mutex};
 pub struct OidnImage {
     pub color: Arc<Vec<[f32; 3]>>,
     pub timings: Timings,
-    /// GPU-to-host copy of the accumulation and AOV buffers.
+    /// GPU-to-host copy of the accumulation and AOV buffers (0 with shared GPU memory: nothing is copied).
     pub readback_ms: f64,
     pub samples: u32,
     /// The OIDN device that ran it.
     pub device: String,
+    /// OIDN read its inputs from GPU memory it shares with wgpu instead of host copies (`super::shared`).
+    pub shared_memory: bool,
 }
 
 impl OidnImage {
@@ -40,6 +42,8 @@ type Key = (u64, u64, u32, DenoiseOptions);
 struct State {
     oidn: Option<Result<Oidn, OidnError>>,
     last: Option<(Key, OidnImage)>,
+    /// Why denoising from shared GPU memory failed once (then the host path serves every later image).
+    shared_failed: Option<String>,
 }
 
 /// The app's OIDN device (a resource of every [`crate::headless::HeadlessApp`]).
@@ -100,11 +104,34 @@ impl HeadlessOidn {
         {
             return Ok(image.clone());
         }
-        let (inputs, readback_s) = read_inputs(ctx, view);
+        let state = &mut *state;
         let Some(Ok(oidn)) = state.oidn.as_mut() else {
             unreachable!("opened above")
         };
-        let denoised = oidn.denoise(&inputs.images(), &options)?;
+        let mut shared = None;
+        if state.shared_failed.is_none() && oidn.shares_memory_with(ctx) {
+            match super::shared::denoise_view(oidn, ctx, view, &options) {
+                Ok(d) => shared = Some(d),
+                Err(e) => {
+                    tracing::warn!(
+                        "{e}; Open Image Denoise copies its images through the host instead"
+                    );
+                    state.shared_failed = Some(e.to_string());
+                }
+            }
+        }
+        let shared_memory = shared.is_some();
+        let (denoised, readback_s, samples) = match shared {
+            Some(d) => (d, 0.0, accumulation.samples),
+            None => {
+                let (inputs, readback_s) = read_inputs(ctx, view);
+                (
+                    oidn.denoise(&inputs.images(), &options)?,
+                    readback_s,
+                    inputs.samples,
+                )
+            }
+        };
         if denoised.repaired > 0 {
             tracing::warn!(
                 "Open Image Denoise returned {} non-finite pixels; they keep their noisy value",
@@ -115,8 +142,9 @@ impl HeadlessOidn {
             color: Arc::new(denoised.color),
             timings: denoised.timings,
             readback_ms: readback_s * 1e3,
-            samples: inputs.samples,
+            samples,
             device: oidn.device_description(),
+            shared_memory,
         };
         state.last = Some((key, image.clone()));
         Ok(image)

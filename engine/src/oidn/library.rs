@@ -62,6 +62,8 @@ pub const DEVICE_TYPE_HIP: c_int = 4;
 pub const DEVICE_TYPE_METAL: c_int = 5;
 /// `OIDN_STORAGE_HOST`: host memory the device can read and write (pinned memory on GPUs).
 pub const STORAGE_HOST: c_int = 1;
+/// `OIDN_EXTERNAL_MEMORY_TYPE_FLAG_OPAQUE_FD`: a POSIX file descriptor of memory another API (Vulkan) exported.
+pub const EXTERNAL_MEMORY_OPAQUE_FD: c_int = 1;
 /// `OIDN_FORMAT_FLOAT3`.
 pub const FORMAT_FLOAT3: c_int = 3;
 /// `OIDN_ERROR_NONE`.
@@ -87,6 +89,7 @@ pub struct Library {
     pub new_buffer: unsafe extern "C" fn(Device, usize) -> Buffer,
     pub new_buffer_with_storage: unsafe extern "C" fn(Device, usize, c_int) -> Buffer,
     pub get_buffer_data: unsafe extern "C" fn(Buffer) -> *mut c_void,
+    pub new_shared_buffer_from_fd: unsafe extern "C" fn(Device, c_int, c_int, usize) -> Buffer,
     pub write_buffer: unsafe extern "C" fn(Buffer, usize, usize, *const c_void),
     pub read_buffer: unsafe extern "C" fn(Buffer, usize, usize, *mut c_void),
     pub release_buffer: unsafe extern "C" fn(Buffer),
@@ -235,6 +238,7 @@ fn load_symbols(file: &Path) -> Result<Library, OidnError> {
         new_buffer: symbol!("oidnNewBuffer"),
         new_buffer_with_storage: symbol!("oidnNewBufferWithStorage"),
         get_buffer_data: symbol!("oidnGetBufferData"),
+        new_shared_buffer_from_fd: symbol!("oidnNewSharedBufferFromFD"),
         write_buffer: symbol!("oidnWriteBuffer"),
         read_buffer: symbol!("oidnReadBuffer"),
         release_buffer: symbol!("oidnReleaseBuffer"),

@@ -7,6 +7,8 @@
 //! - [`filter`]: [`Oidn`], the denoiser over host images (`RT` filter, AOV prefiltering, quality modes,
 //!   timings of each step);
 //! - [`inputs`]: the path tracer's accumulation sums turned into OIDN's inputs;
+//! - [`shared`]: the same filter over GPU memory shared with wgpu (no copies through the host), where OIDN's
+//!   GPU device and the adapter allow it;
 //! - [`headless`]: OIDN for renders that wait for their image (CLI, recorder, benches);
 //! - [`worker`]: a background thread, so a denoise never blocks the viewer's frame loop;
 //! - [`viewer`]: when the viewer denoises with OIDN (a still image) and how its result reaches the display.
@@ -16,11 +18,12 @@ pub mod filter;
 pub mod headless;
 pub mod inputs;
 pub mod library;
+pub mod shared;
 pub mod viewer;
 pub mod worker;
 
 pub use device::{AdapterIdentity, DeviceKind};
-pub use filter::{Denoised, Oidn, Timings};
+pub use filter::{Denoised, Oidn, SharedImages, Timings};
 pub use headless::{HeadlessOidn, OidnImage};
 pub use inputs::{OidnInputs, read_inputs};
 pub use viewer::{OidnStatus, OidnViewerPlugin, ViewerOidn};

@@ -8,6 +8,7 @@ use super::gpu_scene::GpuScene;
 use super::host_denoised::HostDenoised;
 use super::passes::OnFirstUse;
 use super::passes::denoise::Denoiser;
+use super::passes::denoiser_inputs::{DenoiserInputsBuffers, DenoiserInputsPass};
 use super::passes::raycast::RaycastPass;
 use super::passes::tonemap::TonemapPass;
 use super::scene_bindings::SceneBindings;
@@ -27,6 +28,30 @@ pub fn denoised_radiance(world: &World) -> Vec<[f32; 3]> {
     let output = display.encode_denoise(&mut encoder);
     ctx.queue.submit([encoder.finish()]);
     mean_rgb(&ctx.read_buffer(output, output.size()))
+}
+
+/// Writes the view's current accumulation as an external denoiser's inputs (mean radiance, first-hit albedo
+/// and normal, sanitised, as packed float3 planes) into `color`, `albedo` and `normal`, and waits for the GPU:
+/// the images Open Image Denoise's GPU device reads in place from memory it shares with wgpu.
+pub fn write_denoiser_inputs(
+    ctx: &GpuContext,
+    view: &ViewTargets,
+    [color, albedo, normal]: [&wgpu::Buffer; 3],
+) {
+    // The pipeline and layout come from the device's cache; only the small parameter buffer is new.
+    let pass = DenoiserInputsPass::new(ctx);
+    let mut encoder = ctx.device.create_command_encoder(&Default::default());
+    let buffers = DenoiserInputsBuffers {
+        accum: &view.accum,
+        albedo_depth: &view.albedo_depth,
+        normal_hits: &view.normal_hits,
+        color,
+        albedo,
+        normal,
+    };
+    pass.encode(ctx, &mut encoder, &buffers, (view.width, view.height));
+    ctx.queue.submit([encoder.finish()]);
+    ctx.wait_idle();
 }
 
 /// The display passes over the world's view, settings and passes.

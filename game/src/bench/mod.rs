@@ -759,16 +759,19 @@ noises subtracted.\n";
 fn oidn_markdown(r: &Results) -> String {
     let mut s = String::new();
     if !r.oidn_timings.is_empty() {
-        s += "\n| OIDN device | quality | size | ms per frame | GPU->host readback | host->OIDN | prefilter (albedo, normal) | filter | OIDN->host | filter set-up (once) |\n";
-        s += "|---|---|---|---|---|---|---|---|---|---|\n";
+        s += "\n| OIDN device | memory | AOVs | quality | size | ms per frame | without OIDN->host | GPU->host readback | host->OIDN (shared: inputs pass) | prefilter (albedo, normal) | filter | OIDN->host | filter set-up (once) |\n";
+        s += "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
         for t in &r.oidn_timings {
             s += &format!(
-                "| {} | {} | {}x{} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {:.0} |\n",
+                "| {} | {} | {} | {} | {}x{} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {:.0} |\n",
                 t.device,
+                t.memory,
+                t.aux,
                 t.quality.name(),
                 t.width,
                 t.height,
                 t.total_ms,
+                t.on_device_ms,
                 t.readback_ms,
                 t.upload_ms,
                 t.prefilter_ms,

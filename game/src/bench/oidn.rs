@@ -7,7 +7,7 @@ use super::scenes::BenchScene;
 use anyhow::{Context, Result};
 use raykin::gpu::GpuContext;
 use raykin::oidn::device::{AdapterIdentity, DeviceRequest};
-use raykin::oidn::{DenoiseOptions, Oidn, Quality, read_inputs};
+use raykin::oidn::{AuxMode, DenoiseOptions, Oidn, Quality, read_inputs};
 use raykin::render::RenderSettings;
 
 /// One denoise at one size, quality and device: median milliseconds of each step over the repeats.
@@ -18,10 +18,16 @@ pub struct TimingRow {
     pub height: u32,
     pub device: String,
     pub quality: Quality,
+    /// "host": the images copied GPU -> host -> OIDN and back; "shared": OIDN's GPU device reads and writes
+    /// them in GPU memory shared with wgpu (raykin::oidn::shared), only the output read back.
+    pub memory: &'static str,
+    /// How the albedo and normal were used: "prefilter" (OIDN's recommendation, the default) or "clean" (as
+    /// they are, trusted: no prefilters).
+    pub aux: &'static str,
     pub repeats: usize,
-    /// Accumulation, albedo and normal buffers from the GPU to the host (wgpu readback).
+    /// Accumulation, albedo and normal buffers from the GPU to the host (wgpu readback; 0 when shared).
     pub readback_ms: f64,
-    /// Host to OIDN buffers, and back.
+    /// Host to OIDN buffers (shared: the wgpu pass writing OIDN's inputs), and OIDN's output to the host.
     pub upload_ms: f64,
     pub download_ms: f64,
     /// Albedo and normal prefilters, then the main filter.
@@ -29,6 +35,12 @@ pub struct TimingRow {
     pub filter_ms: f64,
     /// Everything above: the cost of each denoised frame.
     pub total_ms: f64,
+    /// Shared rows: the denoise without the output's trip to the host (what an image that stays on the GPU,
+    /// the viewer's, costs); host rows: the same steps, the upload being the host-to-device copy.
+    pub on_device_ms: f64,
+    /// Shared rows: relMSE of the output against the host path's output of the same accumulation (the two
+    /// paths agree up to the GPU's rounding of the means).
+    pub host_difference_rel_mse: Option<f64>,
     /// Filter creation at this size (once).
     pub setup_ms: f64,
 }
@@ -94,61 +106,116 @@ pub fn timings(
             let settings = super::at_size(base, (width, height));
             let mut app = super::open_app(ctx, scene, settings)?;
             app.accumulate(1, 1, |_| {});
+            let shares = oidn.shares_memory_with(ctx);
             for quality in Quality::ALL {
-                let options = DenoiseOptions::at(quality);
-                let mut steps: [Vec<f64>; 6] = Default::default();
-                let mut setup_ms = 0.0;
-                for run in 0..=repeats.max(1) {
-                    let (inputs, readback_s) = read_inputs(&app.ctx, app.view());
-                    let d = oidn
-                        .denoise(&inputs.images(), &options)
-                        .with_context(|| format!("OIDN at {width}x{height}"))?;
-                    let t = d.timings;
-                    if run == 0 {
-                        setup_ms = t.setup_ms;
+                let mut host_output = Vec::new();
+                // The host path as before; where OIDN shares the GPU's memory, the same in shared memory
+                // (compared with the host path's output), and without the prefilters.
+                for (memory, aux) in [
+                    ("host", AuxMode::Prefilter),
+                    ("shared", AuxMode::Prefilter),
+                    ("shared", AuxMode::Clean),
+                ] {
+                    if memory == "shared" && !shares {
                         continue;
                     }
-                    let values = [
-                        readback_s * 1e3,
-                        t.upload_ms,
-                        t.download_ms,
-                        t.prefilter_ms,
-                        t.filter_ms,
-                        readback_s * 1e3 + t.total_ms() - t.setup_ms,
-                    ];
-                    for (s, v) in steps.iter_mut().zip(values) {
-                        s.push(v);
+                    let options = DenoiseOptions {
+                        aux,
+                        ..DenoiseOptions::at(quality)
+                    };
+                    let mut steps: [Vec<f64>; 7] = Default::default();
+                    let mut setup_ms = 0.0;
+                    let mut output = Vec::new();
+                    for run in 0..=repeats.max(1) {
+                        let (d, readback_s) = if memory == "shared" {
+                            let d = raykin::oidn::shared::denoise_view(
+                                &mut oidn,
+                                &app.ctx,
+                                app.view(),
+                                &options,
+                            );
+                            (d, 0.0)
+                        } else {
+                            let (inputs, readback_s) = read_inputs(&app.ctx, app.view());
+                            (oidn.denoise(&inputs.images(), &options), readback_s)
+                        };
+                        let d = d.with_context(|| {
+                            format!("OIDN at {width}x{height} ({memory} memory)")
+                        })?;
+                        let t = d.timings;
+                        output = d.color;
+                        if run == 0 {
+                            setup_ms = t.setup_ms;
+                            continue;
+                        }
+                        let values = [
+                            readback_s * 1e3,
+                            t.upload_ms,
+                            t.download_ms,
+                            t.prefilter_ms,
+                            t.filter_ms,
+                            readback_s * 1e3 + t.total_ms() - t.setup_ms,
+                            t.on_device_ms(),
+                        ];
+                        for (s, v) in steps.iter_mut().zip(values) {
+                            s.push(v);
+                        }
                     }
+                    let host_difference_rel_mse = match (memory, aux) {
+                        ("host", _) => {
+                            host_output = std::mem::take(&mut output);
+                            None
+                        }
+                        (_, AuxMode::Prefilter) => Some(rel_mse(&output, &host_output)),
+                        _ => None,
+                    };
+                    let [
+                        readback,
+                        upload,
+                        download,
+                        prefilter,
+                        filter,
+                        total,
+                        on_device,
+                    ] = steps.map(median);
+                    let row = TimingRow {
+                        scene: scene.name.clone(),
+                        width,
+                        height,
+                        device: oidn.device_description(),
+                        quality,
+                        memory,
+                        aux: aux.name(),
+                        repeats: repeats.max(1),
+                        readback_ms: readback,
+                        upload_ms: upload,
+                        download_ms: download,
+                        prefilter_ms: prefilter,
+                        filter_ms: filter,
+                        total_ms: total,
+                        on_device_ms: on_device,
+                        host_difference_rel_mse,
+                        setup_ms,
+                    };
+                    eprintln!(
+                        "raykin bench: OIDN {} {width}x{height} on {} ({memory} memory, {} AOVs): {:.1} ms per frame, {:.1} without the output's readback (readback {:.1}, upload {:.1}, prefilter {:.1}, filter {:.1}, download {:.1}; set-up {:.0} once){}",
+                        quality.name(),
+                        row.device,
+                        row.aux,
+                        row.total_ms,
+                        row.on_device_ms,
+                        row.readback_ms,
+                        row.upload_ms,
+                        row.prefilter_ms,
+                        row.filter_ms,
+                        row.download_ms,
+                        row.setup_ms,
+                        row.host_difference_rel_mse
+                            .map(|d| format!("; relMSE against the host path's output {d:.2e}"))
+                            .unwrap_or_default()
+                    );
+                    rows.push(row);
                 }
-                let [readback, upload, download, prefilter, filter, total] = steps.map(median);
-                let row = TimingRow {
-                    scene: scene.name.clone(),
-                    width,
-                    height,
-                    device: oidn.device_description(),
-                    quality,
-                    repeats: repeats.max(1),
-                    readback_ms: readback,
-                    upload_ms: upload,
-                    download_ms: download,
-                    prefilter_ms: prefilter,
-                    filter_ms: filter,
-                    total_ms: total,
-                    setup_ms,
-                };
-                eprintln!(
-                    "raykin bench: OIDN {} {width}x{height} on {}: {:.1} ms per frame (readback {:.1}, upload {:.1}, prefilter {:.1}, filter {:.1}, download {:.1}; set-up {:.0} once)",
-                    quality.name(),
-                    row.device,
-                    row.total_ms,
-                    row.readback_ms,
-                    row.upload_ms,
-                    row.prefilter_ms,
-                    row.filter_ms,
-                    row.download_ms,
-                    row.setup_ms
-                );
-                rows.push(row);
             }
         }
     }

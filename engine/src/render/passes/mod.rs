@@ -4,6 +4,7 @@
 
 pub mod deform;
 pub mod denoise;
+pub mod denoiser_inputs;
 pub mod display;
 pub mod gbuffer;
 pub mod gradient;
@@ -36,6 +37,7 @@ pub fn all_kernels() -> Vec<(&'static str, String)> {
         &gradient::KERNEL,
         &temporal::KERNEL,
         &handover::KERNEL,
+        &denoiser_inputs::KERNEL,
     ]
     .into_iter()
     .map(|k: &ShaderModule| (k.name, compose(k)))

@@ -1,0 +1,56 @@
+//! OIDN over GPU memory it shares with wgpu: a wgpu pass writes the accumulation's means as OIDN's inputs into
+//! Vulkan memory that OIDN's GPU device imported (`gpu::external_memory`), OIDN filters them in place, and the
+//! output is read where OIDN wrote it. Nothing crosses PCIe but the output, and that only when the host needs
+//! the image (a file). The host path (`inputs::read_inputs` then [`Oidn::denoise`]) stays for every other
+//! device: OIDN's CPU device, a GPU it has no backend for, a non-Vulkan adapter.
+
+use super::filter::{Denoised, Oidn, Timings, ms_since, repair};
+use super::{DenoiseOptions, OidnError};
+use crate::gpu::GpuContext;
+use crate::render::ViewTargets;
+use std::time::Instant;
+
+/// The view's current accumulation denoised on OIDN's GPU device from shared memory; the output read back to
+/// the host. Call only where [`Oidn::shares_memory_with`] is true. Timings: `upload_ms` is the wgpu pass that
+/// writes the inputs (with its wait), `download_ms` the output's readback; nothing is read back before.
+pub fn denoise_view(
+    oidn: &mut Oidn,
+    ctx: &GpuContext,
+    view: &ViewTargets,
+    options: &DenoiseOptions,
+) -> Result<Denoised, OidnError> {
+    let (images, setup_ms) = oidn.shared_images(ctx, view.width, view.height, options)?;
+    let mut timings = Timings {
+        setup_ms,
+        ..Default::default()
+    };
+    let start = Instant::now();
+    crate::render::queries::write_denoiser_inputs(
+        ctx,
+        view,
+        [&images.color, &images.albedo, &images.normal],
+    );
+    timings.upload_ms = ms_since(start);
+    (timings.prefilter_ms, timings.filter_ms) = oidn.execute()?;
+
+    let start = Instant::now();
+    let mut color = read_plane(ctx, &images.output);
+    let repaired = repair(&mut color, || read_plane(ctx, &images.color));
+    timings.download_ms = ms_since(start);
+    Ok(Denoised {
+        color,
+        timings,
+        repaired,
+    })
+}
+
+/// A packed float3 plane from the GPU (one staging copy, converted in parallel from the mapped memory).
+fn read_plane(ctx: &GpuContext, plane: &wgpu::Buffer) -> Vec<[f32; 3]> {
+    ctx.read_buffers_with(&[plane], |bytes| {
+        use rayon::prelude::*;
+        match bytemuck::try_cast_slice::<u8, [f32; 3]>(bytes) {
+            Ok(pixels) => pixels.par_iter().copied().collect(),
+            Err(_) => bytemuck::pod_collect_to_vec(bytes),
+        }
+    })
+}
