@@ -558,7 +558,7 @@ fn denoiser_inputs_pass_writes_the_host_paths_inputs() {
         .collect();
     raykin::render::queries::write_denoiser_inputs(
         &app.ctx,
-        view,
+        &view.denoiser_sources(),
         [&planes[0], &planes[1], &planes[2]],
     );
     let written = |b: &wgpu::Buffer| -> Vec<[f32; 3]> {
@@ -593,6 +593,52 @@ fn denoiser_inputs_pass_writes_the_host_paths_inputs() {
     );
     assert_eq!(written(&planes[2])[3], [1.0, -1.0, -1.0]);
     assert_eq!(written(&planes[2])[4][0], 0.0);
+}
+
+/// The pass that brings OIDN's output from shared memory to the display writes each pixel in the
+/// accumulation's layout with a count of 1, negative channels as 0, and a non-finite pixel as the noisy colour
+/// OIDN was given (what the host path's repair does).
+#[test]
+fn denoised_output_pass_shows_the_output_and_keeps_the_noisy_colour_where_it_is_not_finite() {
+    use wgpu::util::DeviceExt;
+    let (ctx, _gpu) = gpu();
+    let output: [[f32; 3]; 4] = [
+        [1.0, 2.0, 3.0],
+        [-1.0, 0.5, 2.0],
+        [f32::NAN, 1.0, 1.0],
+        [0.0, f32::INFINITY, 0.0],
+    ];
+    let color: [[f32; 3]; 4] = [[9.0; 3], [8.0; 3], [0.25, 0.5, 0.75], [4.0, 5.0, 6.0]];
+    let plane = |data: &[[f32; 3]; 4]| {
+        ctx.device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("test plane"),
+                contents: bytemuck::cast_slice(data),
+                usage: wgpu::BufferUsages::STORAGE,
+            })
+    };
+    let shown = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("test shown"),
+        size: 4 * 16,
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+        mapped_at_creation: false,
+    });
+    raykin::render::queries::write_denoised_output(
+        &ctx,
+        (2, 2),
+        [&plane(&output), &plane(&color)],
+        &shown,
+    );
+    let got: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&ctx.read_buffer(&shown, 64));
+    assert_eq!(
+        got,
+        vec![
+            [1.0, 2.0, 3.0, 1.0],
+            [0.0, 0.5, 2.0, 1.0],
+            [0.25, 0.5, 0.75, 1.0],
+            [4.0, 5.0, 6.0, 1.0]
+        ]
+    );
 }
 
 /// Memory exported for another API (OIDN's CUDA device) behaves as any wgpu buffer (written, copied, read

@@ -326,7 +326,7 @@ fn gpu_deform_structs_match_wgsl() {
 
 #[test]
 fn realtime_structs_match_wgsl() {
-    use passes::denoiser_inputs::DenoiserInputsParams;
+    use passes::denoiser_planes::DenoiserPlanesParams;
     use passes::gradient::FilterStep;
     use passes::handover::HandoverParams;
     use raykin::render::layout::*;
@@ -380,9 +380,15 @@ fn realtime_structs_match_wgsl() {
         [width, height, weight]
     );
     same_layout!(
-        WgslLayouts::of(&passes::denoiser_inputs::KERNEL),
+        WgslLayouts::of(&passes::denoiser_planes::PACK_KERNEL),
         "Params",
-        DenoiserInputsParams,
+        DenoiserPlanesParams,
+        [width, height, max_radiance]
+    );
+    same_layout!(
+        WgslLayouts::of(&passes::denoiser_planes::UNPACK_KERNEL),
+        "Params",
+        DenoiserPlanesParams,
         [width, height, max_radiance]
     );
     same_layout!(

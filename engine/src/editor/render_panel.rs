@@ -219,9 +219,16 @@ fn oidn_status(status: &crate::oidn::OidnStatus) -> String {
             samples,
             device,
             timings,
+            shared_memory,
+            readback_ms,
         } => format!(
-            "{samples} spp denoised on {device} in {:.0} ms",
-            timings.total_ms()
+            "{samples} spp denoised on {device} in {:.0} ms{}",
+            timings.total_ms() + readback_ms,
+            if *shared_memory {
+                " (GPU memory shared with wgpu)"
+            } else {
+                " (through host copies)"
+            }
         ),
         OidnStatus::Unavailable(why) => format!("unavailable, showing svgf: {why}"),
     }

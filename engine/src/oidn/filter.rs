@@ -12,7 +12,7 @@ use super::device::{self, DeviceKind, DeviceRequest};
 use super::library::{self, Library};
 use super::{DenoiseOptions, Images, OidnError};
 use crate::gpu::GpuContext;
-use crate::render::passes::denoiser_inputs::{MAX_RADIANCE, plane_bytes};
+use crate::render::passes::denoiser_planes::{MAX_RADIANCE, plane_bytes};
 use std::ffi::CStr;
 use std::time::Instant;
 

@@ -110,7 +110,7 @@ impl HeadlessOidn {
         };
         let mut shared = None;
         if state.shared_failed.is_none() && oidn.shares_memory_with(ctx) {
-            match super::shared::denoise_view(oidn, ctx, view, &options) {
+            match super::shared::denoise_view(oidn, ctx, &view.denoiser_sources(), &options) {
                 Ok(d) => shared = Some(d),
                 Err(e) => {
                     tracing::warn!(

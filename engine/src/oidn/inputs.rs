@@ -5,6 +5,7 @@
 
 use crate::gpu::GpuContext;
 use crate::render::ViewTargets;
+use crate::render::passes::denoiser_planes::DenoiserSources;
 
 /// Host images for [`super::Oidn::denoise`], row-major from the top-left.
 #[derive(Clone, Debug, Default)]
@@ -71,10 +72,15 @@ impl OidnInputs {
 /// one submission and one wait, turned into means straight from the mapped memory. Also returns the seconds
 /// that took (the GPU-to-host copy and the means).
 pub fn read_inputs(ctx: &GpuContext, view: &ViewTargets) -> (OidnInputs, f64) {
+    read_sources(ctx, &view.denoiser_sources())
+}
+
+/// [`read_inputs`] from the accumulation's buffers (what another thread holds).
+pub fn read_sources(ctx: &GpuContext, sources: &DenoiserSources) -> (OidnInputs, f64) {
     let start = std::time::Instant::now();
-    let planes = [&view.accum, &view.albedo_depth, &view.normal_hits];
+    let planes = [&sources.accum, &sources.albedo_depth, &sources.normal_hits];
     let inputs = ctx.read_buffers_with(&planes, |bytes| {
-        inputs_from_planes(view.width, view.height, bytes)
+        inputs_from_planes(sources.width, sources.height, bytes)
     });
     (inputs, start.elapsed().as_secs_f64())
 }

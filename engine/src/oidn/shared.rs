@@ -4,35 +4,22 @@
 //! the image (a file). The host path (`inputs::read_inputs` then [`Oidn::denoise`]) stays for every other
 //! device: OIDN's CPU device, a GPU it has no backend for, a non-Vulkan adapter.
 
-use super::filter::{Denoised, Oidn, Timings, ms_since, repair};
+use super::filter::{Denoised, Oidn, SharedImages, Timings, ms_since, repair};
 use super::{DenoiseOptions, OidnError};
 use crate::gpu::GpuContext;
-use crate::render::ViewTargets;
+use crate::render::passes::denoiser_planes::DenoiserSources;
 use std::time::Instant;
 
-/// The view's current accumulation denoised on OIDN's GPU device from shared memory; the output read back to
-/// the host. Call only where [`Oidn::shares_memory_with`] is true. Timings: `upload_ms` is the wgpu pass that
-/// writes the inputs (with its wait), `download_ms` the output's readback; nothing is read back before.
+/// The accumulation in `sources` denoised on OIDN's GPU device from shared memory, the output read back to the
+/// host. Call only where [`Oidn::shares_memory_with`] is true. Timings: `upload_ms` is the wgpu pass that writes
+/// the inputs (with its wait), `download_ms` the output's readback; nothing is read back before.
 pub fn denoise_view(
     oidn: &mut Oidn,
     ctx: &GpuContext,
-    view: &ViewTargets,
+    sources: &DenoiserSources,
     options: &DenoiseOptions,
 ) -> Result<Denoised, OidnError> {
-    let (images, setup_ms) = oidn.shared_images(ctx, view.width, view.height, options)?;
-    let mut timings = Timings {
-        setup_ms,
-        ..Default::default()
-    };
-    let start = Instant::now();
-    crate::render::queries::write_denoiser_inputs(
-        ctx,
-        view,
-        [&images.color, &images.albedo, &images.normal],
-    );
-    timings.upload_ms = ms_since(start);
-    (timings.prefilter_ms, timings.filter_ms) = oidn.execute()?;
-
+    let (images, mut timings) = filter_in_place(oidn, ctx, sources, options)?;
     let start = Instant::now();
     let mut color = read_plane(ctx, &images.output);
     let repaired = repair(&mut color, || read_plane(ctx, &images.color));
@@ -42,6 +29,51 @@ pub fn denoise_view(
         timings,
         repaired,
     })
+}
+
+/// As [`denoise_view`], but the output stays on the GPU: written into `shown` in the display's layout
+/// (`render::HostDenoised::image_buffer`; non-finite pixels keep their noisy mean), `download_ms` being that
+/// pass. Nothing crosses to the host.
+pub fn denoise_into(
+    oidn: &mut Oidn,
+    ctx: &GpuContext,
+    sources: &DenoiserSources,
+    options: &DenoiseOptions,
+    shown: &wgpu::Buffer,
+) -> Result<Timings, OidnError> {
+    let (images, mut timings) = filter_in_place(oidn, ctx, sources, options)?;
+    let start = Instant::now();
+    crate::render::queries::write_denoised_output(
+        ctx,
+        (sources.width, sources.height),
+        [&images.output, &images.color],
+        shown,
+    );
+    timings.download_ms = ms_since(start);
+    Ok(timings)
+}
+
+/// The inputs written into the shared images and OIDN run over them; the images and the timings so far.
+fn filter_in_place(
+    oidn: &mut Oidn,
+    ctx: &GpuContext,
+    sources: &DenoiserSources,
+    options: &DenoiseOptions,
+) -> Result<(SharedImages, Timings), OidnError> {
+    let (images, setup_ms) = oidn.shared_images(ctx, sources.width, sources.height, options)?;
+    let mut timings = Timings {
+        setup_ms,
+        ..Default::default()
+    };
+    let start = Instant::now();
+    crate::render::queries::write_denoiser_inputs(
+        ctx,
+        sources,
+        [&images.color, &images.albedo, &images.normal],
+    );
+    timings.upload_ms = ms_since(start);
+    (timings.prefilter_ms, timings.filter_ms) = oidn.execute()?;
+    Ok((images, timings))
 }
 
 /// A packed float3 plane from the GPU (one staging copy, converted in parallel from the mapped memory).

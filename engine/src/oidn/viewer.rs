@@ -1,15 +1,15 @@
 //! OIDN in the viewer: once the image has settled (the accumulation outlived a frame and reached
-//! [`SETTLE_SPP`], or the sample limit), its buffers are copied to the host without waiting for the GPU,
-//! denoised on a worker thread, and shown in place of the svgf image until the accumulation restarts. It runs
-//! again each time the sample count doubles, and once more at the sample limit. While the camera or an
-//! animation moves, the display shows svgf's image: OIDN is never waited for by the frame loop.
+//! [`SETTLE_SPP`], or the sample limit), a worker thread denoises it, in GPU memory shared with OIDN where its
+//! device allows (nothing crosses to the host; `super::shared`), else from host copies it makes itself, and
+//! writes the result into a GPU buffer the display shows in place of the svgf image until the accumulation
+//! restarts. It runs again each time the sample count doubles, and once more at the sample limit. While the
+//! camera or an animation moves, the display shows svgf's image: OIDN is never waited for by the frame loop.
 
 use super::Timings;
 use super::device::{AdapterIdentity, DeviceRequest};
-use super::worker::{Job, OidnWorker};
+use super::worker::{GpuJob, Job, OidnWorker, Source};
 use crate::FrameSet;
 use crate::gpu::GpuContext;
-use crate::gpu::readback::AsyncReadback;
 use crate::render::{
     Accumulation, AovView, DenoiserKind, HostDenoised, RenderSettings, ViewTargets,
 };
@@ -29,11 +29,14 @@ pub enum OidnStatus {
     Idle,
     /// Copying or denoising the image of this many samples per pixel.
     Denoising(u32),
-    /// Showing the image of `samples` spp, denoised on `device` in `timings`.
+    /// Showing the image of `samples` spp, denoised on `device` in `timings` (plus `readback_ms` of host
+    /// copies, 0 when OIDN shared the GPU's memory).
     Shown {
         samples: u32,
         device: String,
         timings: Timings,
+        shared_memory: bool,
+        readback_ms: f64,
     },
     /// OIDN cannot run here; the svgf image is shown.
     Unavailable(String),
@@ -43,11 +46,6 @@ pub enum OidnStatus {
 #[derive(Resource, Default)]
 pub struct ViewerOidn {
     worker: Option<OidnWorker<Key>>,
-    /// A copy of the accumulation on its way to the host.
-    readback: Option<(Key, AsyncReadback)>,
-    /// The last copy's staging buffer, kept for the next copy of the same size: allocating it (170 MB of
-    /// host-visible memory at 2560x1440) took about 40 ms of the frame on the H200.
-    spare_readback: Option<AsyncReadback>,
     shown: Option<Key>,
     /// A result was handed to the display this frame: one more frame must run to show it.
     fresh: bool,
@@ -57,9 +55,7 @@ pub struct ViewerOidn {
 impl ViewerOidn {
     /// A copy or a denoise is under way: the frame loop should keep running to show its result.
     pub fn busy(&self) -> bool {
-        self.fresh
-            || self.readback.is_some()
-            || self.worker.as_ref().is_some_and(|w| w.in_flight() > 0)
+        self.fresh || self.worker.as_ref().is_some_and(|w| w.in_flight() > 0)
     }
 
     /// Whether to denoise now: the image is still (it outlived this frame's samples) and has reached
@@ -97,8 +93,7 @@ impl Plugin for OidnViewerPlugin {
     }
 }
 
-/// The viewer's OIDN step: hand arrived results to the display, arrived copies to the worker, and start a
-/// copy when due.
+/// The viewer's OIDN step: hand arrived results to the display, and hand the worker the accumulation when due.
 pub fn denoise_still_image(
     ctx: Res<GpuContext>,
     settings: Res<RenderSettings>,
@@ -128,12 +123,16 @@ pub fn denoise_still_image(
         match done.result {
             Ok(image) if (done.tag.0, done.tag.1) == current => {
                 // The next frame's display transform shows it, also when the viewer then goes idle.
-                oidn.fresh = host.show(&ctx, &view, &accumulation, &image.color);
+                oidn.fresh = done
+                    .shown
+                    .is_some_and(|b| host.show_buffer(&view, &accumulation, b));
                 oidn.shown = Some(done.tag);
                 oidn.status = OidnStatus::Shown {
                     samples: done.tag.2,
                     device: done.device,
                     timings: image.timings,
+                    shared_memory: done.shared_memory,
+                    readback_ms: done.readback_ms,
                 };
             }
             // The accumulation restarted while it was denoised.
@@ -145,46 +144,25 @@ pub fn denoise_still_image(
             }
         }
     }
-    if let Some((key, readback)) = &mut oidn.readback {
-        if let Some((_, bytes)) = readback.poll(&ctx).pop() {
-            let key = *key;
-            oidn.spare_readback = oidn.readback.take().map(|(_, r)| r);
-            if (key.0, key.1) == current {
-                let job = Job {
-                    tag: key,
-                    inputs: super::inputs::inputs_from_planes(view.width, view.height, &bytes),
-                    options: settings.oidn,
-                };
-                if !worker.submit(job) {
-                    oidn.status =
-                        OidnStatus::Unavailable("the denoising thread could not start".into());
-                }
-            }
-        }
-        return;
-    }
     let key = (current.0, current.1, accumulation.samples);
-    if worker.in_flight() > 0 || !oidn.due(key, settings.spp_per_frame, accumulation.sample_limit) {
+    let busy = worker.in_flight() > 0;
+    if busy || !oidn.due(key, settings.spp_per_frame, accumulation.sample_limit) {
         return;
     }
-    let plane = view.accum.size();
-    let mut readback = match oidn.spare_readback.take() {
-        Some(r) if r.size() == 3 * plane => r,
-        _ => AsyncReadback::new(&ctx, "oidn inputs", 3 * plane, 1),
+    let job = Job {
+        tag: key,
+        source: Source::Gpu(Box::new(GpuJob {
+            ctx: ctx.clone(),
+            sources: view.denoiser_sources(),
+            shown: HostDenoised::image_buffer(&ctx, &view),
+        })),
+        options: settings.oidn,
     };
-    let mut encoder = ctx.device.create_command_encoder(&Default::default());
-    let sources = [
-        (&view.accum, 0, plane),
-        (&view.albedo_depth, plane, plane),
-        (&view.normal_hits, 2 * plane, plane),
-    ];
-    if readback.encode(&mut encoder, &sources, 0) {
-        ctx.queue.submit([encoder.finish()]);
-        readback.after_submit();
-        oidn.readback = Some((key, readback));
+    let worker = oidn.worker.as_mut().expect("spawned above");
+    if worker.submit(job) {
         oidn.status = OidnStatus::Denoising(key.2);
     } else {
-        oidn.spare_readback = Some(readback);
+        oidn.status = OidnStatus::Unavailable("the denoising thread could not start".into());
     }
 }
 

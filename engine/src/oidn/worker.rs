@@ -1,16 +1,37 @@
 //! A thread that owns an [`Oidn`] and denoises one job at a time, so an interactive frame loop only hands
-//! over host images and later picks up the result. The device is opened on the thread at its first job.
+//! over a job (host images, or the accumulation's GPU buffers and a buffer for the result) and later picks up
+//! the result. The device is opened on the thread at its first job; every wait (for the GPU, for OIDN) happens
+//! on the thread.
 
 use super::device::DeviceRequest;
 use super::{DenoiseOptions, Denoised, Oidn, OidnError, OidnInputs};
+use crate::gpu::GpuContext;
+use crate::render::passes::denoiser_planes::DenoiserSources;
 use std::sync::Mutex;
 use std::sync::mpsc::{Receiver, Sender, TryRecvError, channel};
 
 /// What to denoise; `tag` comes back with the result.
 pub struct Job<T> {
     pub tag: T,
-    pub inputs: OidnInputs,
+    pub source: Source,
     pub options: DenoiseOptions,
+}
+
+/// What a job denoises, and where its result goes.
+pub enum Source {
+    /// Host images; the result comes back as a host image ([`Denoised::color`]).
+    Host(OidnInputs),
+    /// The accumulation on the GPU; the result is written into `shown` (the display's layout,
+    /// `render::HostDenoised::image_buffer`) and [`Denoised::color`] stays empty. In GPU memory shared with
+    /// OIDN where its device allows (`super::shared`), else through host copies made on the thread.
+    Gpu(Box<GpuJob>),
+}
+
+/// A [`Source::Gpu`] job's buffers (boxed: the device context is large beside a host image's handles).
+pub struct GpuJob {
+    pub ctx: GpuContext,
+    pub sources: DenoiserSources,
+    pub shown: wgpu::Buffer,
 }
 
 /// A finished job.
@@ -20,6 +41,12 @@ pub struct Done<T> {
     /// The device that ran it ("CUDA NVIDIA H200"), and notes from opening it.
     pub device: String,
     pub notes: Vec<String>,
+    /// A [`Source::Gpu`] job's buffer, holding the result when `result` is Ok.
+    pub shown: Option<wgpu::Buffer>,
+    /// The job ran in GPU memory shared with OIDN (nothing went through the host).
+    pub shared_memory: bool,
+    /// Milliseconds spent copying a [`Source::Gpu`] job's accumulation to the host (0 when shared).
+    pub readback_ms: f64,
 }
 
 pub struct OidnWorker<T> {
@@ -38,22 +65,43 @@ impl<T: Send + 'static> OidnWorker<T> {
             .name("oidn".into())
             .spawn(move || {
                 let mut oidn: Option<Result<Oidn, OidnError>> = None;
+                let mut shared_failed = false;
                 while let Ok(job) = job_rx.recv() {
                     let opened = oidn.get_or_insert_with(|| Oidn::new(&request));
-                    let (result, device, notes) = match opened {
-                        Ok(o) => (
-                            o.denoise(&job.inputs.images(), &job.options),
-                            o.device_description(),
-                            std::mem::take(&mut o.notes),
-                        ),
-                        Err(e) => (Err(e.clone()), String::new(), Vec::new()),
-                    };
-                    let done = Done {
+                    let mut done = Done {
                         tag: job.tag,
-                        result,
-                        device,
-                        notes,
+                        result: Err(OidnError::Input("not run".into())),
+                        device: String::new(),
+                        notes: Vec::new(),
+                        shown: None,
+                        shared_memory: false,
+                        readback_ms: 0.0,
                     };
+                    match (opened, job.source) {
+                        (Err(e), _) => done.result = Err(e.clone()),
+                        (Ok(o), Source::Host(inputs)) => {
+                            done.result = o.denoise(&inputs.images(), &job.options);
+                        }
+                        (Ok(o), Source::Gpu(gpu)) => {
+                            let GpuJob {
+                                ctx,
+                                sources,
+                                shown,
+                            } = *gpu;
+                            run_on_gpu_buffers(
+                                o,
+                                &mut shared_failed,
+                                (&ctx, &sources, &shown),
+                                &job.options,
+                                &mut done,
+                            );
+                            done.shown = Some(shown);
+                        }
+                    }
+                    if let Some(Ok(o)) = &mut oidn {
+                        done.device = o.device_description();
+                        done.notes = std::mem::take(&mut o.notes);
+                    }
                     if done_tx.send(done).is_err() {
                         break;
                     }
@@ -105,6 +153,43 @@ impl<T: Send + 'static> OidnWorker<T> {
         self.in_flight -= 1;
         Some(done)
     }
+}
+
+/// A [`Source::Gpu`] job: in shared GPU memory unless that failed once (a warning says why), else through
+/// host copies; the result ends up in `shown`.
+fn run_on_gpu_buffers<T>(
+    oidn: &mut Oidn,
+    shared_failed: &mut bool,
+    (ctx, sources, shown): (&GpuContext, &DenoiserSources, &wgpu::Buffer),
+    options: &DenoiseOptions,
+    done: &mut Done<T>,
+) {
+    if !*shared_failed && oidn.shares_memory_with(ctx) {
+        match super::shared::denoise_into(oidn, ctx, sources, options, shown) {
+            Ok(timings) => {
+                done.shared_memory = true;
+                done.result = Ok(Denoised {
+                    color: Vec::new(),
+                    timings,
+                    repaired: 0,
+                });
+                return;
+            }
+            Err(e) => {
+                tracing::warn!(
+                    "{e}; Open Image Denoise copies its images through the host instead"
+                );
+                *shared_failed = true;
+            }
+        }
+    }
+    let (inputs, readback_s) = super::inputs::read_sources(ctx, sources);
+    done.readback_ms = readback_s * 1e3;
+    done.result = oidn.denoise(&inputs.images(), options).map(|mut d| {
+        crate::render::HostDenoised::write_image(ctx, shown, &d.color);
+        d.color = Vec::new();
+        d
+    });
 }
 
 impl<T> Drop for OidnWorker<T> {

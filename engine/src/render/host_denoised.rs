@@ -1,6 +1,7 @@
-//! An image denoised off the GPU (Open Image Denoise on the host), which the display shows in place of the
-//! svgf image while the accumulation it was denoised from lasts. The renderer only shows it: who denoises,
-//! and when, is the `oidn` module's business (it depends on the renderer, not the reverse).
+//! An image denoised outside the renderer (Open Image Denoise, from host copies or in GPU memory it shares
+//! with wgpu), which the display shows in place of the svgf image while the accumulation it was denoised from
+//! lasts. The renderer only shows it: who denoises, and when, is the `oidn` module's business (it depends on
+//! the renderer, not the reverse).
 
 use super::accumulation::Accumulation;
 use super::settings::{DenoiserKind, RenderSettings};
@@ -37,23 +38,52 @@ impl HostDenoised {
         if image.is_empty() || image.len() as u64 != view.pixels() {
             return false;
         }
-        let mut shown = self.shown.lock().unwrap_or_else(|e| e.into_inner());
-        let buffer = match shown.take() {
-            Some(s) if s.generation == view.generation => s.buffer,
-            _ => ctx.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("host-denoised image"),
-                size: view.accum.size(),
-                usage: wgpu::BufferUsages::STORAGE
-                    | wgpu::BufferUsages::COPY_DST
-                    | wgpu::BufferUsages::COPY_SRC,
-                mapped_at_creation: false,
-            }),
+        let reused = {
+            let mut shown = self.shown.lock().unwrap_or_else(|e| e.into_inner());
+            shown
+                .take()
+                .filter(|s| s.generation == view.generation)
+                .map(|s| s.buffer)
         };
+        let buffer = reused.unwrap_or_else(|| Self::image_buffer(ctx, view));
+        Self::write_image(ctx, &buffer, image);
+        self.show_buffer(view, accumulation, buffer)
+    }
+
+    /// Uploads a host image (linear RGB, row-major from the top-left) into a buffer of
+    /// [`Self::image_buffer`]'s layout.
+    pub fn write_image(ctx: &GpuContext, buffer: &wgpu::Buffer, image: &[[f32; 3]]) {
         // Sample count 1: the tone mapper divides by it.
         let pixels: Vec<[f32; 4]> = image.iter().map(|p| [p[0], p[1], p[2], 1.0]).collect();
         ctx.queue
-            .write_buffer(&buffer, 0, bytemuck::cast_slice(&pixels));
-        *shown = Some(Shown {
+            .write_buffer(buffer, 0, bytemuck::cast_slice(&pixels));
+    }
+
+    /// A buffer for an image of `view` in the display's layout (the accumulation's, sample count 1), for a
+    /// denoiser to write on the GPU and hand to [`Self::show_buffer`].
+    pub fn image_buffer(ctx: &GpuContext, view: &ViewTargets) -> wgpu::Buffer {
+        ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("denoised image"),
+            size: view.accum.size(),
+            usage: wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_DST
+                | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        })
+    }
+
+    /// Shows `buffer`, written on the GPU in the layout [`Self::image_buffer`] describes, until the
+    /// accumulation restarts or the view is replaced. False, and nothing changes, when its size does not match.
+    pub fn show_buffer(
+        &self,
+        view: &ViewTargets,
+        accumulation: &Accumulation,
+        buffer: wgpu::Buffer,
+    ) -> bool {
+        if buffer.size() != view.accum.size() {
+            return false;
+        }
+        *self.shown.lock().unwrap_or_else(|e| e.into_inner()) = Some(Shown {
             buffer,
             generation: view.generation,
             epoch: accumulation.epoch,

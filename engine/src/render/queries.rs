@@ -8,7 +8,7 @@ use super::gpu_scene::GpuScene;
 use super::host_denoised::HostDenoised;
 use super::passes::OnFirstUse;
 use super::passes::denoise::Denoiser;
-use super::passes::denoiser_inputs::{DenoiserInputsBuffers, DenoiserInputsPass};
+use super::passes::denoiser_planes::{DenoiserPlanesPass, DenoiserSources};
 use super::passes::raycast::RaycastPass;
 use super::passes::tonemap::TonemapPass;
 use super::scene_bindings::SceneBindings;
@@ -30,26 +30,34 @@ pub fn denoised_radiance(world: &World) -> Vec<[f32; 3]> {
     mean_rgb(&ctx.read_buffer(output, output.size()))
 }
 
-/// Writes the view's current accumulation as an external denoiser's inputs (mean radiance, first-hit albedo
-/// and normal, sanitised, as packed float3 planes) into `color`, `albedo` and `normal`, and waits for the GPU:
-/// the images Open Image Denoise's GPU device reads in place from memory it shares with wgpu.
+/// Writes the accumulation's current means (radiance, first-hit albedo and normal, sanitised, as packed float3
+/// planes) into `planes` (colour, albedo, normal) and waits for the GPU: the images Open Image Denoise's GPU
+/// device reads in place from memory it shares with wgpu.
 pub fn write_denoiser_inputs(
     ctx: &GpuContext,
-    view: &ViewTargets,
-    [color, albedo, normal]: [&wgpu::Buffer; 3],
+    sources: &DenoiserSources,
+    planes: [&wgpu::Buffer; 3],
 ) {
-    // The pipeline and layout come from the device's cache; only the small parameter buffer is new.
-    let pass = DenoiserInputsPass::new(ctx);
+    // The pipelines and layouts come from the device's cache; only the small parameter buffer is new.
+    let pass = DenoiserPlanesPass::new(ctx);
     let mut encoder = ctx.device.create_command_encoder(&Default::default());
-    let buffers = DenoiserInputsBuffers {
-        accum: &view.accum,
-        albedo_depth: &view.albedo_depth,
-        normal_hits: &view.normal_hits,
-        color,
-        albedo,
-        normal,
-    };
-    pass.encode(ctx, &mut encoder, &buffers, (view.width, view.height));
+    pass.encode_pack(ctx, &mut encoder, sources, planes);
+    ctx.queue.submit([encoder.finish()]);
+    ctx.wait_idle();
+}
+
+/// Writes a denoiser's packed float3 `output` into `shown` in the accumulation's layout (sample count 1, what
+/// the display shows from `HostDenoised`), non-finite pixels replaced by the `color` plane it was given, and
+/// waits for the GPU.
+pub fn write_denoised_output(
+    ctx: &GpuContext,
+    size: (u32, u32),
+    planes: [&wgpu::Buffer; 2],
+    shown: &wgpu::Buffer,
+) {
+    let pass = DenoiserPlanesPass::new(ctx);
+    let mut encoder = ctx.device.create_command_encoder(&Default::default());
+    pass.encode_unpack(ctx, &mut encoder, size, planes, shown);
     ctx.queue.submit([encoder.finish()]);
     ctx.wait_idle();
 }

@@ -40,6 +40,17 @@ fn next_generation() -> u64 {
 }
 
 impl ViewTargets {
+    /// The accumulation's sums an external denoiser reads, as handles another thread can hold.
+    pub fn denoiser_sources(&self) -> super::passes::denoiser_planes::DenoiserSources {
+        super::passes::denoiser_planes::DenoiserSources {
+            accum: self.accum.clone(),
+            albedo_depth: self.albedo_depth.clone(),
+            normal_hits: self.normal_hits.clone(),
+            width: self.width,
+            height: self.height,
+        }
+    }
+
     pub fn new(ctx: &GpuContext, width: u32, height: u32) -> Self {
         let pixels = (width as u64 * height as u64).max(1);
         let view = Self {

@@ -41,6 +41,11 @@ pub struct TimingRow {
     /// Shared rows: relMSE of the output against the host path's output of the same accumulation (the two
     /// paths agree up to the GPU's rounding of the means).
     pub host_difference_rel_mse: Option<f64>,
+    /// Shared rows: one more denoise with the output written for display on the GPU (the viewer's path,
+    /// `shared::denoise_into`): its milliseconds without set-up, and the relMSE of that image against this
+    /// row's output.
+    pub display_path_ms: Option<f64>,
+    pub display_path_difference_rel_mse: Option<f64>,
     /// Filter creation at this size (once).
     pub setup_ms: f64,
 }
@@ -131,7 +136,7 @@ pub fn timings(
                             let d = raykin::oidn::shared::denoise_view(
                                 &mut oidn,
                                 &app.ctx,
-                                app.view(),
+                                &app.view().denoiser_sources(),
                                 &options,
                             );
                             (d, 0.0)
@@ -169,6 +174,12 @@ pub fn timings(
                         (_, AuxMode::Prefilter) => Some(rel_mse(&output, &host_output)),
                         _ => None,
                     };
+                    let (display_path_ms, display_path_difference_rel_mse) = if memory == "shared" {
+                        let (ms, image) = display_path(&mut oidn, &app, &options)?;
+                        (Some(ms), Some(rel_mse(&image, &output)))
+                    } else {
+                        (None, None)
+                    };
                     let [
                         readback,
                         upload,
@@ -195,6 +206,8 @@ pub fn timings(
                         total_ms: total,
                         on_device_ms: on_device,
                         host_difference_rel_mse,
+                        display_path_ms,
+                        display_path_difference_rel_mse,
                         setup_ms,
                     };
                     eprintln!(
@@ -214,12 +227,41 @@ pub fn timings(
                             .map(|d| format!("; relMSE against the host path's output {d:.2e}"))
                             .unwrap_or_default()
                     );
+                    if let (Some(ms), Some(d)) = (display_path_ms, display_path_difference_rel_mse)
+                    {
+                        eprintln!(
+                            "raykin bench:   written for display on the GPU instead (the viewer's path): {ms:.1} ms, relMSE against the read-back output {d:.2e}"
+                        );
+                    }
                     rows.push(row);
                 }
             }
         }
     }
     Ok(rows)
+}
+
+/// The viewer's shared-memory path once (filters already made): OIDN's output written into a display buffer on
+/// the GPU; its milliseconds, and that buffer read back as an image to compare.
+fn display_path(
+    oidn: &mut Oidn,
+    app: &raykin::headless::HeadlessApp,
+    options: &DenoiseOptions,
+) -> Result<(f64, Vec<[f32; 3]>)> {
+    let shown = raykin::render::HostDenoised::image_buffer(&app.ctx, app.view());
+    let start = std::time::Instant::now();
+    raykin::oidn::shared::denoise_into(
+        oidn,
+        &app.ctx,
+        &app.view().denoiser_sources(),
+        options,
+        &shown,
+    )
+    .context("OIDN written for display")?;
+    let ms = start.elapsed().as_secs_f64() * 1e3;
+    // Count 1 per pixel: the means are the image.
+    let bytes = app.ctx.read_buffer(&shown, shown.size());
+    Ok((ms, raykin::render::view::mean_rgb(&bytes)))
 }
 
 /// The samples per pixel the gains are measured at.

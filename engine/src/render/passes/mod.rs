@@ -4,7 +4,7 @@
 
 pub mod deform;
 pub mod denoise;
-pub mod denoiser_inputs;
+pub mod denoiser_planes;
 pub mod display;
 pub mod gbuffer;
 pub mod gradient;
@@ -37,7 +37,8 @@ pub fn all_kernels() -> Vec<(&'static str, String)> {
         &gradient::KERNEL,
         &temporal::KERNEL,
         &handover::KERNEL,
-        &denoiser_inputs::KERNEL,
+        &denoiser_planes::PACK_KERNEL,
+        &denoiser_planes::UNPACK_KERNEL,
     ]
     .into_iter()
     .map(|k: &ShaderModule| (k.name, compose(k)))
