@@ -198,7 +198,9 @@ fn converged_input_stays_converged() {
     let mut app = cornell::app(ctx, true, cornell::SIZE, 31);
     app.accumulate(64, 64, |_| {});
     let mut converged = inputs(&app);
+    // The whole converged image goes through the filter (nothing set apart as unscattered).
     converged.color = reference.clone();
+    converged.unscattered = vec![[0.0; 3]; reference.len()];
     let denoised = denoise(&mut oidn, &converged);
     let change = rel_mse(&pick(&denoised, &inner), &pick(&reference, &inner), EPS);
     eprintln!(
@@ -503,9 +505,10 @@ fn mirror_aovs_show_the_mirrored_surface() {
 }
 
 /// The GPU pass that writes OIDN's inputs into shared GPU memory (`render::queries::write_denoiser_inputs`)
-/// writes what the host path hands OIDN: per pixel the sums divided by the sample count, then NaN -> 0,
-/// radiance clamped to [0, 1e30], albedo to [0, 1], normal to [-1, 1] (computed here from the sums the GPU
-/// holds, with poisoned pixels written into them to reach every rule), within 2 ulps (the GPU's division).
+/// writes what the host path hands OIDN: per pixel the sums divided by the sample count (the radiance less its
+/// unscattered part, at least 0), then NaN -> 0, radiance clamped to [0, 1e30], albedo to [0, 1], normal to
+/// [-1, 1] (computed here from the sums the GPU holds, with poisoned pixels written into them to reach every
+/// rule), within 2 ulps (the GPU's division).
 #[test]
 fn denoiser_inputs_pass_writes_the_host_paths_inputs() {
     let (ctx, _gpu) = gpu();
@@ -527,11 +530,35 @@ fn denoiser_inputs_pass_writes_the_host_paths_inputs() {
     let sums = |b: &wgpu::Buffer| -> Vec<[f32; 4]> {
         bytemuck::pod_collect_to_vec(&app.ctx.read_buffer(b, b.size()))
     };
-    let (accum, albedo, normal) = (
+    let (accum, albedo, normal, moments) = (
         sums(&view.accum),
         sums(&view.albedo_depth),
         sums(&view.normal_hits),
+        sums(&view.moments),
     );
+    assert!(
+        moments.iter().any(|m| m[0] > 0.0),
+        "the light is seen directly: some radiance is unscattered"
+    );
+    // The colour: the mean less the unscattered mean, at least 0, then sanitised; its tolerance is 2 ulps of
+    // each mean (the difference cancels where the light is seen directly).
+    let (colour, colour_tolerance): (Vec<[f32; 3]>, Vec<[f32; 3]>) = accum
+        .iter()
+        .zip(&moments)
+        .map(|(a, m)| {
+            let n = a[3].max(1.0);
+            let value = [0, 1, 2].map(|c| {
+                let v = (a[c] / n - m[c] / n).max(0.0);
+                if v.is_nan() { 0.0 } else { v.min(1e30) }
+            });
+            // A poisoned (NaN) mean has an exact expected value (0) and no tolerance.
+            let tolerance = [0, 1, 2].map(|c| {
+                let t = 2.0 * f32::EPSILON * ((a[c] / n).abs() + (m[c] / n).abs());
+                if t.is_nan() { 0.0 } else { t }
+            });
+            (value, tolerance)
+        })
+        .unzip();
     let expected = |plane: &[[f32; 4]], lo: f32, hi: f32| -> Vec<[f32; 3]> {
         plane
             .iter()
@@ -564,16 +591,23 @@ fn denoiser_inputs_pass_writes_the_host_paths_inputs() {
     let written = |b: &wgpu::Buffer| -> Vec<[f32; 3]> {
         bytemuck::pod_collect_to_vec(&app.ctx.read_buffer(b, b.size()))
     };
-    for (name, plane, want) in [
-        ("colour", &planes[0], expected(&accum, 0.0, 1e30)),
-        ("albedo", &planes[1], expected(&albedo, 0.0, 1.0)),
-        ("normal", &planes[2], expected(&normal, -1.0, 1.0)),
+    let ulps = |image: &[[f32; 3]]| -> Vec<[f32; 3]> {
+        image
+            .iter()
+            .map(|p| p.map(|v| 2.0 * f32::EPSILON * v.abs()))
+            .collect()
+    };
+    let (albedo, normal) = (expected(&albedo, 0.0, 1.0), expected(&normal, -1.0, 1.0));
+    for (name, plane, want, tolerances) in [
+        ("colour", &planes[0], colour.clone(), colour_tolerance),
+        ("albedo", &planes[1], albedo.clone(), ulps(&albedo)),
+        ("normal", &planes[2], normal.clone(), ulps(&normal)),
     ] {
         let got = written(plane);
         assert_eq!(got.len(), want.len());
         for (i, (g, w)) in got.iter().zip(&want).enumerate() {
             for c in 0..3 {
-                let tolerance = 2.0 * f32::EPSILON * w[c].abs();
+                let tolerance = tolerances[i][c];
                 assert!(
                     g[c].is_finite() && (g[c] - w[c]).abs() <= tolerance,
                     "{name} pixel {i} channel {c}: GPU {} host {}",
@@ -596,8 +630,9 @@ fn denoiser_inputs_pass_writes_the_host_paths_inputs() {
 }
 
 /// The pass that brings OIDN's output from shared memory to the display writes each pixel in the
-/// accumulation's layout with a count of 1, negative channels as 0, and a non-finite pixel as the noisy colour
-/// OIDN was given (what the host path's repair does).
+/// accumulation's layout with a count of 1: the output (negative channels as 0; a non-finite pixel as the noisy
+/// colour OIDN was given, as the host path's repair does) plus the mean unscattered radiance, which OIDN never
+/// saw.
 #[test]
 fn denoised_output_pass_shows_the_output_and_keeps_the_noisy_colour_where_it_is_not_finite() {
     use wgpu::util::DeviceExt;
@@ -617,6 +652,33 @@ fn denoised_output_pass_shows_the_output_and_keeps_the_noisy_colour_where_it_is_
                 usage: wgpu::BufferUsages::STORAGE,
             })
     };
+    let sums = |data: [[f32; 4]; 4]| {
+        ctx.device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("test sums"),
+                contents: bytemuck::cast_slice(&data),
+                usage: wgpu::BufferUsages::STORAGE,
+            })
+    };
+    // 2 samples per pixel (0 in the last: counted as 1); unscattered sums.
+    let accum = sums([[0.0, 0.0, 0.0, 2.0]; 4].map(|mut a| {
+        a[3] = 2.0;
+        a
+    }));
+    let moments = sums([
+        [0.0, 0.0, 0.0, 5.0],
+        [1.0, 0.0, 0.0, 5.0],
+        [0.0, 0.5, 0.0, 5.0],
+        [f32::NAN, 0.0, 4.0, 5.0],
+    ]);
+    let sources = raykin::render::passes::denoiser_planes::DenoiserSources {
+        accum,
+        albedo_depth: plane(&color),
+        normal_hits: plane(&color),
+        moments,
+        width: 2,
+        height: 2,
+    };
     let shown = ctx.device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("test shown"),
         size: 4 * 16,
@@ -625,7 +687,7 @@ fn denoised_output_pass_shows_the_output_and_keeps_the_noisy_colour_where_it_is_
     });
     raykin::render::queries::write_denoised_output(
         &ctx,
-        (2, 2),
+        &sources,
         [&plane(&output), &plane(&color)],
         &shown,
     );
@@ -634,9 +696,9 @@ fn denoised_output_pass_shows_the_output_and_keeps_the_noisy_colour_where_it_is_
         got,
         vec![
             [1.0, 2.0, 3.0, 1.0],
-            [0.0, 0.5, 2.0, 1.0],
-            [0.25, 0.5, 0.75, 1.0],
-            [4.0, 5.0, 6.0, 1.0]
+            [0.5, 0.5, 2.0, 1.0],
+            [0.25, 0.75, 0.75, 1.0],
+            [4.0, 5.0, 8.0, 1.0]
         ]
     );
 }

@@ -137,7 +137,8 @@ impl Oidn {
         &self.lib.path
     }
 
-    /// Denoises `images.color`, guided by the albedo and normal images when given.
+    /// Denoises `images.color`, guided by the albedo and normal images when given, and adds
+    /// `images.unscattered` (not denoised) to the result.
     pub fn denoise(
         &mut self,
         images: &Images,
@@ -150,6 +151,12 @@ impl Oidn {
         let mut out = self.read(output, color.len())?;
         timings.download_ms = ms_since(start);
         let repaired = repair(&mut out, || color);
+        if let Some(unscattered) = images.unscattered {
+            use rayon::prelude::*;
+            out.par_iter_mut().zip(unscattered).for_each(|(o, u)| {
+                *o = [0, 1, 2].map(|c| o[c] + sanitize(u[c], 0.0, MAX_RADIANCE))
+            });
+        }
         Ok(Denoised {
             color: out,
             timings,
@@ -601,12 +608,17 @@ pub(crate) fn repair(out: &mut [[f32; 3]], input: impl FnOnce() -> Vec<[f32; 3]>
     broken
 }
 
+/// `v` clamped to [lo, hi]; NaN becomes 0.
+fn sanitize(v: f32, lo: f32, hi: f32) -> f32 {
+    if v.is_nan() { 0.0 } else { v.clamp(lo, hi) }
+}
+
 /// Each channel clamped to [lo, hi]; NaN becomes 0.
 fn sanitized(image: &[[f32; 3]], lo: f32, hi: f32) -> Vec<[f32; 3]> {
     use rayon::prelude::*;
     image
         .par_iter()
-        .map(|p| p.map(|v| if v.is_nan() { 0.0 } else { v.clamp(lo, hi) }))
+        .map(|p| p.map(|v| sanitize(v, lo, hi)))
         .collect()
 }
 

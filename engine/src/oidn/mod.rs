@@ -56,6 +56,8 @@ pub struct Images<'a> {
     pub color: &'a [[f32; 3]],
     pub albedo: Option<&'a [[f32; 3]]>,
     pub normal: Option<&'a [[f32; 3]]>,
+    /// Radiance added to the output as it is, not denoised: what reached the camera unscattered (exact).
+    pub unscattered: Option<&'a [[f32; 3]]>,
 }
 
 impl Images<'_> {
@@ -72,6 +74,7 @@ impl Images<'_> {
             ("colour", Some(self.color.len())),
             ("albedo", self.albedo.map(<[_]>::len)),
             ("normal", self.normal.map(<[_]>::len)),
+            ("unscattered", self.unscattered.map(<[_]>::len)),
         ] {
             if let Some(len) = len
                 && len != pixels
@@ -108,6 +111,7 @@ mod tests {
             color: &color,
             albedo: Some(&albedo),
             normal: None,
+            unscattered: None,
         };
         let text = images.validate().unwrap_err().to_string();
         assert!(
@@ -120,6 +124,7 @@ mod tests {
             color: &[],
             albedo: None,
             normal: None,
+            unscattered: None,
         };
         assert!(empty.validate().is_err());
     }

@@ -4,30 +4,33 @@
 //! the image (a file). The host path (`inputs::read_inputs` then [`Oidn::denoise`]) stays for every other
 //! device: OIDN's CPU device, a GPU it has no backend for, a non-Vulkan adapter.
 
-use super::filter::{Denoised, Oidn, SharedImages, Timings, ms_since, repair};
+use super::filter::{Denoised, Oidn, SharedImages, Timings, ms_since};
 use super::{DenoiseOptions, OidnError};
 use crate::gpu::GpuContext;
 use crate::render::passes::denoiser_planes::DenoiserSources;
 use std::time::Instant;
 
-/// The accumulation in `sources` denoised on OIDN's GPU device from shared memory, the output read back to the
-/// host. Call only where [`Oidn::shares_memory_with`] is true. Timings: `upload_ms` is the wgpu pass that writes
-/// the inputs (with its wait), `download_ms` the output's readback; nothing is read back before.
+/// The accumulation in `sources` denoised on OIDN's GPU device from shared memory, the output (with the
+/// unscattered radiance added back) read back to the host. Call only where [`Oidn::shares_memory_with`] is
+/// true. Timings: `upload_ms` is the wgpu pass that writes the inputs (with its wait), `download_ms` the pass
+/// that writes the output and its readback; nothing is read back before.
 pub fn denoise_view(
     oidn: &mut Oidn,
     ctx: &GpuContext,
     sources: &DenoiserSources,
     options: &DenoiseOptions,
 ) -> Result<Denoised, OidnError> {
-    let (images, mut timings) = filter_in_place(oidn, ctx, sources, options)?;
+    let shown = crate::render::HostDenoised::image_buffer_sized(ctx, sources.accum.size());
+    let mut timings = denoise_into(oidn, ctx, sources, options, &shown)?;
     let start = Instant::now();
-    let mut color = read_plane(ctx, &images.output);
-    let repaired = repair(&mut color, || read_plane(ctx, &images.color));
-    timings.download_ms = ms_since(start);
+    // Count 1 per pixel: the means are the image.
+    let color = ctx.read_buffers_with(&[&shown], crate::render::view::mean_rgb);
+    timings.download_ms += ms_since(start);
     Ok(Denoised {
         color,
         timings,
-        repaired,
+        // The unpack pass replaced any non-finite output pixel by its noisy value; it does not count them.
+        repaired: 0,
     })
 }
 
@@ -45,7 +48,7 @@ pub fn denoise_into(
     let start = Instant::now();
     crate::render::queries::write_denoised_output(
         ctx,
-        (sources.width, sources.height),
+        sources,
         [&images.output, &images.color],
         shown,
     );
@@ -74,15 +77,4 @@ fn filter_in_place(
     timings.upload_ms = ms_since(start);
     (timings.prefilter_ms, timings.filter_ms) = oidn.execute()?;
     Ok((images, timings))
-}
-
-/// A packed float3 plane from the GPU (one staging copy, converted in parallel from the mapped memory).
-fn read_plane(ctx: &GpuContext, plane: &wgpu::Buffer) -> Vec<[f32; 3]> {
-    ctx.read_buffers_with(&[plane], |bytes| {
-        use rayon::prelude::*;
-        match bytemuck::try_cast_slice::<u8, [f32; 3]>(bytes) {
-            Ok(pixels) => pixels.par_iter().copied().collect(),
-            Err(_) => bytemuck::pod_collect_to_vec(bytes),
-        }
-    })
 }

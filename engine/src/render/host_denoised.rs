@@ -62,9 +62,14 @@ impl HostDenoised {
     /// A buffer for an image of `view` in the display's layout (the accumulation's, sample count 1), for a
     /// denoiser to write on the GPU and hand to [`Self::show_buffer`].
     pub fn image_buffer(ctx: &GpuContext, view: &ViewTargets) -> wgpu::Buffer {
+        Self::image_buffer_sized(ctx, view.accum.size())
+    }
+
+    /// [`Self::image_buffer`] of `size` bytes (the accumulation buffer's size).
+    pub fn image_buffer_sized(ctx: &GpuContext, size: u64) -> wgpu::Buffer {
         ctx.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("denoised image"),
-            size: view.accum.size(),
+            size,
             usage: wgpu::BufferUsages::STORAGE
                 | wgpu::BufferUsages::COPY_DST
                 | wgpu::BufferUsages::COPY_SRC,

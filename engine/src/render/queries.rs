@@ -30,8 +30,8 @@ pub fn denoised_radiance(world: &World) -> Vec<[f32; 3]> {
     mean_rgb(&ctx.read_buffer(output, output.size()))
 }
 
-/// Writes the accumulation's current means (radiance, first-hit albedo and normal, sanitised, as packed float3
-/// planes) into `planes` (colour, albedo, normal) and waits for the GPU: the images Open Image Denoise's GPU
+/// Writes the accumulation's current means (scattered radiance, first-hit albedo and normal, sanitised, as
+/// packed float3 planes) into `planes` (colour, albedo, normal) and waits for the GPU: the images Open Image Denoise's GPU
 /// device reads in place from memory it shares with wgpu.
 pub fn write_denoiser_inputs(
     ctx: &GpuContext,
@@ -46,18 +46,18 @@ pub fn write_denoiser_inputs(
     ctx.wait_idle();
 }
 
-/// Writes a denoiser's packed float3 `output` into `shown` in the accumulation's layout (sample count 1, what
-/// the display shows from `HostDenoised`), non-finite pixels replaced by the `color` plane it was given, and
-/// waits for the GPU.
+/// Writes a denoiser's packed float3 `output` plus the unscattered radiance of `sources` into `shown` in the
+/// accumulation's layout (sample count 1, what the display shows from `HostDenoised`), non-finite pixels
+/// replaced by the `color` plane it was given, and waits for the GPU.
 pub fn write_denoised_output(
     ctx: &GpuContext,
-    size: (u32, u32),
+    sources: &DenoiserSources,
     planes: [&wgpu::Buffer; 2],
     shown: &wgpu::Buffer,
 ) {
     let pass = DenoiserPlanesPass::new(ctx);
     let mut encoder = ctx.device.create_command_encoder(&Default::default());
-    pass.encode_unpack(ctx, &mut encoder, size, planes, shown);
+    pass.encode_unpack(ctx, &mut encoder, sources, planes, shown);
     ctx.queue.submit([encoder.finish()]);
     ctx.wait_idle();
 }

@@ -46,6 +46,7 @@ impl ViewTargets {
             accum: self.accum.clone(),
             albedo_depth: self.albedo_depth.clone(),
             normal_hits: self.normal_hits.clone(),
+            moments: self.moments.clone(),
             width: self.width,
             height: self.height,
         }

@@ -1,7 +1,8 @@
-//! The denoiser-planes pass: the accumulation's mean radiance and first-hit albedo and normal, sanitised, written
-//! as packed float3 planes (`pack.wgsl`) into buffers an external denoiser (Open Image Denoise's GPU device) reads
-//! in place, and its packed output turned back into the accumulation's layout for display (`unpack.wgsl`), so
-//! that neither the inputs nor a displayed result travel through host memory.
+//! The denoiser-planes pass: the accumulation's mean scattered radiance and first-hit albedo and normal,
+//! sanitised, written as packed float3 planes (`pack.wgsl`) into buffers an external denoiser (Open Image
+//! Denoise's GPU device) reads in place, and its packed output plus the exact unscattered radiance turned back
+//! into the accumulation's layout for display (`unpack.wgsl`), so that neither the inputs nor a displayed result
+//! travel through host memory.
 
 use crate::gpu::GpuContext;
 use crate::gpu::bind::{Binding, bind_group, compute_layout, params_buffer};
@@ -39,13 +40,15 @@ pub struct DenoiserPlanesParams {
     pub _pad: u32,
 }
 
-/// The accumulation's sums a denoiser reads (its layout: radiance + count, albedo + depth, normal + hits), as
-/// handles that can travel to another thread (the viewer's denoising worker).
+/// The accumulation's sums a denoiser reads (its layout: radiance + count, albedo + depth, normal + hits,
+/// unscattered radiance + a luminance moment), as handles that can travel to another thread (the viewer's
+/// denoising worker).
 #[derive(Clone, Debug)]
 pub struct DenoiserSources {
     pub accum: wgpu::Buffer,
     pub albedo_depth: wgpu::Buffer,
     pub normal_hits: wgpu::Buffer,
+    pub moments: wgpu::Buffer,
     pub width: u32,
     pub height: u32,
 }
@@ -64,10 +67,15 @@ impl DenoiserPlanesPass {
         let pack_layout = compute_layout(
             ctx,
             "denoiser_pack",
-            &[Read, Read, Read, ReadWrite, ReadWrite, ReadWrite, Params],
+            &[
+                Read, Read, Read, Read, ReadWrite, ReadWrite, ReadWrite, Params,
+            ],
         );
-        let unpack_layout =
-            compute_layout(ctx, "denoiser_unpack", &[Read, Read, ReadWrite, Params]);
+        let unpack_layout = compute_layout(
+            ctx,
+            "denoiser_unpack",
+            &[Read, Read, Read, Read, ReadWrite, Params],
+        );
         let pipeline = |label, kernel: &ShaderModule, layout, entry| {
             crate::gpu::compute_pipeline(ctx, label, compose(kernel), &[Some(layout)], entry)
         };
@@ -113,6 +121,7 @@ impl DenoiserPlanesPass {
                 &sources.accum,
                 &sources.albedo_depth,
                 &sources.normal_hits,
+                &sources.moments,
                 color,
                 albedo,
                 normal,
@@ -124,21 +133,30 @@ impl DenoiserPlanesPass {
     }
 
     /// Records the unpacking of the denoiser's `output` plane (with the `color` plane it was given, for pixels
-    /// it returned non-finite) into `shown`, in the accumulation's layout.
+    /// it returned non-finite), plus the unscattered radiance of `sources`, into `shown`, in the
+    /// accumulation's layout.
     pub fn encode_unpack(
         &self,
         ctx: &GpuContext,
         encoder: &mut wgpu::CommandEncoder,
-        (width, height): (u32, u32),
+        sources: &DenoiserSources,
         [output, color]: [&wgpu::Buffer; 2],
         shown: &wgpu::Buffer,
     ) {
+        let (width, height) = (sources.width, sources.height);
         self.write_params(ctx, width, height);
         let group = bind_group(
             ctx,
             "denoiser_unpack",
             &self.unpack_layout,
-            &[output, color, shown, &self.params],
+            &[
+                output,
+                color,
+                &sources.accum,
+                &sources.moments,
+                shown,
+                &self.params,
+            ],
         );
         dispatch(
             encoder,

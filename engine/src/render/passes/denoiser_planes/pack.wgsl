@@ -1,8 +1,9 @@
 // An external denoiser's inputs (Open Image Denoise's) from the accumulation, written in GPU memory it shares:
-// per pixel the mean radiance, first-hit albedo and first-hit normal (each sum over the samples divided by the
-// sample count, as oidn::inputs does on the host), sanitised as oidn::filter does (NaN -> 0; radiance in
-// [0, max_radiance], albedo in [0, 1], normal in [-1, 1]) and stored as tightly packed float3 planes, the
-// layout of OIDN's FLOAT3 images.
+// per pixel the mean scattered radiance (the mean minus what reached the camera unscattered, at least 0: that
+// part is exact and unpack.wgsl adds it back), first-hit albedo and first-hit normal (each sum over the samples
+// divided by the sample count, as oidn::inputs does on the host), sanitised as oidn::filter does (NaN -> 0;
+// radiance in [0, max_radiance], albedo in [0, 1], normal in [-1, 1]) and stored as tightly packed float3
+// planes, the layout of OIDN's FLOAT3 images.
 
 struct Params {
     width: u32,
@@ -15,10 +16,12 @@ struct Params {
 @group(0) @binding(0) var<storage, read> accum: array<vec4<f32>>;
 @group(0) @binding(1) var<storage, read> albedo_depth: array<vec4<f32>>;
 @group(0) @binding(2) var<storage, read> normal_hits: array<vec4<f32>>;
-@group(0) @binding(3) var<storage, read_write> color_plane: array<f32>;
-@group(0) @binding(4) var<storage, read_write> albedo_plane: array<f32>;
-@group(0) @binding(5) var<storage, read_write> normal_plane: array<f32>;
-@group(0) @binding(6) var<uniform> params: Params;
+// rgb: unscattered radiance summed over the samples.
+@group(0) @binding(3) var<storage, read> moments: array<vec4<f32>>;
+@group(0) @binding(4) var<storage, read_write> color_plane: array<f32>;
+@group(0) @binding(5) var<storage, read_write> albedo_plane: array<f32>;
+@group(0) @binding(6) var<storage, read_write> normal_plane: array<f32>;
+@group(0) @binding(7) var<uniform> params: Params;
 
 // By the bits: a comparison with NaN may be folded away by a compiler that assumes finite floats.
 fn is_nan(v: f32) -> bool {
@@ -39,7 +42,7 @@ fn pack(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = gid.y * params.width + gid.x;
     let sum = accum[i];
     let n = max(sum.w, 1.0);
-    let color = sanitised(sum.rgb / n, 0.0, params.max_radiance);
+    let color = sanitised(max(sum.rgb / n - moments[i].rgb / n, vec3<f32>(0.0)), 0.0, params.max_radiance);
     let albedo = sanitised(albedo_depth[i].rgb / n, 0.0, 1.0);
     let normal = sanitised(normal_hits[i].rgb / n, -1.0, 1.0);
     for (var c = 0u; c < 3u; c++) {

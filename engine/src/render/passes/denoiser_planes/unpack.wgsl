@@ -1,24 +1,31 @@
-// An external denoiser's output (Open Image Denoise's packed float3 image, in GPU memory it shares) into the
-// accumulation's layout with a sample count of 1, which the display's tone mapper reads unchanged. A pixel the
-// denoiser returned non-finite keeps its noisy mean (the colour plane OIDN was given); negative channels become 0
-// (as oidn::filter::repair does on the host).
+// An external denoiser's output (Open Image Denoise's packed float3 image, in GPU memory it shares) plus the
+// exact unscattered radiance pack.wgsl left out, into the accumulation's layout with a sample count of 1, which
+// the display's tone mapper reads unchanged. A pixel the denoiser returned non-finite keeps its noisy mean (the
+// colour plane OIDN was given); negative channels become 0 (as oidn::filter::repair does on the host).
 
 struct Params {
     width: u32,
     height: u32,
-    // Unused here (the pack kernel's clamp); the two kernels share one parameter struct.
+    // Radiance above this is clamped (as in pack.wgsl).
     max_radiance: f32,
     _pad: u32,
 }
 
 @group(0) @binding(0) var<storage, read> output_plane: array<f32>;
 @group(0) @binding(1) var<storage, read> color_plane: array<f32>;
-@group(0) @binding(2) var<storage, read_write> shown: array<vec4<f32>>;
-@group(0) @binding(3) var<uniform> params: Params;
+@group(0) @binding(2) var<storage, read> accum: array<vec4<f32>>;
+// rgb: unscattered radiance summed over the samples.
+@group(0) @binding(3) var<storage, read> moments: array<vec4<f32>>;
+@group(0) @binding(4) var<storage, read_write> shown: array<vec4<f32>>;
+@group(0) @binding(5) var<uniform> params: Params;
 
 // By the bits, as in pack.wgsl: a compiler may assume finite floats in comparisons.
 fn is_finite(v: f32) -> bool {
     return (bitcast<u32>(v) & 0x7f800000u) != 0x7f800000u;
+}
+
+fn is_nan(v: f32) -> bool {
+    return (bitcast<u32>(v) & 0x7fffffffu) > 0x7f800000u;
 }
 
 @compute @workgroup_size(8, 8)
@@ -28,5 +35,10 @@ fn unpack(@builtin(global_invocation_id) gid: vec3<u32>) {
     let denoised = vec3<f32>(output_plane[3u * i], output_plane[3u * i + 1u], output_plane[3u * i + 2u]);
     let noisy = vec3<f32>(color_plane[3u * i], color_plane[3u * i + 1u], color_plane[3u * i + 2u]);
     let finite = is_finite(denoised.x) && is_finite(denoised.y) && is_finite(denoised.z);
-    shown[i] = vec4<f32>(select(noisy, max(denoised, vec3<f32>(0.0)), finite), 1.0);
+    let u = moments[i].rgb / max(accum[i].w, 1.0);
+    var unscattered = vec3<f32>(0.0);
+    for (var c = 0u; c < 3u; c++) {
+        unscattered[c] = select(clamp(u[c], 0.0, params.max_radiance), 0.0, is_nan(u[c]));
+    }
+    shown[i] = vec4<f32>(select(noisy, max(denoised, vec3<f32>(0.0)), finite) + unscattered, 1.0);
 }
