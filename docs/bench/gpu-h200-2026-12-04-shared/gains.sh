@@ -10,7 +10,7 @@ export VK_DRIVER_FILES=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json RAYK
 b=${1:-raykin-v}
 (cd rel && xz -dkf $b.xz && chmod +x $b)
 w=$(mktemp -d)
-timeout 560 rel/$b bench --suite full --parts errors --parts oidn --scene cornell --scene flight-helmet --scene crowd \
+timeout 560 rel/$b bench --suite full --parts errors,oidn --scene cornell --scene flight-helmet --scene crowd \
   --assets rel/assets --out "$w" --cache "$w/c" > "$OUT/gains.log" 2>&1
 echo "bench rc $?"
 cp "$w/results.json" "$OUT/gains-results.json" 2>/dev/null

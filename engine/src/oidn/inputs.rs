@@ -1,5 +1,5 @@
-//! OIDN's inputs from the view's accumulation: mean radiance (where no sample met a surface, the environment seen
-//! directly, exact, is added back after denoising instead), and the first-hit albedo and normal as
+//! OIDN's inputs from the view's accumulation: mean scattered radiance (the unscattered part is exact and added
+//! back after denoising), and the first-hit albedo and normal as
 //! OIDN documents its auxiliary images (anti-aliased like the colour, albedo in [0, 1], normals averaged but
 //! not renormalised, so an edge pixel's normal is the mean of its sub-pixel normals). Through mirror-like metal
 //! the path kernel records the surface the mirror shows instead (shaders/integrator/path.wgsl).
@@ -15,8 +15,8 @@ pub struct OidnInputs {
     pub height: u32,
     /// The radiance to denoise: the mean minus `unscattered`.
     pub color: Vec<[f32; 3]>,
-    /// Mean radiance added back to OIDN's output instead of denoised: in pixels where no sample met a surface,
-    /// the unscattered radiance (the environment seen directly, exact); 0 elsewhere.
+    /// Mean radiance that reached the camera without scattering (emitters and the environment seen directly):
+    /// exact, so it is not denoised but added back to OIDN's output, as the svgf denoiser does.
     pub unscattered: Vec<[f32; 3]>,
     pub albedo: Vec<[f32; 3]>,
     pub normal: Vec<[f32; 3]>,
@@ -29,12 +29,10 @@ impl OidnInputs {
     /// samples that hit), first-hit normal + hit count, and the denoiser moments (unscattered radiance +
     /// a luminance moment).
     ///
-    /// Pixels where no sample met a surface (the sky seen directly) are exact at any sample count: OIDN gets
-    /// 0 there and their mean is added back afterwards (`unscattered`); given to OIDN they came back with the
-    /// network's low-frequency residue (FlightHelmet at 64 spp, H200: FLIP 0.0032 noisy, 0.0131 after OIDN
-    /// high; docs/BENCHMARKS.md). Everywhere else the whole mean goes to OIDN: setting apart the unscattered
-    /// part of every pixel also left the coverage noise at outlines and lights undenoised (FlightHelmet's
-    /// relMSE gain at 4 spp 7.8x -> 7.1x).
+    /// OIDN gets the scattered radiance only (the mean minus the unscattered part, at least 0): left in, the
+    /// sky and the lights seen directly, exact at any sample count, came back with the network's
+    /// low-frequency residue (FlightHelmet at 64 spp, H200: FLIP 0.0032 noisy, 0.0131 after OIDN high;
+    /// docs/BENCHMARKS.md).
     ///
     /// Samples that left the scene count as albedo 0 and normal 0. Measured against albedo 1 and against the
     /// environment's radiance clamped to 1 (the rule for emitters some renderers use), OIDN high at 4 spp,
@@ -62,13 +60,7 @@ impl OidnInputs {
                 .collect()
         };
         let mean = means(accum);
-        // Set apart only where no sample met a surface: at an object's outline OIDN smooths the coverage noise
-        // of the sky with the rest, which the bare unscattered part would keep (below).
-        let unscattered: Vec<[f32; 3]> = means(moments)
-            .into_par_iter()
-            .zip(normal_hits)
-            .map(|(u, h)| if h[3] == 0.0 { u } else { [0.0; 3] })
-            .collect();
+        let unscattered = means(moments);
         let color = mean
             .par_iter()
             .zip(&unscattered)
@@ -149,31 +141,21 @@ mod tests {
     #[test]
     fn sums_become_means_with_misses_counting_zero() {
         // Pixel 0: 4 samples, all hits on albedo 0.5, normal +z. Pixel 1: 4 samples, 1 hit (albedo 0.2, normal
-        // +x), 3 misses that saw sky radiance summing to 1. Pixel 2: 4 misses, sky radiance summing to 2.
-        let accum = [
-            [4.0, 8.0, 12.0, 4.0],
-            [2.0, 2.0, 2.0, 4.0],
-            [2.0, 2.0, 2.0, 4.0],
-        ];
-        let albedo = [[2.0, 2.0, 2.0, 7.0], [0.2, 0.2, 0.2, 1.0], [0.0; 4]];
-        let normal = [[0.0, 0.0, 4.0, 4.0], [1.0, 0.0, 0.0, 1.0], [0.0; 4]];
-        // The moments' w is a luminance moment, unused here.
-        let moments = [
-            [0.0, 0.0, 0.0, 9.0],
-            [1.0, 1.0, 1.0, 0.0],
-            [2.0, 2.0, 2.0, 0.0],
-        ];
-        let inputs = OidnInputs::from_sums(3, 1, &accum, &albedo, &normal, &moments);
-        // Only the pixel that met no surface is set apart; the outline pixel goes to OIDN whole.
-        assert_eq!(inputs.color, vec![[1.0, 2.0, 3.0], [0.5; 3], [0.0; 3]]);
-        assert_eq!(inputs.unscattered, vec![[0.0; 3], [0.0; 3], [0.5; 3]]);
+        // +x), 3 misses.
+        let accum = [[4.0, 8.0, 12.0, 4.0], [2.0, 2.0, 2.0, 4.0]];
+        let albedo = [[2.0, 2.0, 2.0, 7.0], [0.2, 0.2, 0.2, 1.0]];
+        let normal = [[0.0, 0.0, 4.0, 4.0], [1.0, 0.0, 0.0, 1.0]];
+        // Pixel 1's three misses saw sky radiance summing to 1 (the moments' w is a luminance moment, unused
+        // here).
+        let moments = [[0.0, 0.0, 0.0, 9.0], [1.0, 1.0, 1.0, 0.0]];
+        let inputs = OidnInputs::from_sums(2, 1, &accum, &albedo, &normal, &moments);
+        // OIDN gets the scattered part; the unscattered mean is kept apart.
+        assert_eq!(inputs.color, vec![[1.0, 2.0, 3.0], [0.25, 0.25, 0.25]]);
+        assert_eq!(inputs.unscattered, vec![[0.0; 3], [0.25, 0.25, 0.25]]);
         assert_eq!(inputs.albedo[0], [0.5; 3]);
         assert_eq!(inputs.albedo[1], [0.05; 3]);
         // The edge pixel's normal keeps its sub-pixel coverage (length 1/4), as OIDN asks.
-        assert_eq!(
-            inputs.normal,
-            vec![[0.0, 0.0, 1.0], [0.25, 0.0, 0.0], [0.0; 3]]
-        );
+        assert_eq!(inputs.normal, vec![[0.0, 0.0, 1.0], [0.25, 0.0, 0.0]]);
         assert_eq!(inputs.samples, 4);
         assert!(inputs.images().validate().is_ok());
     }

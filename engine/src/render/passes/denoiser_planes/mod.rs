@@ -74,7 +74,7 @@ impl DenoiserPlanesPass {
         let unpack_layout = compute_layout(
             ctx,
             "denoiser_unpack",
-            &[Read, Read, Read, Read, Read, ReadWrite, Params],
+            &[Read, Read, Read, Read, ReadWrite, Params],
         );
         let pipeline = |label, kernel: &ShaderModule, layout, entry| {
             crate::gpu::compute_pipeline(ctx, label, compose(kernel), &[Some(layout)], entry)
@@ -153,7 +153,6 @@ impl DenoiserPlanesPass {
                 output,
                 color,
                 &sources.accum,
-                &sources.normal_hits,
                 &sources.moments,
                 shown,
                 &self.params,

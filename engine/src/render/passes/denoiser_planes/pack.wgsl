@@ -1,6 +1,6 @@
 // An external denoiser's inputs (Open Image Denoise's) from the accumulation, written in GPU memory it shares:
-// per pixel the mean radiance less `unscattered` (the environment where no sample met a surface: exact, and
-// unpack.wgsl adds it back), first-hit albedo and first-hit normal (each sum over the samples
+// per pixel the mean scattered radiance (the mean minus what reached the camera unscattered, at least 0: that
+// part is exact and unpack.wgsl adds it back), first-hit albedo and first-hit normal (each sum over the samples
 // divided by the sample count, as oidn::inputs does on the host), sanitised as oidn::filter does (NaN -> 0;
 // radiance in [0, max_radiance], albedo in [0, 1], normal in [-1, 1]) and stored as tightly packed float3
 // planes, the layout of OIDN's FLOAT3 images.
@@ -36,19 +36,13 @@ fn sanitised(v: vec3<f32>, lo: f32, hi: f32) -> vec3<f32> {
     return out;
 }
 
-// The mean unscattered radiance where no sample met a surface (the environment seen directly, exact); 0 elsewhere,
-// where the denoiser takes the whole mean (at outlines it smooths the sky's coverage noise with the rest).
-fn unscattered(i: u32, n: f32) -> vec3<f32> {
-    return select(vec3<f32>(0.0), moments[i].rgb / n, normal_hits[i].w == 0.0);
-}
-
 @compute @workgroup_size(8, 8)
 fn pack(@builtin(global_invocation_id) gid: vec3<u32>) {
     if gid.x >= params.width || gid.y >= params.height { return; }
     let i = gid.y * params.width + gid.x;
     let sum = accum[i];
     let n = max(sum.w, 1.0);
-    let color = sanitised(max(sum.rgb / n - unscattered(i, n), vec3<f32>(0.0)), 0.0, params.max_radiance);
+    let color = sanitised(max(sum.rgb / n - moments[i].rgb / n, vec3<f32>(0.0)), 0.0, params.max_radiance);
     let albedo = sanitised(albedo_depth[i].rgb / n, 0.0, 1.0);
     let normal = sanitised(normal_hits[i].rgb / n, -1.0, 1.0);
     for (var c = 0u; c < 3u; c++) {

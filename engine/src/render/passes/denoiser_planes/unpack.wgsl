@@ -1,5 +1,5 @@
 // An external denoiser's output (Open Image Denoise's packed float3 image, in GPU memory it shares) plus the
-// exact radiance pack.wgsl left out (the environment where no sample met a surface), into the accumulation's layout with a sample count of 1, which
+// exact unscattered radiance pack.wgsl left out, into the accumulation's layout with a sample count of 1, which
 // the display's tone mapper reads unchanged. A pixel the denoiser returned non-finite keeps its noisy mean (the
 // colour plane OIDN was given); negative channels become 0 (as oidn::filter::repair does on the host).
 
@@ -14,11 +14,10 @@ struct Params {
 @group(0) @binding(0) var<storage, read> output_plane: array<f32>;
 @group(0) @binding(1) var<storage, read> color_plane: array<f32>;
 @group(0) @binding(2) var<storage, read> accum: array<vec4<f32>>;
-@group(0) @binding(3) var<storage, read> normal_hits: array<vec4<f32>>;
 // rgb: unscattered radiance summed over the samples.
-@group(0) @binding(4) var<storage, read> moments: array<vec4<f32>>;
-@group(0) @binding(5) var<storage, read_write> shown: array<vec4<f32>>;
-@group(0) @binding(6) var<uniform> params: Params;
+@group(0) @binding(3) var<storage, read> moments: array<vec4<f32>>;
+@group(0) @binding(4) var<storage, read_write> shown: array<vec4<f32>>;
+@group(0) @binding(5) var<uniform> params: Params;
 
 // By the bits, as in pack.wgsl: a compiler may assume finite floats in comparisons.
 fn is_finite(v: f32) -> bool {
@@ -36,8 +35,7 @@ fn unpack(@builtin(global_invocation_id) gid: vec3<u32>) {
     let denoised = vec3<f32>(output_plane[3u * i], output_plane[3u * i + 1u], output_plane[3u * i + 2u]);
     let noisy = vec3<f32>(color_plane[3u * i], color_plane[3u * i + 1u], color_plane[3u * i + 2u]);
     let finite = is_finite(denoised.x) && is_finite(denoised.y) && is_finite(denoised.z);
-    // As pack.wgsl's `unscattered`: set apart only where no sample met a surface.
-    let u = select(vec3<f32>(0.0), moments[i].rgb / max(accum[i].w, 1.0), normal_hits[i].w == 0.0);
+    let u = moments[i].rgb / max(accum[i].w, 1.0);
     var unscattered = vec3<f32>(0.0);
     for (var c = 0u; c < 3u; c++) {
         unscattered[c] = select(clamp(u[c], 0.0, params.max_radiance), 0.0, is_nan(u[c]));
