@@ -31,8 +31,9 @@ impl OidnInputs {
     ///
     /// OIDN gets the scattered radiance only (the mean minus the unscattered part, at least 0): left in, the
     /// sky and the lights seen directly, exact at any sample count, came back with the network's
-    /// low-frequency residue (FlightHelmet at 64 spp, H200: FLIP 0.0032 noisy, 0.0131 after OIDN high;
-    /// docs/BENCHMARKS.md).
+    /// low-frequency residue (FlightHelmet at 64 spp, H200: FLIP 0.0032 noisy, 0.0131 after OIDN high, 0.0029
+    /// with the split; docs/BENCHMARKS.md). Setting apart only the pixels no sample's surface met (the sky)
+    /// was worse: OIDN then saw a black background beside outlines that hold the sky's radiance.
     ///
     /// Samples that left the scene count as albedo 0 and normal 0. Measured against albedo 1 and against the
     /// environment's radiance clamped to 1 (the rule for emitters some renderers use), OIDN high at 4 spp,
