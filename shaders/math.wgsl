@@ -43,6 +43,20 @@ fn is_finite(x: f32) -> bool {
     return (bitcast<u32>(x) & 0x7f800000u) != 0x7f800000u;
 }
 
+// By the bits, like is_finite: a compiler that assumes finite floats may fold a comparison with NaN away.
+fn is_nan(x: f32) -> bool {
+    return (bitcast<u32>(x) & 0x7fffffffu) > 0x7f800000u;
+}
+
+// Each channel clamped to [lo, hi], NaN as 0 (the host's oidn::filter::sanitized).
+fn sanitised3(v: vec3<f32>, lo: f32, hi: f32) -> vec3<f32> {
+    var out = vec3<f32>(0.0);
+    for (var c = 0u; c < 3u; c++) {
+        out[c] = select(clamp(v[c], lo, hi), 0.0, is_nan(v[c]));
+    }
+    return out;
+}
+
 // Rust's f32::signum: the sign bit decides, so -0.0 gives -1.
 fn signum(x: f32) -> f32 {
     return select(1.0, -1.0, (bitcast<u32>(x) & 0x80000000u) != 0u);

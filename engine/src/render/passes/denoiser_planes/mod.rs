@@ -12,13 +12,13 @@ use bytemuck::{Pod, Zeroable};
 pub const PACK_KERNEL: ShaderModule = ShaderModule {
     name: "denoiser_pack",
     source: include_str!("pack.wgsl"),
-    requires: &[],
+    requires: &["math"],
 };
 
 pub const UNPACK_KERNEL: ShaderModule = ShaderModule {
     name: "denoiser_unpack",
     source: include_str!("unpack.wgsl"),
-    requires: &[],
+    requires: &["math"],
 };
 
 /// Radiance above this is clamped before denoising (here and on the host path): OIDN's HDR transfer must not

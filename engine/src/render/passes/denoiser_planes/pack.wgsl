@@ -23,28 +23,15 @@ struct Params {
 @group(0) @binding(6) var<storage, read_write> normal_plane: array<f32>;
 @group(0) @binding(7) var<uniform> params: Params;
 
-// By the bits: a comparison with NaN may be folded away by a compiler that assumes finite floats.
-fn is_nan(v: f32) -> bool {
-    return (bitcast<u32>(v) & 0x7fffffffu) > 0x7f800000u;
-}
-
-fn sanitised(v: vec3<f32>, lo: f32, hi: f32) -> vec3<f32> {
-    var out = vec3<f32>(0.0);
-    for (var c = 0u; c < 3u; c++) {
-        out[c] = select(clamp(v[c], lo, hi), 0.0, is_nan(v[c]));
-    }
-    return out;
-}
-
 @compute @workgroup_size(8, 8)
 fn pack(@builtin(global_invocation_id) gid: vec3<u32>) {
     if gid.x >= params.width || gid.y >= params.height { return; }
     let i = gid.y * params.width + gid.x;
     let sum = accum[i];
     let n = max(sum.w, 1.0);
-    let color = sanitised(max(sum.rgb / n - moments[i].rgb / n, vec3<f32>(0.0)), 0.0, params.max_radiance);
-    let albedo = sanitised(albedo_depth[i].rgb / n, 0.0, 1.0);
-    let normal = sanitised(normal_hits[i].rgb / n, -1.0, 1.0);
+    let color = sanitised3(max(sum.rgb / n - moments[i].rgb / n, vec3<f32>(0.0)), 0.0, params.max_radiance);
+    let albedo = sanitised3(albedo_depth[i].rgb / n, 0.0, 1.0);
+    let normal = sanitised3(normal_hits[i].rgb / n, -1.0, 1.0);
     for (var c = 0u; c < 3u; c++) {
         color_plane[3u * i + c] = color[c];
         albedo_plane[3u * i + c] = albedo[c];

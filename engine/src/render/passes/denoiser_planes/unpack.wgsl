@@ -19,15 +19,6 @@ struct Params {
 @group(0) @binding(4) var<storage, read_write> shown: array<vec4<f32>>;
 @group(0) @binding(5) var<uniform> params: Params;
 
-// By the bits, as in pack.wgsl: a compiler may assume finite floats in comparisons.
-fn is_finite(v: f32) -> bool {
-    return (bitcast<u32>(v) & 0x7f800000u) != 0x7f800000u;
-}
-
-fn is_nan(v: f32) -> bool {
-    return (bitcast<u32>(v) & 0x7fffffffu) > 0x7f800000u;
-}
-
 @compute @workgroup_size(8, 8)
 fn unpack(@builtin(global_invocation_id) gid: vec3<u32>) {
     if gid.x >= params.width || gid.y >= params.height { return; }
@@ -36,9 +27,6 @@ fn unpack(@builtin(global_invocation_id) gid: vec3<u32>) {
     let noisy = vec3<f32>(color_plane[3u * i], color_plane[3u * i + 1u], color_plane[3u * i + 2u]);
     let finite = is_finite(denoised.x) && is_finite(denoised.y) && is_finite(denoised.z);
     let u = moments[i].rgb / max(accum[i].w, 1.0);
-    var unscattered = vec3<f32>(0.0);
-    for (var c = 0u; c < 3u; c++) {
-        unscattered[c] = select(clamp(u[c], 0.0, params.max_radiance), 0.0, is_nan(u[c]));
-    }
+    let unscattered = sanitised3(u, 0.0, params.max_radiance);
     shown[i] = vec4<f32>(select(noisy, max(denoised, vec3<f32>(0.0)), finite) + unscattered, 1.0);
 }
