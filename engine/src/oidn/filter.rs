@@ -221,13 +221,7 @@ impl Oidn {
             .filters
             .as_ref()
             .expect("filters made before running them");
-        let start = Instant::now();
-        for &f in &filters.prefilters {
-            // SAFETY: a committed filter over live buffers.
-            unsafe { (self.lib.execute_filter)(f) };
-        }
-        self.check("prefiltering the albedo and normal")?;
-        Ok(ms_since(start))
+        self.run(&filters.prefilters, "prefiltering the albedo and normal")
     }
 
     fn run_main_filter(&self) -> Result<f64, OidnError> {
@@ -235,10 +229,17 @@ impl Oidn {
             .filters
             .as_ref()
             .expect("filters made before running them");
+        self.run(&[filters.beauty], "denoising")
+    }
+
+    /// Executes `filters` in order (each blocks until done); their milliseconds, or the error naming `what`.
+    fn run(&self, filters: &[library::Filter], what: &str) -> Result<f64, OidnError> {
         let start = Instant::now();
-        // SAFETY: a committed filter over live buffers.
-        unsafe { (self.lib.execute_filter)(filters.beauty) };
-        self.check("denoising")?;
+        for &f in filters {
+            // SAFETY: a committed filter over live buffers.
+            unsafe { (self.lib.execute_filter)(f) };
+        }
+        self.check(what)?;
         Ok(ms_since(start))
     }
 
