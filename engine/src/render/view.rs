@@ -41,8 +41,8 @@ fn next_generation() -> u64 {
 
 impl ViewTargets {
     /// The accumulation's sums an external denoiser reads, as handles another thread can hold.
-    pub fn denoiser_sources(&self) -> super::passes::denoiser_planes::DenoiserSources {
-        super::passes::denoiser_planes::DenoiserSources {
+    pub fn denoiser_sources(&self) -> DenoiserSources {
+        DenoiserSources {
             accum: self.accum.clone(),
             albedo_depth: self.albedo_depth.clone(),
             normal_hits: self.normal_hits.clone(),
@@ -219,4 +219,17 @@ impl PrimaryHit {
             barycentrics: [f32::from_bits(h[2]), f32::from_bits(h[3])],
         }
     }
+}
+
+/// The accumulation's sums a denoiser reads (its layout: radiance + count, albedo + depth, normal + hits,
+/// unscattered radiance + a luminance moment), as handles that can travel to another thread (the viewer's
+/// denoising worker).
+#[derive(Clone, Debug)]
+pub struct DenoiserSources {
+    pub accum: wgpu::Buffer,
+    pub albedo_depth: wgpu::Buffer,
+    pub normal_hits: wgpu::Buffer,
+    pub moments: wgpu::Buffer,
+    pub width: u32,
+    pub height: u32,
 }

@@ -8,6 +8,8 @@ use crate::gpu::GpuContext;
 use crate::gpu::bind::{Binding, bind_group, compute_layout, params_buffer};
 use crate::render::shaders::{ShaderModule, compose};
 use bytemuck::{Pod, Zeroable};
+// The accumulation buffers the pass reads (defined beside `ViewTargets`, which hands them out).
+pub use crate::render::view::DenoiserSources;
 
 pub const PACK_KERNEL: ShaderModule = ShaderModule {
     name: "denoiser_pack",
@@ -38,19 +40,6 @@ pub struct DenoiserPlanesParams {
     pub height: u32,
     pub max_radiance: f32,
     pub _pad: u32,
-}
-
-/// The accumulation's sums a denoiser reads (its layout: radiance + count, albedo + depth, normal + hits,
-/// unscattered radiance + a luminance moment), as handles that can travel to another thread (the viewer's
-/// denoising worker).
-#[derive(Clone, Debug)]
-pub struct DenoiserSources {
-    pub accum: wgpu::Buffer,
-    pub albedo_depth: wgpu::Buffer,
-    pub normal_hits: wgpu::Buffer,
-    pub moments: wgpu::Buffer,
-    pub width: u32,
-    pub height: u32,
 }
 
 pub struct DenoiserPlanesPass {
