@@ -150,7 +150,7 @@ impl Oidn {
         let start = Instant::now();
         let mut out = self.read(output, color.len())?;
         timings.download_ms = ms_since(start);
-        let repaired = repair(&mut out, || color);
+        let repaired = repair(&mut out, &color);
         if let Some(unscattered) = images.unscattered {
             use rayon::prelude::*;
             out.par_iter_mut().zip(unscattered).for_each(|(o, u)| {
@@ -201,10 +201,7 @@ impl Oidn {
             normal: true,
             shared: true,
         };
-        if self.filters.as_ref().is_none_or(|f| f.key != key) {
-            self.release_filters();
-            self.filters = Some(self.make_filters(key, Some(ctx))?);
-        }
+        self.filters_for(key, Some(ctx))?;
         let images = self.filters.as_ref().and_then(|f| f.shared.clone());
         Ok((images.expect("made shared above"), ms_since(start)))
     }
@@ -307,10 +304,7 @@ impl Oidn {
             normal: images.normal.is_some(),
             shared: false,
         };
-        if self.filters.as_ref().is_none_or(|f| f.key != key) {
-            self.release_filters();
-            self.filters = Some(self.make_filters(key, None)?);
-        }
+        self.filters_for(key, None)?;
         timings.setup_ms = ms_since(start);
 
         let lib = self.lib;
@@ -408,6 +402,16 @@ impl Oidn {
             device: self.device_description(),
             message: "sharing GPU memory needs POSIX file descriptors".into(),
         })
+    }
+
+    /// Makes the filters for `key` unless the current ones were made for it (committing filters is OIDN's
+    /// expensive step; they are kept across denoises).
+    fn filters_for(&mut self, key: FilterKey, ctx: Option<&GpuContext>) -> Result<(), OidnError> {
+        if self.filters.as_ref().is_none_or(|f| f.key != key) {
+            self.release_filters();
+            self.filters = Some(self.make_filters(key, ctx)?);
+        }
+        Ok(())
     }
 
     /// The filters for `key`, over new OIDN buffers or, for shared images, over Vulkan memory of `ctx`'s
@@ -592,21 +596,18 @@ unsafe fn host_pixels<'a>(lib: &Library, buffer: library::Buffer, pixels: usize)
     unsafe { std::slice::from_raw_parts((lib.get_buffer_data)(buffer).cast(), pixels) }
 }
 
-/// Replaces each non-finite output pixel by its input (`input` is called only when there is one) and clamps
-/// negative channels to 0; returns how many pixels were replaced.
-pub(crate) fn repair(out: &mut [[f32; 3]], input: impl FnOnce() -> Vec<[f32; 3]>) -> usize {
+/// Replaces each non-finite output pixel by its input and clamps negative channels to 0; returns how many
+/// pixels were replaced.
+fn repair(out: &mut [[f32; 3]], input: &[[f32; 3]]) -> usize {
     use rayon::prelude::*;
-    let finite = |p: &[f32; 3]| p.iter().all(|v| v.is_finite());
-    let broken = out.par_iter().filter(|p| !finite(p)).count();
-    let input = if broken > 0 { input() } else { Vec::new() };
-    out.par_iter_mut().enumerate().for_each(|(i, o)| {
-        *o = if finite(o) {
-            o.map(|v| v.max(0.0))
-        } else {
-            input[i]
-        };
-    });
-    broken
+    out.par_iter_mut()
+        .zip(input)
+        .map(|(o, i)| {
+            let finite = o.iter().all(|v| v.is_finite());
+            *o = if finite { o.map(|v| v.max(0.0)) } else { *i };
+            usize::from(!finite)
+        })
+        .sum()
 }
 
 /// `v` clamped to [lo, hi]; NaN becomes 0.

@@ -42,8 +42,8 @@ type Key = (u64, u64, u32, DenoiseOptions);
 struct State {
     oidn: Option<Result<Oidn, OidnError>>,
     last: Option<(Key, OidnImage)>,
-    /// Why denoising from shared GPU memory failed once (then the host path serves every later image).
-    shared_failed: Option<String>,
+    /// Denoising from shared GPU memory failed once (then the host path serves every later image).
+    shared_failed: bool,
 }
 
 /// The app's OIDN device (a resource of every [`crate::headless::HeadlessApp`]).
@@ -108,18 +108,9 @@ impl HeadlessOidn {
         let Some(Ok(oidn)) = state.oidn.as_mut() else {
             unreachable!("opened above")
         };
-        let mut shared = None;
-        if state.shared_failed.is_none() && oidn.shares_memory_with(ctx) {
-            match super::shared::denoise_view(oidn, ctx, &view.denoiser_sources(), &options) {
-                Ok(d) => shared = Some(d),
-                Err(e) => {
-                    tracing::warn!(
-                        "{e}; Open Image Denoise copies its images through the host instead"
-                    );
-                    state.shared_failed = Some(e.to_string());
-                }
-            }
-        }
+        let shared = super::shared::attempt(oidn, ctx, &mut state.shared_failed, |o| {
+            super::shared::denoise_view(o, ctx, &view.denoiser_sources(), &options)
+        });
         let shared_memory = shared.is_some();
         let (denoised, readback_s, samples) = match shared {
             Some(d) => (d, 0.0, accumulation.samples),

@@ -78,3 +78,25 @@ fn filter_in_place(
     (timings.prefilter_ms, timings.filter_ms) = oidn.execute()?;
     Ok((images, timings))
 }
+
+/// Runs `denoise` in shared GPU memory where `oidn` and `ctx` allow it and it has not failed before; `None`
+/// means "use the host path": not possible here, or it just failed (then `failed` is set, a warning says why,
+/// and later calls go straight to the host path).
+pub fn attempt<T>(
+    oidn: &mut Oidn,
+    ctx: &GpuContext,
+    failed: &mut bool,
+    denoise: impl FnOnce(&mut Oidn) -> Result<T, OidnError>,
+) -> Option<T> {
+    if *failed || !oidn.shares_memory_with(ctx) {
+        return None;
+    }
+    match denoise(oidn) {
+        Ok(result) => Some(result),
+        Err(e) => {
+            tracing::warn!("{e}; Open Image Denoise copies its images through the host instead");
+            *failed = true;
+            None
+        }
+    }
+}

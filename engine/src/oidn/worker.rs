@@ -164,24 +164,16 @@ fn run_on_gpu_buffers<T>(
     options: &DenoiseOptions,
     done: &mut Done<T>,
 ) {
-    if !*shared_failed && oidn.shares_memory_with(ctx) {
-        match super::shared::denoise_into(oidn, ctx, sources, options, shown) {
-            Ok(timings) => {
-                done.shared_memory = true;
-                done.result = Ok(Denoised {
-                    color: Vec::new(),
-                    timings,
-                    repaired: 0,
-                });
-                return;
-            }
-            Err(e) => {
-                tracing::warn!(
-                    "{e}; Open Image Denoise copies its images through the host instead"
-                );
-                *shared_failed = true;
-            }
-        }
+    if let Some(timings) = super::shared::attempt(oidn, ctx, shared_failed, |o| {
+        super::shared::denoise_into(o, ctx, sources, options, shown)
+    }) {
+        done.shared_memory = true;
+        done.result = Ok(Denoised {
+            color: Vec::new(),
+            timings,
+            repaired: 0,
+        });
+        return;
     }
     let (inputs, readback_s) = super::inputs::read_sources(ctx, sources);
     done.readback_ms = readback_s * 1e3;
