@@ -481,6 +481,38 @@ impl SceneAsset {
         shown
     }
 
+    /// By node index: whether the node draws a mesh that never moves or changes shape: displayed, its mesh
+    /// neither skinned nor morphed, and no animation channel moving it or an ancestor. (The editor can still
+    /// move one; the renderer notices that.)
+    pub fn still_nodes(&self) -> Vec<bool> {
+        let mut moved = vec![false; self.nodes.len()];
+        for channel in self.animations.iter().flat_map(|clip| &clip.channels) {
+            if !matches!(channel.values, ChannelValues::Weights { .. })
+                && let Some(m) = moved.get_mut(channel.node)
+            {
+                *m = true;
+            }
+        }
+        // Roots first: a moved parent moves its subtree.
+        let mut stack: Vec<(usize, bool)> = self.roots.iter().map(|&r| (r, false)).collect();
+        let mut still = vec![false; self.nodes.len()];
+        let mut seen = vec![false; self.nodes.len()];
+        while let Some((n, parent_moves)) = stack.pop() {
+            if n >= self.nodes.len() || std::mem::replace(&mut seen[n], true) {
+                continue;
+            }
+            let moves = parent_moves || moved[n];
+            let node = &self.nodes[n];
+            still[n] = !moves
+                && node
+                    .mesh
+                    .and_then(|m| self.meshes.get(m))
+                    .is_some_and(|m| !m.is_deformable());
+            stack.extend(node.children.iter().map(|&c| (c, moves)));
+        }
+        still
+    }
+
     /// World-space bounds of every displayed mesh instance in the rest pose.
     pub fn rest_bounds(&self) -> Option<(Vec3, Vec3)> {
         let world = self.rest_world_matrices();
@@ -510,3 +542,72 @@ impl SceneAsset {
 /// The loaded scene, shared by the systems that read asset data.
 #[derive(Resource, Clone)]
 pub struct SceneAssets(pub Arc<SceneAsset>);
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn triangle_mesh(morphed: bool) -> MeshData {
+        MeshData {
+            positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y],
+            triangles: vec![[0, 1, 2]],
+            morph_targets: if morphed {
+                vec![Default::default()]
+            } else {
+                Vec::new()
+            },
+            ..Default::default()
+        }
+    }
+
+    /// Roots 0 -> 1 -> {2, 3 (no mesh)} and 4 -> 5 (a morphed mesh); node 6 is in no displayed scene. A
+    /// translation channel on node 1 moves it and its subtree; a weights channel on node 4 moves nothing.
+    #[test]
+    fn still_nodes_are_the_displayed_rigid_meshes_no_channel_moves() {
+        let node = |mesh: Option<usize>, parent: Option<usize>, children: Vec<usize>| NodeData {
+            mesh,
+            parent,
+            children,
+            ..Default::default()
+        };
+        let scene = SceneAsset {
+            meshes: vec![triangle_mesh(false), triangle_mesh(true)],
+            nodes: vec![
+                node(Some(0), None, vec![1]),
+                node(Some(0), Some(0), vec![2, 3]),
+                node(Some(0), Some(1), vec![]),
+                node(None, Some(1), vec![]),
+                node(Some(0), None, vec![5]),
+                node(Some(1), Some(4), vec![]),
+                node(Some(0), None, vec![]),
+            ],
+            roots: vec![0, 4],
+            animations: vec![AnimationClip {
+                name: "move".into(),
+                channels: vec![
+                    AnimationChannel {
+                        node: 1,
+                        interpolation: Interpolation::Linear,
+                        times: vec![0.0, 1.0],
+                        values: ChannelValues::Translation(vec![Vec3::ZERO, Vec3::X]),
+                    },
+                    AnimationChannel {
+                        node: 4,
+                        interpolation: Interpolation::Linear,
+                        times: vec![0.0],
+                        values: ChannelValues::Weights {
+                            values: vec![0.5],
+                            count: 1,
+                        },
+                    },
+                ],
+                duration: 1.0,
+            }],
+            ..Default::default()
+        };
+        assert_eq!(
+            scene.still_nodes(),
+            vec![true, false, false, false, true, false, false]
+        );
+    }
+}
