@@ -227,8 +227,8 @@ pub struct BenchArgs {
     /// Shorthand for --scene crowd (64 CesiumMan + 32 Fox, animated, through the frame loop).
     #[arg(long)]
     pub crowd: bool,
-    /// BVH layout of static meshes.
-    #[arg(long, value_enum, default_value_t = StaticBvh::Wide)]
+    /// BVH layout of static meshes (see `render --help`).
+    #[arg(long, value_enum, default_value_t = StaticBvh::Merged)]
     pub static_bvh: StaticBvh,
     /// Override the suite's frame-loop sizes with one size.
     #[arg(long, value_parser = at_least_one(), allow_negative_numbers = true)]
@@ -377,8 +377,10 @@ pub struct SceneArgs {
     /// up to float rounding.
     #[arg(long, value_enum, default_value_t = DeformArg::Auto)]
     pub deform: DeformArg,
-    /// BVH layout of static meshes: compressed 8-wide nodes, or the refittable BVH2 deformable meshes use.
-    #[arg(long, value_enum, default_value_t = StaticBvh::Wide)]
+    /// BVH layout of static meshes: compressed 8-wide trees with the instances that never move merged into
+    /// one (fastest: overlapping meshes stop costing a descent each), the same without the merge, or the
+    /// refittable BVH2 deformable meshes use. The image is the same up to float rounding.
+    #[arg(long, value_enum, default_value_t = StaticBvh::Merged)]
     pub static_bvh: StaticBvh,
 }
 
@@ -440,16 +442,24 @@ impl From<DenoiseAovs> for raykin::oidn::AuxMode {
 
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
 pub enum StaticBvh {
+    /// One compressed 8-wide tree per mesh, and the instances that never move merged into one more.
+    Merged,
+    /// One compressed 8-wide tree per mesh, every instance through the top level.
     Wide,
+    /// The refittable BVH2 deformable meshes use, per mesh.
     Binary,
 }
 
-impl From<StaticBvh> for raykin::bvh::StaticLayout {
-    fn from(v: StaticBvh) -> Self {
-        match v {
-            StaticBvh::Wide => Self::Wide,
-            StaticBvh::Binary => Self::Binary,
+impl StaticBvh {
+    pub fn layout(self) -> raykin::bvh::StaticLayout {
+        match self {
+            StaticBvh::Merged | StaticBvh::Wide => raykin::bvh::StaticLayout::Wide,
+            StaticBvh::Binary => raykin::bvh::StaticLayout::Binary,
         }
+    }
+
+    pub fn merged(self) -> bool {
+        self == StaticBvh::Merged
     }
 }
 

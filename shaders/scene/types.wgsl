@@ -14,7 +14,11 @@ struct Instance {
     mesh: u32,
     // This instance's emissive triangles in the light list: lights[first_light .. first_light + light_count],
     // sorted by triangle slot.
-    first_light: u32, light_count: u32, _p0: u32,
+    first_light: u32, light_count: u32,
+    // NONE, except on the merged static tree's pseudo-instance: its (member instance, member triangle slot) pairs
+    // in `triangles`, two per entry: slot s's in entry merged_origins + s / 2, half s % 2
+    // (engine/src/render/gpu_scene/static_merge.rs).
+    merged_origins: u32,
 }
 
 struct Mesh {

@@ -16,6 +16,20 @@ fn trace_blas(instance: u32, ray_world: Ray, hit: ptr<function, Hit>, any_hit: b
     return trace_blas_binary(mesh, instance, o, d, hit, any_hit);
 }
 
+// A hit on the merged static tree as the member instance and its mesh's own triangle slot: all that shading,
+// the light list and picking know. Once per ray, outside the traversal loops.
+fn member_hit(hit: Hit) -> Hit {
+    if hit.instance == NONE { return hit; }
+    let origins = instances[hit.instance].merged_origins;
+    if origins == NONE { return hit; }
+    let pair = triangles[origins + (hit.triangle >> 1u)];
+    let origin = select(pair.xy, pair.zw, (hit.triangle & 1u) == 1u);
+    var member = hit;
+    member.instance = origin.x;
+    member.triangle = origin.y;
+    return member;
+}
+
 fn trace(ray: Ray, t_max: f32, any_hit: bool) -> Hit {
     var hit = Hit(t_max, NONE, 0u, vec2<f32>(0.0));
     let inv_d = safe_inverse(ray.dir);
@@ -38,7 +52,7 @@ fn trace(ray: Ray, t_max: f32, any_hit: bool) -> Hit {
                 if k == count_a && !(tb < hit.t) { break; }
                 instance = n.b.index + (k - count_a);
             }
-            if trace_blas(instance, ray, &hit, any_hit) && any_hit { return hit; }
+            if trace_blas(instance, ray, &hit, any_hit) && any_hit { return member_hit(hit); }
         }
         let go_a = n.a.count == 0u && ta < hit.t;
         let go_b = n.b.count == 0u && tb < hit.t;
@@ -59,5 +73,5 @@ fn trace(ray: Ray, t_max: f32, any_hit: bool) -> Hit {
             node = stack[sp];
         }
     }
-    return hit;
+    return member_hit(hit);
 }

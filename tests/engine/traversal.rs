@@ -9,45 +9,129 @@ use raykin::camera::CameraChoice;
 use raykin::render::RenderSettings;
 use std::sync::Arc;
 
-fn render_both(file: &str, size: u32, spp: u32) -> (Vec<[f32; 3]>, Vec<[f32; 3]>) {
+fn load(file: &str) -> Arc<raykin::scene::SceneAsset> {
     let path = shared_assets().join(file);
-    let scene = Arc::new(
+    Arc::new(
         raykin::scene::load_gltf(&path, &Default::default())
             .unwrap_or_else(|e| panic!("{}: {e}", path.display())),
-    );
+    )
+}
+
+fn settings(size: u32, layout: StaticLayout, merge_static: bool) -> RenderSettings {
+    RenderSettings {
+        width: size,
+        height: size,
+        static_bvh: layout,
+        merge_static,
+        ..Default::default()
+    }
+}
+
+/// Per-mesh wide trees (no merge) and per-mesh BVH2s.
+fn render_both(file: &str, size: u32, spp: u32) -> (Vec<[f32; 3]>, Vec<[f32; 3]>) {
+    let scene = load(file);
     let (ctx, _gpu) = gpu();
     let image = |layout| {
-        let settings = RenderSettings {
-            width: size,
-            height: size,
-            static_bvh: layout,
-            ..Default::default()
-        };
-        render(&ctx, &scene, settings, &CameraChoice::Auto, spp)
+        render(
+            &ctx,
+            &scene,
+            settings(size, layout, false),
+            &CameraChoice::Auto,
+            spp,
+        )
     };
     (image(StaticLayout::Wide), image(StaticLayout::Binary))
 }
 
-fn assert_same_image(file: &str, size: u32, spp: u32) {
-    let (wide, binary) = render_both(file, size, spp);
-    assert_all_finite(&wide, file);
-    let differing = wide.iter().zip(&binary).filter(|(a, b)| a != b).count();
-    // Equal-distance hits on coplanar triangles may resolve differently between the two traversal orders;
-    // anything beyond a stray pixel is a traversal bug (a missed subtree shows as a hole).
+/// Equal-distance hits on coplanar triangles may resolve differently between two traversal orders over the
+/// same triangles: a stray pixel, no more. Anything beyond is a traversal bug (a missed subtree shows as a hole).
+fn assert_similar(file: &str, what: [&str; 2], a: &[[f32; 3]], b: &[[f32; 3]]) {
+    assert_all_finite(a, file);
+    let differing = a.iter().zip(b).filter(|(x, y)| x != y).count();
     assert!(
-        differing * 200 <= wide.len(),
-        "{file}: {differing} of {} pixels differ between the wide and binary BVHs",
-        wide.len()
+        differing * 200 <= a.len(),
+        "{file}: {differing} of {} pixels differ between the {} and {} BVHs",
+        a.len(),
+        what[0],
+        what[1]
     );
-    let (mw, mb) = (mean_rgb(&wide), mean_rgb(&binary));
+    let (ma, mb) = (mean_rgb(a), mean_rgb(b));
     for c in 0..3 {
         assert!(
-            (mw[c] - mb[c]).abs() <= 1e-3 * mb[c].max(1e-3),
-            "{file}: channel {c} mean {} (wide) vs {} (binary)",
-            mw[c],
-            mb[c]
+            (ma[c] - mb[c]).abs() <= 1e-3 * mb[c].max(1e-3),
+            "{file}: channel {c} mean {} ({}) vs {} ({})",
+            ma[c],
+            what[0],
+            mb[c],
+            what[1]
         );
     }
+}
+
+/// For a merged tree against per-mesh trees: the merged tree intersects world-space copies of the
+/// triangles, so a hit's distance and barycentrics differ in their last bits, and so does everything shaded
+/// from them; a path whose Russian roulette or a grazing bounce decides otherwise is rare. At most 1% of
+/// the pixels may differ by more than 1e-3 relative, and the means by 0.2%; a missed member or a wrong
+/// mapping back changes far more (a whole object's pixels).
+fn assert_close(file: &str, what: [&str; 2], a: &[[f32; 3]], b: &[[f32; 3]]) {
+    assert_all_finite(a, file);
+    let far = a
+        .iter()
+        .zip(b)
+        .filter(|(x, y)| (0..3).any(|c| (x[c] - y[c]).abs() > 1e-3 * y[c].abs().max(1e-2)))
+        .count();
+    assert!(
+        far * 100 <= a.len(),
+        "{file}: {far} of {} pixels differ by more than 1e-3 between the {} and {} BVHs",
+        a.len(),
+        what[0],
+        what[1]
+    );
+    let (ma, mb) = (mean_rgb(a), mean_rgb(b));
+    for c in 0..3 {
+        assert!(
+            (ma[c] - mb[c]).abs() <= 2e-3 * mb[c].max(1e-3),
+            "{file}: channel {c} mean {} ({}) vs {} ({})",
+            ma[c],
+            what[0],
+            mb[c],
+            what[1]
+        );
+    }
+}
+
+fn assert_same_image(file: &str, size: u32, spp: u32) {
+    let (wide, binary) = render_both(file, size, spp);
+    assert_similar(file, ["wide", "binary"], &wide, &binary);
+}
+
+/// Renders `file` with the static instances merged and without; returns the merge's members (node, mesh).
+fn assert_merge_keeps_the_image(file: &str, size: u32, spp: u32) -> Vec<(u32, u32)> {
+    let scene = load(file);
+    let (ctx, _gpu) = gpu();
+    let mut merged = raykin::headless::HeadlessApp::new(
+        ctx.clone(),
+        scene.clone(),
+        settings(size, StaticLayout::Wide, true),
+        &CameraChoice::Auto,
+    )
+    .expect("scene uploads");
+    merged.accumulate(spp, 64, |_| {});
+    let members = merged
+        .gpu_scene()
+        .merge
+        .as_ref()
+        .map(|m| m.members.iter().map(|m| (m.node, m.mesh)).collect())
+        .unwrap_or_default();
+    let per_mesh = render(
+        &ctx,
+        &scene,
+        settings(size, StaticLayout::Wide, false),
+        &CameraChoice::Auto,
+        spp,
+    );
+    assert_close(file, ["merged", "per-mesh"], &merged.radiance(), &per_mesh);
+    members
 }
 
 #[test]
@@ -63,6 +147,133 @@ fn alpha_blend_test_wide_equals_binary() {
         32,
         4,
     );
+}
+
+/// FlightHelmet's six meshes overlap (shell, straps, lenses, stand): all six are merged, and the image is the
+/// per-mesh trees' (same paths: the merge maps every hit back to the member's own triangle slot, so shading,
+/// textures and the light list see what they saw).
+#[test]
+fn merged_static_tree_gives_the_per_mesh_image() {
+    let members = assert_merge_keeps_the_image("FlightHelmet/glTF/FlightHelmet.gltf", 32, 4);
+    assert_eq!(members.len(), 6, "{members:?}");
+    // The Cornell box's light is a member: next-event estimation and MIS find it through the mapped hits.
+    let members = assert_merge_keeps_the_image("CornellBox/CornellBox.glb", 32, 8);
+    assert!(members.len() >= 2, "{members:?}");
+}
+
+/// The merged triangles skip the alpha test: meshes with an alpha-masked material stay outside the merge, and
+/// their cut-outs render as before.
+#[test]
+fn alpha_masked_meshes_stay_out_of_the_merge() {
+    let file = "AlphaBlendModeTest/glTF-Binary/AlphaBlendModeTest.glb";
+    let members = assert_merge_keeps_the_image(file, 32, 4);
+    let scene = load(file);
+    let masked = |mesh: u32| {
+        scene.meshes[mesh as usize]
+            .triangle_materials
+            .iter()
+            .any(|&m| {
+                scene
+                    .materials
+                    .get(m as usize)
+                    .is_some_and(|m| matches!(m.alpha_mode, raykin::scene::AlphaMode::Mask(_)))
+            })
+    };
+    let masked_nodes = scene
+        .nodes
+        .iter()
+        .filter(|n| n.mesh.is_some_and(|m| masked(m as u32)))
+        .count();
+    assert!(masked_nodes > 0, "the test file has masked meshes");
+    assert!(members.len() >= 2, "{members:?}");
+    assert!(
+        members.iter().all(|&(_, mesh)| !masked(mesh)),
+        "{members:?}"
+    );
+}
+
+/// A member that moves after all (the inspector) leaves the merge for good, the rest is rebuilt in place, and
+/// the image is that of a scene file with the node moved (traced without the merge).
+#[test]
+fn a_moved_member_leaves_the_merge_and_renders_where_it_went() {
+    use raykin::scene::{SceneNode, Transform};
+    let file = "CornellBox/CornellBox.glb";
+    let scene = load(file);
+    let (ctx, _gpu) = gpu();
+    let mut app = raykin::headless::HeadlessApp::new(
+        ctx.clone(),
+        scene.clone(),
+        settings(32, StaticLayout::Wide, true),
+        &CameraChoice::Auto,
+    )
+    .expect("scene uploads");
+    app.step();
+    let before: Vec<u32> = app
+        .gpu_scene()
+        .merge
+        .as_ref()
+        .expect("merged")
+        .members
+        .iter()
+        .map(|m| m.node)
+        .collect();
+    assert!(before.len() >= 3, "{before:?}");
+    // Move the second member: a box, not the room.
+    let moved = before[1];
+    let offset = glam::Vec3::new(0.07, 0.0, 0.05) * scene_size(&scene);
+    let world = app.app.world_mut();
+    let entity = world
+        .query::<(bevy_ecs::entity::Entity, &SceneNode)>()
+        .iter(world)
+        .find(|(_, n)| n.node == moved as usize)
+        .map(|(e, _)| e)
+        .expect("the member's entity");
+    world
+        .get_mut::<Transform>(entity)
+        .expect("placed")
+        .translation += offset;
+    app.step();
+    app.restart_accumulation();
+    app.accumulate(8, 64, |_| {});
+    let after: Vec<u32> = app
+        .gpu_scene()
+        .merge
+        .as_ref()
+        .expect("still merged")
+        .members
+        .iter()
+        .map(|m| m.node)
+        .collect();
+    let expected: Vec<u32> = before.iter().copied().filter(|&n| n != moved).collect();
+    assert_eq!(after, expected);
+
+    let mut edited = (*scene).clone();
+    edited.nodes[moved as usize].transform.translation += offset;
+    let reference = render(
+        &ctx,
+        &Arc::new(edited),
+        settings(32, StaticLayout::Wide, false),
+        &CameraChoice::Auto,
+        8,
+    );
+    let unmoved = render(
+        &ctx,
+        &scene,
+        settings(32, StaticLayout::Wide, false),
+        &CameraChoice::Auto,
+        8,
+    );
+    let image = app.radiance();
+    assert!(
+        image.iter().zip(&unmoved).filter(|(a, b)| a != b).count() * 20 > image.len(),
+        "the move shows"
+    );
+    assert_close(file, ["moved member", "edited file"], &image, &reference);
+}
+
+fn scene_size(scene: &raykin::scene::SceneAsset) -> f32 {
+    let (lo, hi) = scene.rest_bounds().expect("geometry");
+    (hi - lo).max_element()
 }
 
 #[test]

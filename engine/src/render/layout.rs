@@ -42,7 +42,9 @@ pub struct GpuInstance {
     /// sorted by triangle slot (how a BSDF-sampled hit finds its light for MIS).
     pub first_light: u32,
     pub light_count: u32,
-    pub _pad: u32,
+    /// `NONE`, except on the merged static tree's pseudo-instance: where its hits' (member instance, member
+    /// triangle slot) pairs sit in the triangle buffer (`gpu_scene::static_merge::StaticMerge::origins`).
+    pub merged_origins: u32,
 }
 
 impl GpuInstance {
@@ -60,7 +62,7 @@ impl GpuInstance {
             mesh,
             first_light: 0,
             light_count: 0,
-            _pad: 0,
+            merged_origins: NONE,
         }
     }
 }

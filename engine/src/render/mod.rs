@@ -72,6 +72,7 @@ pub fn insert_resources(
         scene,
         settings.bvh_quality,
         settings.static_bvh,
+        settings.merge_static,
         binding_limit,
     )?;
     let baked = environment::bake(&settings.environment, gpu_scene.binding_limit)

@@ -7,8 +7,9 @@ use crate::animation::{DeformedElsewhere, DeformedMeshes};
 use crate::bvh::MeshBvh;
 use crate::bvh::refit::BvhStats;
 use crate::gpu::GpuContext;
+use crate::render::layout::NONE;
 use crate::scene::{
-    ActiveVariant, GlobalTransform, Materials, MeshInstance, SceneAssets, SkinnedMesh,
+    ActiveVariant, GlobalTransform, Materials, MeshInstance, SceneAssets, SceneNode, SkinnedMesh,
 };
 use bevy_ecs::prelude::*;
 
@@ -18,6 +19,16 @@ use bevy_ecs::prelude::*;
 pub struct GeometryChanged(pub bool);
 
 pub use super::gpu_scene::InstanceMap;
+
+/// What [`update_instances`] reads of a mesh instance: placement, mesh, skin, and the glTF node (by which the
+/// merged static instances are recognised).
+type PlacedMesh = (
+    Entity,
+    &'static GlobalTransform,
+    &'static MeshInstance,
+    Option<&'static SkinnedMesh>,
+    Option<&'static SceneNode>,
+);
 
 /// Collects mesh instances; rebuilds the TLAS and re-uploads instances when any placement or deformed mesh
 /// changed, and restarts accumulation.
@@ -30,19 +41,14 @@ pub fn update_instances(
     mut geometry: ResMut<GeometryChanged>,
     mut accumulation: ResMut<Accumulation>,
     mut stats: ResMut<BvhStats>,
-    instances: Query<(
-        Entity,
-        &GlobalTransform,
-        &MeshInstance,
-        Option<&SkinnedMesh>,
-    )>,
+    instances: Query<PlacedMesh>,
 ) {
     let start = std::time::Instant::now();
     stats.last_tlas_seconds = 0.0;
     // Skinned vertices are already in world space (the joint matrices place them).
     let mut placed: Vec<(InstanceInput, Entity)> = instances
         .iter()
-        .map(|(e, g, m, skinned)| {
+        .map(|(e, g, m, skinned, node)| {
             let world = if skinned.is_some() {
                 glam::Mat4::IDENTITY
             } else {
@@ -51,6 +57,7 @@ pub fn update_instances(
             let input = InstanceInput {
                 world,
                 mesh: m.mesh as u32,
+                node: node.map_or(NONE, |n| n.node as u32),
             };
             (input, e)
         })
@@ -66,16 +73,22 @@ pub fn update_instances(
     });
     let (inputs, entities): (Vec<InstanceInput>, Vec<Entity>) = placed.into_iter().unzip();
     let moved = std::mem::take(&mut geometry.0);
-    if inputs == map.last_inputs && !moved {
+    if inputs == map.last_inputs && !moved && !scene.merge_needs_check() {
         return;
     }
     if let Err(e) = scene.update_instances(&ctx, &assets.0, &inputs) {
         tracing::error!("top-level BVH: {e}");
     }
+    // The merged static tree's pseudo-instance is no entity (its hits become its members').
     map.entities = scene
         .instance_order
         .iter()
-        .map(|&i| entities[i as usize])
+        .map(|&i| {
+            entities
+                .get(i as usize)
+                .copied()
+                .unwrap_or(Entity::PLACEHOLDER)
+        })
         .collect();
     map.last_inputs = inputs;
     accumulation.restart();

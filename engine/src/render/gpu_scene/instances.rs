@@ -5,6 +5,7 @@ use super::GpuScene;
 use super::light_tree::LightBounds;
 use super::lights::WeightedLight;
 use super::packing::{emissive_slots, gpu_material, luminance};
+use super::static_merge::{self, MergeMember};
 use crate::bvh::FlatBvh;
 use crate::gpu::GpuContext;
 use crate::gpu::bind::write_or_grow;
@@ -13,35 +14,45 @@ use crate::scene::SceneAsset;
 use bevy_ecs::prelude::{Entity, Resource};
 use bytemuck::Zeroable;
 use glam::{Mat4, Vec3};
+use std::collections::HashMap;
 
-/// Per-instance data the renderer needs each frame: world matrix and mesh.
+/// Per-instance data the renderer needs each frame: world matrix, mesh, and the glTF node it draws (`NONE`
+/// for instances of no node), by which the merged static instances are recognised.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct InstanceInput {
     pub world: Mat4,
     pub mesh: u32,
+    pub node: u32,
 }
 
 impl GpuScene {
-    /// Uploads instances (in TLAS leaf order), the TLAS and the light list's triangles for this frame's
-    /// placements.
+    /// Uploads instances (the merged static ones first, then the top-level leaves in tree order), the TLAS and
+    /// the light list's triangles for this frame's placements.
     pub fn update_instances(
         &mut self,
         ctx: &GpuContext,
         scene: &SceneAsset,
         inputs: &[InstanceInput],
     ) -> Result<(), crate::bvh::BvhTooDeep> {
-        let boxes: Vec<(Vec3, Vec3)> = inputs
+        let members = self.merged_inputs(ctx, scene, inputs);
+        let mut merged = vec![false; inputs.len()];
+        members.iter().for_each(|&i| merged[i] = true);
+        let leaves: Vec<usize> = (0..inputs.len()).filter(|&i| !merged[i]).collect();
+        let mut boxes: Vec<(Vec3, Vec3)> = leaves
             .iter()
-            .map(|i| {
-                let slot = &self.mesh_slots[i.mesh as usize];
+            .map(|&i| {
+                let input = &inputs[i];
+                let slot = &self.mesh_slots[input.mesh as usize];
                 let (lo, hi) = slot
                     .deformed_bounds
                     .unwrap_or_else(|| slot.blas.root_bounds());
-                transform_box(i.world, lo, hi)
+                transform_box(input.world, lo, hi)
             })
             .collect();
+        // The merged tree is the last leaf input.
+        boxes.extend(self.merge.as_ref().map(|m| m.bounds));
         let tlas = crate::bvh::build_tlas(&boxes)?;
-        self.upload_instances(ctx, scene, inputs, tlas);
+        self.upload_placements(ctx, scene, inputs, &members, &leaves, tlas);
         let (lo, hi) = boxes.iter().fold((Vec3::MAX, Vec3::MIN), |(lo, hi), b| {
             (lo.min(b.0), hi.max(b.1))
         });
@@ -54,9 +65,103 @@ impl GpuScene {
         Ok(())
     }
 
+    /// Whether a material edit or variant switch is waiting to be checked against the merge.
+    pub fn merge_needs_check(&self) -> bool {
+        self.merge_materials_changed
+    }
+
+    /// The inputs the merge covers, in member order (empty without a merge). Members missing from `inputs`,
+    /// moved away from where they were merged, or (after a material change) needing the alpha test leave the
+    /// merge; the rest is rebuilt into its room, or the merge is dropped when fewer than two remain.
+    fn merged_inputs(
+        &mut self,
+        ctx: &GpuContext,
+        scene: &SceneAsset,
+        inputs: &[InstanceInput],
+    ) -> Vec<usize> {
+        let check_materials = std::mem::take(&mut self.merge_materials_changed);
+        let Some(merge) = &self.merge else {
+            return Vec::new();
+        };
+        let by_node: HashMap<u32, usize> = inputs
+            .iter()
+            .enumerate()
+            .filter(|(_, input)| input.node != NONE)
+            .map(|(i, input)| (input.node, i))
+            .collect();
+        let mut alpha_tested = HashMap::new();
+        let mut kept = Vec::with_capacity(merge.members.len());
+        for member in &merge.members {
+            let found = by_node.get(&member.node).copied().filter(|&i| {
+                let input = &inputs[i];
+                input.mesh == member.mesh
+                    && static_merge::same_placement(input.world, member.world)
+                    && !(check_materials
+                        && *alpha_tested.entry(member.mesh).or_insert_with(|| {
+                            static_merge::needs_alpha_test(
+                                scene,
+                                member.mesh as usize,
+                                self.variant,
+                                &self.material_data,
+                            )
+                        }))
+            });
+            kept.extend(found);
+        }
+        if kept.len() == merge.members.len() {
+            return kept;
+        }
+        let members: Vec<MergeMember> = kept
+            .iter()
+            .map(|&i| {
+                let input = &inputs[i];
+                MergeMember {
+                    node: input.node,
+                    mesh: input.mesh,
+                    world: input.world,
+                }
+            })
+            .collect();
+        let opaque = (self.material_data.len() - 1) as u32;
+        let rebuilt = (members.len() >= 2)
+            .then(|| {
+                static_merge::build(scene, &self.mesh_slots, members, self.bvh_quality, opaque)
+            })
+            .flatten()
+            .and_then(|geometry| {
+                merge.rebuilt(
+                    ctx,
+                    [&self.vertex_pool, &self.triangles, &self.wide_nodes],
+                    geometry,
+                )
+            });
+        tracing::debug!(
+            "static merge: {} of {} members left it; {}",
+            merge.members.len() - kept.len(),
+            merge.members.len(),
+            if rebuilt.is_some() {
+                "rebuilt"
+            } else {
+                "dropped"
+            }
+        );
+        if let Some(m) = &rebuilt {
+            let index = self.mesh_slots.len() as u64;
+            ctx.queue.write_buffer(
+                &self.meshes,
+                index * std::mem::size_of::<GpuMesh>() as u64,
+                bytemuck::bytes_of(&m.mesh),
+            );
+        } else {
+            kept.clear();
+        }
+        self.merge = rebuilt;
+        kept
+    }
+
     /// Uploads instances in `tlas`'s leaf order and the tree itself, and rebuilds the light list's emissive
     /// triangles (uploaded by [`Self::upload_lights`]). [`Self::update_instances`] builds the tree; tests hand in
-    /// pathological ones (a top-level tree deeper than any build makes).
+    /// pathological ones (a top-level tree deeper than any build makes), over every input, none merged.
     pub fn upload_instances(
         &mut self,
         ctx: &GpuContext,
@@ -64,11 +169,51 @@ impl GpuScene {
         inputs: &[InstanceInput],
         tlas: FlatBvh,
     ) {
-        let mut ordered: Vec<GpuInstance> = tlas
-            .order
-            .iter()
-            .map(|&i| GpuInstance::new(inputs[i as usize].world, inputs[i as usize].mesh))
-            .collect();
+        let leaves: Vec<usize> = (0..inputs.len()).collect();
+        self.upload_placements(ctx, scene, inputs, &[], &leaves, tlas);
+    }
+
+    /// The instance buffer: `members` (inputs merged, in merge order), then `tlas`'s leaves in tree order, where
+    /// leaf `k` is input `leaves[k]` and leaf `leaves.len()` the merged tree.
+    fn upload_placements(
+        &mut self,
+        ctx: &GpuContext,
+        scene: &SceneAsset,
+        inputs: &[InstanceInput],
+        members: &[usize],
+        leaves: &[usize],
+        mut tlas: FlatBvh,
+    ) {
+        let placed = |i: usize| GpuInstance::new(inputs[i].world, inputs[i].mesh);
+        let mut ordered: Vec<GpuInstance> = members.iter().map(|&i| placed(i)).collect();
+        let mut order: Vec<u32> = members.iter().map(|&i| i as u32).collect();
+        for &leaf in &tlas.order {
+            match leaves.get(leaf as usize) {
+                Some(&i) => {
+                    ordered.push(placed(i));
+                    order.push(i as u32);
+                }
+                None => {
+                    let merge = self
+                        .merge
+                        .as_ref()
+                        .expect("a leaf past the inputs is the merge");
+                    let mut pseudo = GpuInstance::new(Mat4::IDENTITY, self.mesh_slots.len() as u32);
+                    pseudo.merged_origins = merge.origins;
+                    ordered.push(pseudo);
+                    order.push(NONE);
+                }
+            }
+        }
+        // The tree's leaves index the instance buffer, where the members come first.
+        let shift = members.len() as u32;
+        if shift > 0 {
+            for child in tlas.nodes.iter_mut().flat_map(|n| n.children.iter_mut()) {
+                if child.is_leaf() {
+                    child.index += shift;
+                }
+            }
+        }
         let triangles = self.triangle_lights(scene, &mut ordered);
         self.lights.set_triangles(triangles);
         let instance_bytes = bytemuck::cast_slice::<_, u8>(&ordered);
@@ -83,7 +228,7 @@ impl GpuScene {
         if recreated {
             self.generation += 1;
         }
-        self.instance_order = tlas.order;
+        self.instance_order = order;
         self.memory.instances_and_tlas = (instance_bytes.len() + tlas_bytes.len()) as u64;
         self.uploaded_instances = ordered;
     }
@@ -105,6 +250,9 @@ impl GpuScene {
                 continue;
             }
             emission_changed |= gpu.emissive != self.material_data[i].emissive;
+            if (gpu.flags ^ self.material_data[i].flags) & MATERIAL_ALPHA_MASK != 0 {
+                self.merge_materials_changed |= self.merge.is_some();
+            }
             self.material_data[i] = gpu;
             ctx.queue.write_buffer(
                 &self.materials,
@@ -157,7 +305,8 @@ impl GpuScene {
             inst.first_light = lights.len() as u32;
             inst.light_count = 0;
             let mesh = inst.mesh as usize;
-            if self.emissive_triangles[mesh].is_empty() {
+            // The merged tree's pseudo-instance has no mesh of the scene: its members carry the lights.
+            if self.emissive_triangles.get(mesh).is_none_or(Vec::is_empty) {
                 continue;
             }
             let r = &inst.world_from_object;

@@ -8,6 +8,7 @@ pub mod light_tree;
 pub mod lights;
 pub mod motion;
 mod packing;
+pub mod static_merge;
 mod variant;
 
 pub use instances::{InstanceInput, InstanceMap, transform_box};
@@ -177,6 +178,10 @@ pub struct GpuScene {
     pub generation: u64,
     /// Build quality of the upload (rebuilds of the upload tree use it).
     bvh_quality: crate::bvh::BvhQuality,
+    /// The static instances traced through one tree, while at least two are.
+    pub merge: Option<static_merge::StaticMerge>,
+    /// A material edit or variant switch may have given a member an alpha-masked material.
+    merge_materials_changed: bool,
     pub build_seconds: f64,
 }
 
@@ -188,6 +193,7 @@ impl GpuScene {
         scene: &SceneAsset,
         quality: crate::bvh::BvhQuality,
         layout: StaticLayout,
+        merge_static: bool,
         binding_limit: Option<u64>,
     ) -> Result<(Self, Vec<String>), UploadError> {
         let start = std::time::Instant::now();
@@ -301,7 +307,36 @@ impl GpuScene {
             });
         }
 
-        let meshes: Vec<GpuMesh> = slots.iter().map(|s| s.gpu).collect();
+        let mut merge = None;
+        if merge_static && layout == StaticLayout::Wide {
+            let members = static_merge::plan(scene, scene.active_variant, &materials);
+            let opaque = (materials.len() - 1) as u32;
+            let geometry = (!members.is_empty())
+                .then(|| static_merge::build(scene, &slots, members, quality, opaque))
+                .flatten();
+            // Only where every buffer still binds: the merge is a speed-up, never a reason to refuse a scene.
+            if let Some(g) = geometry.filter(|g| {
+                g.fits(
+                    limit,
+                    pool.len(),
+                    triangles.len(),
+                    wide_nodes.len(),
+                    WIDE_BLAS,
+                )
+            }) {
+                merge = Some(static_merge::StaticMerge::append(
+                    g,
+                    &mut pool,
+                    &mut triangles,
+                    &mut wide_nodes,
+                ));
+            }
+        }
+        let meshes: Vec<GpuMesh> = slots
+            .iter()
+            .map(|s| s.gpu)
+            .chain(merge.as_ref().map(|m| m.mesh))
+            .collect();
         check("BLAS node", (blas_nodes.len() * 64) as u64)?;
         check("wide BLAS node", (wide_nodes.len() * 80) as u64)?;
         check("triangle", (triangles.len() * 16) as u64)?;
@@ -349,6 +384,8 @@ impl GpuScene {
             generation: 1,
             binding_limit: limit,
             bvh_quality: quality,
+            merge,
+            merge_materials_changed: false,
             build_seconds: start.elapsed().as_secs_f64(),
         };
         Ok((gpu_scene, notes))

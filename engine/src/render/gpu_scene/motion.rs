@@ -89,14 +89,18 @@ impl SceneMotion {
             }
             self.uploaded_instances = instances.to_vec();
         }
+        // The merged static tree's pseudo-instance is no object (`NONE`).
         let objects = instances
             .iter()
             .map(|i| i.object)
+            .filter(|&o| o != NONE)
             .max()
             .map_or(0, |m| m as usize + 1);
         let mut table = vec![NONE; objects];
         for (i, inst) in instances.iter().enumerate() {
-            table[inst.object as usize] = i as u32;
+            if inst.object != NONE {
+                table[inst.object as usize] = i as u32;
+            }
         }
         if table != self.uploaded_objects {
             if write_or_grow(

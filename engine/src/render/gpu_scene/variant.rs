@@ -65,6 +65,8 @@ impl GpuScene {
         if emission_changed {
             self.refresh_triangle_lights(ctx, scene);
         }
+        // A member of the merge may now need the alpha test.
+        self.merge_materials_changed |= self.merge.is_some() && !changed_materials.is_empty();
         changed_materials.sort_unstable();
         changed_materials.dedup();
         changed_materials

@@ -6,7 +6,7 @@
 use crate::gpu::GpuContext;
 use crate::render::gpu_scene::GpuScene;
 use crate::render::gpu_scene::InstanceMap;
-use crate::render::layout::{GpuMotionInstance, LIGHT_TRIANGLE};
+use crate::render::layout::{GpuMotionInstance, LIGHT_TRIANGLE, NONE};
 use crate::render::settings::{RenderMode, RenderSettings};
 use crate::scene::SceneAssets;
 use bevy_ecs::prelude::*;
@@ -64,6 +64,15 @@ pub fn update_scene_motion(
     }
     let mut instances = Vec::with_capacity(map.entities.len());
     for (&entity, inst) in map.entities.iter().zip(scene.uploaded_instances()) {
+        if entity == Entity::PLACEHOLDER {
+            // The merged static tree: never a hit of its own, never an object.
+            instances.push(GpuMotionInstance {
+                prev_world_from_object: inst.world_from_object,
+                object: NONE,
+                _pad: [0; 3],
+            });
+            continue;
+        }
         let prev = objects.last_world.get(&entity).copied();
         instances.push(GpuMotionInstance {
             prev_world_from_object: prev.unwrap_or(inst.world_from_object),
@@ -75,6 +84,7 @@ pub fn update_scene_motion(
         .entities
         .iter()
         .zip(scene.uploaded_instances())
+        .filter(|(e, _)| **e != Entity::PLACEHOLDER)
         .map(|(&e, inst)| (e, inst.world_from_object))
         .collect();
     // Keys that follow a light from frame to frame while the list is rebuilt: an emissive triangle by its

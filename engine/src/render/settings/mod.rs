@@ -135,6 +135,10 @@ pub struct RenderSettings {
     pub oidn: DenoiseOptions,
     /// BVH layout of static meshes (deformable meshes always refit a BVH2).
     pub static_bvh: crate::bvh::StaticLayout,
+    /// With the wide layout: the instances that never move traced through one merged tree
+    /// (`render::gpu_scene::static_merge`). Settings saved before it existed load with it on.
+    #[serde(default = "merge_static_default")]
+    pub merge_static: bool,
     /// Where deformable meshes are skinned, morphed and refit (`Auto`: GPU on real GPUs).
     pub deform: DeformBackend,
     /// Accumulate, or the real-time path while anything moves.
@@ -142,6 +146,10 @@ pub struct RenderSettings {
     pub mode: RenderMode,
     #[serde(default)]
     pub realtime: RealtimeSettings,
+}
+
+fn merge_static_default() -> bool {
+    true
 }
 
 impl Default for RenderSettings {
@@ -168,6 +176,7 @@ impl Default for RenderSettings {
             denoiser: DenoiserKind::default(),
             oidn: Default::default(),
             static_bvh: crate::bvh::StaticLayout::Wide,
+            merge_static: true,
             deform: DeformBackend::Auto,
             mode: RenderMode::Accumulate,
             realtime: RealtimeSettings::default(),
