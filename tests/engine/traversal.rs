@@ -218,8 +218,10 @@ fn a_moved_member_leaves_the_merge_and_renders_where_it_went() {
         .map(|m| m.node)
         .collect();
     assert!(before.len() >= 3, "{before:?}");
-    // Move the second member: a box, not the room.
-    let moved = before[1];
+    let moved = *before
+        .iter()
+        .find(|&&n| scene.nodes[n as usize].name == "small.box")
+        .expect("the small box is a member");
     let offset = glam::Vec3::new(0.07, 0.0, 0.05) * scene_size(&scene);
     let world = app.app.world_mut();
     let entity = world
