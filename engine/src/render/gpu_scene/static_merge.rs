@@ -123,7 +123,7 @@ pub fn needs_alpha_test(
 }
 
 /// The instances the scene file says never move: still nodes ([`SceneAsset::still_nodes`]) with a
-/// non-empty mesh that needs no alpha test and is placed at most [`MAX_MERGED_COPIES`] times, in Morton order.
+/// non-empty mesh that needs no alpha test and is placed at most [`MAX_MERGED_COPIES`] times, in node order.
 /// Empty when fewer than two qualify (one instance gains nothing from a second tree over the same triangles).
 pub fn plan(
     scene: &SceneAsset,
@@ -162,49 +162,7 @@ pub fn plan(
     if candidates.len() < 2 {
         candidates.clear();
     }
-    sort_spatially(scene, &mut candidates);
     candidates
-}
-
-/// Members in Morton order of their boxes' centres, as top-level leaves come in tree order: their instance
-/// records, and the light list built from them, keep neighbours in space together in memory.
-fn sort_spatially(scene: &SceneAsset, members: &mut [MergeMember]) {
-    let centre = |m: &MergeMember| {
-        let positions = &scene.meshes[m.mesh as usize].positions;
-        let (lo, hi) = positions
-            .iter()
-            .fold((Vec3::MAX, Vec3::MIN), |(lo, hi), p| {
-                (lo.min(*p), hi.max(*p))
-            });
-        let (lo, hi) = super::transform_box(m.world, lo, hi);
-        0.5 * (lo + hi)
-    };
-    let centres: Vec<Vec3> = members.iter().map(centre).collect();
-    let (lo, hi) = centres.iter().fold((Vec3::MAX, Vec3::MIN), |(lo, hi), c| {
-        (lo.min(*c), hi.max(*c))
-    });
-    let extent = (hi - lo).max(Vec3::splat(f32::MIN_POSITIVE));
-    let mut keyed: Vec<(u32, MergeMember)> = centres
-        .iter()
-        .zip(members.iter())
-        .map(|(c, m)| (morton3((*c - lo) / extent), *m))
-        .collect();
-    keyed.sort_by_key(|(key, m)| (*key, m.node));
-    for (slot, (_, m)) in members.iter_mut().zip(keyed) {
-        *slot = m;
-    }
-}
-
-/// The 30-bit Morton code of a point in the unit cube (10 bits per axis).
-fn morton3(p: Vec3) -> u32 {
-    let spread = |v: f32| {
-        let mut x = ((v.clamp(0.0, 1.0) * 1023.0) as u32) & 0x3ff;
-        x = (x | (x << 16)) & 0x030000ff;
-        x = (x | (x << 8)) & 0x0300f00f;
-        x = (x | (x << 4)) & 0x030c30c3;
-        (x | (x << 2)) & 0x09249249
-    };
-    spread(p.x) << 2 | spread(p.y) << 1 | spread(p.z)
 }
 
 /// Builds the merged tree over `members`' world-space triangles (each mesh's triangles in its own slot order,
