@@ -4,7 +4,7 @@
 # the bench's frame loop on the bench scenes (SCENES, default "cornell flight-helmet spheres crowd"; BENCH_ARGS:
 # more bench options, e.g. "--spp-per-frame 16"), variants alternating ROUNDS times. Writes $OUT/bench.log and
 # $OUT/ab.txt (variant, round, scene, width, height, trace ms median, shading-free camera and diffuse bounce G
-# rays/s) and prints each scene/size/variant mean. Carry .gl and rel; shared/assets holds the scenes.
+# rays/s) and prints each scene/size/variant mean. Carry .gl and rel; ASSETS (default shared/assets) holds the scenes.
 # Usage: bash scripts/gpu-ab-frames.sh ROUNDS VARIANT...
 set -u
 rounds=$1; shift
@@ -19,7 +19,7 @@ for round in $(seq "$rounds"); do
     [[ $v == *:* ]] && dir=${v#*:}
     w=$(mktemp -d)
     RAYKIN_SHADER_DIR=$dir rel/$b bench --suite full --parts frames --frames ${FRAMES:-40} ${BENCH_ARGS:-} "${scenes[@]}" \
-      --assets shared/assets --out "$w" --cache "$w/c" >> "$OUT/bench.log" 2>&1
+      --assets "${ASSETS:-shared/assets}" --out "$w" --cache "$w/c" >> "$OUT/bench.log" 2>&1
     python3 -c "
 import json; r=json.load(open('$w/results.json'))
 for row in r['rows']: print('$v', $round, row.get('scene'), row.get('width'), row.get('height'), row.get('trace_ms_median', row.get('trace_ms')),
