@@ -1,0 +1,14 @@
+// Alpha-mask cut-outs, tested during traversal so that masked-out texels are never hit.
+
+// False when the hit point's base-colour alpha is below the material's cutoff.
+fn alpha_passes(mesh: Mesh, tri: vec4<u32>, bary: vec2<f32>) -> bool {
+    let m = materials[tri.w];
+    if (m.flags & MATERIAL_ALPHA_MASK) == 0u { return true; }
+    let w = vec3<f32>(1.0 - bary.x - bary.y, bary.x, bary.y);
+    var alpha = m.base_color.a;
+    // ABLATION (not an image raykin keeps): the base-colour texture's alpha is not read.
+    if mesh.color_offset != NONE {
+        alpha *= vertex_color(mesh, tri, w).a;
+    }
+    return alpha >= m.alpha_cutoff;
+}
