@@ -91,8 +91,10 @@ impl MergedGeometry {
         max_wide_nodes: u32,
     ) -> bool {
         let nodes = wide_nodes + self.nodes.len();
+        // `StaticMerge::append` pads the triangle buffer to an even entry first.
+        let triangle_entries = triangle_entries + triangle_entries % 2 + self.entries.len();
         ((pool_words + self.positions.len()) * 4) as u64 <= limit
-            && ((triangle_entries + self.entries.len()) * 16) as u64 <= limit
+            && (triangle_entries * 16) as u64 <= limit
             && (nodes * 80) as u64 <= limit
             && nodes < max_wide_nodes as usize
     }
