@@ -212,6 +212,9 @@ struct RenderReport {
     merged_static_instances: usize,
     merged_static_triangles: u32,
     merged_static_bytes: u64,
+    /// The scene's buffers copied into textures, which kernels on CPU adapters read (0 on GPUs; not counted in
+    /// `gpu_memory_total_bytes`).
+    scene_texture_bytes: u64,
     render_wall_s: f64,
     samples_per_second: f64,
 }
@@ -434,6 +437,11 @@ fn render_to_file(
             merged_static_instances: gpu_scene.merge.as_ref().map_or(0, |m| m.members.len()),
             merged_static_triangles: gpu_scene.merge.as_ref().map_or(0, |m| m.triangles),
             merged_static_bytes: gpu_scene.merge.as_ref().map_or(0, |m| m.bytes),
+            scene_texture_bytes: app
+                .app
+                .world()
+                .resource::<raykin::render::scene_bindings::SceneBindings>()
+                .texture_bytes(),
             render_wall_s: wall,
             samples_per_second: (w as f64 * h as f64 * args.spp as f64) / wall,
         };

@@ -19,7 +19,7 @@ fn gsurface_first_hit(g: GSurface, origin: vec3<f32>) -> Hit {
 fn gsurface_shading_point(g: GSurface, eye: vec3<f32>) -> ShadingPoint {
     var bsdf = unpack_bsdf(g.bsdf);
     if MATERIAL_LOBES != 0u && g.material != NONE {
-        let m = materials[g.material];
+        let m = read_material(g.material);
         bsdf.lobes = pack_lobes(m.specular_f0, m.specular_weight, m.transmission, m.refraction_ior, false);
         if (MATERIAL_LOBES & LOBES_LAYERS) != 0u {
             bsdf.layers = pack_layers(m.clearcoat, m.clearcoat_roughness, vec3<f32>(0.0, 0.0, 1.0), m.sheen_color, m.sheen_roughness);

@@ -14,12 +14,12 @@ const MAX_SPHERICAL_SAMPLE_AREA: f32 = 6.22;
 
 // Emission of the light's material at barycentrics (b1, b2) of its triangle.
 fn area_light_emission(instance: u32, slot: u32, b: vec2<f32>) -> vec3<f32> {
-    let m = materials[triangles[slot].w];
+    let m = read_material(read_triangle(slot).w);
     var emission = m.emissive;
     if m.emissive_texture != NONE {
-        let mesh = meshes[instances[instance].mesh];
+        let mesh = read_mesh(read_instance(instance).mesh);
         let w = vec3<f32>(1.0 - b.x - b.y, b.x, b.y);
-        emission *= srgb_to_linear(sample_texture(m.emissive_texture, texture_uv(m.emissive_texture, mesh, triangles[slot], w)).rgb);
+        emission *= srgb_to_linear(sample_texture(m.emissive_texture, texture_uv(m.emissive_texture, mesh, read_triangle(slot), w)).rgb);
     }
     return emission;
 }
@@ -37,7 +37,7 @@ fn triangle_spherical_area(p: array<vec3<f32>, 3>, origin: vec3<f32>) -> f32 {
 // Whether the side of the triangle that `origin` sees emits.
 fn triangle_emits_towards(light: Light, p: array<vec3<f32>, 3>, origin: vec3<f32>) -> bool {
     let side = dot(cross(p[1] - p[0], p[2] - p[0]), origin - p[0]);
-    let double_sided = (materials[triangles[light.index_b].w].flags & MATERIAL_DOUBLE_SIDED) != 0u;
+    let double_sided = (read_material(read_triangle(light.index_b).w).flags & MATERIAL_DOUBLE_SIDED) != 0u;
     return side > 0.0 || (side < 0.0 && double_sided);
 }
 

@@ -11,7 +11,7 @@
 //   (lights[frame.infinite_light_first ..]); emissive triangles are seen through `resolve_hit`.
 
 fn light_sample_li(index: u32, ctx: LightSampleContext, u: vec2<f32>, allow_incomplete_pdf: bool) -> LightLiSample {
-    let light = lights[index];
+    let light = read_light(index);
     if light.kind == LIGHT_TRIANGLE { return triangle_light_sample_li(light, ctx, u); }
     if light.kind == LIGHT_POINT || light.kind == LIGHT_SPOT { return point_light_sample_li(light, ctx); }
     if light.kind == LIGHT_DIRECTIONAL { return directional_light_sample_li(light); }
@@ -21,7 +21,7 @@ fn light_sample_li(index: u32, ctx: LightSampleContext, u: vec2<f32>, allow_inco
 }
 
 fn light_pdf_li(index: u32, ctx: LightSampleContext, wi: vec3<f32>, distance: f32, allow_incomplete_pdf: bool) -> f32 {
-    let light = lights[index];
+    let light = read_light(index);
     if light.kind == LIGHT_TRIANGLE { return triangle_light_pdf(light, ctx, wi, distance); }
     if light.kind == LIGHT_ENVIRONMENT { return environment_pdf(light, wi, allow_incomplete_pdf); }
     if light.kind == LIGHT_SUN { return sun_pdf(light, wi); }
@@ -29,7 +29,7 @@ fn light_pdf_li(index: u32, ctx: LightSampleContext, wi: vec3<f32>, distance: f3
 }
 
 fn infinite_light_le(index: u32, dir: vec3<f32>) -> vec3<f32> {
-    let light = lights[index];
+    let light = read_light(index);
     if light.kind == LIGHT_ENVIRONMENT { return environment_le(light, dir); }
     if light.kind == LIGHT_SUN { return sun_le(light, dir); }
     return vec3<f32>(0.0);

@@ -38,7 +38,7 @@ fn environment_direction(uv: vec2<f32>) -> vec3<f32> {
 
 fn environment_texel(width: u32, i: u32, j: u32) -> vec3<f32> {
     let k = 3u * (j * width + i);
-    return vec3<f32>(environment_map[k], environment_map[k + 1u], environment_map[k + 2u]);
+    return read_environment3(k);
 }
 
 // Radiance arriving from world direction `dir`: texel column i sits at u = (i + 1/2) / W (wrapping), row j
@@ -62,7 +62,7 @@ fn environment_le(light: Light, dir: vec3<f32>) -> vec3<f32> {
 
 // Entry k of a CDF starting at `base`, less entry k - 1 (0 before the first).
 fn environment_cdf_step(base: u32, k: u32) -> f32 {
-    return environment_map[base + k] - select(0.0, environment_map[base + k - 1u], k > 0u);
+    return read_environment(base + k) - select(0.0, read_environment(base + k - 1u), k > 0u);
 }
 
 // The first of `count` CDF entries at `base` that exceeds u.
@@ -71,7 +71,7 @@ fn environment_cdf_search(base: u32, count: u32, u: f32) -> u32 {
     var hi = count - 1u;
     while lo < hi {
         let mid = (lo + hi) / 2u;
-        if environment_map[base + mid] <= u { lo = mid + 1u; } else { hi = mid; }
+        if read_environment(base + mid) <= u { lo = mid + 1u; } else { hi = mid; }
     }
     return lo;
 }
@@ -166,8 +166,8 @@ fn environment_sample_li(light: Light, u: vec2<f32>, compensated: bool) -> Light
     let i = environment_cdf_search(row, w, u.x);
     // Where u falls inside the chosen entries places the point inside the cell, through the bilinear density
     // of the cell's corner luminances: v by its linear marginal, then u by the linear conditional.
-    let ry = clamp((u.y - (environment_map[marginal + j] - environment_cdf_step(marginal, j))) / environment_cdf_step(marginal, j), 0.0, 0.99999994);
-    let rx = clamp((u.x - (environment_map[row + i] - environment_cdf_step(row, i))) / environment_cdf_step(row, i), 0.0, 0.99999994);
+    let ry = clamp((u.y - (read_environment(marginal + j) - environment_cdf_step(marginal, j))) / environment_cdf_step(marginal, j), 0.0, 0.99999994);
+    let rx = clamp((u.x - (read_environment(row + i) - environment_cdf_step(row, i))) / environment_cdf_step(row, i), 0.0, 0.99999994);
     let bilinear = dist.bilinear;
     var f = vec2<f32>(rx, ry);
     if bilinear {

@@ -23,7 +23,7 @@ fn next_event_cdf() -> u32 {
 
 // Probability of `light` under the CDF at `base`: the difference of adjacent entries.
 fn cdf_pmf(base: u32, light: u32) -> f32 {
-    return light_cdf[base + light] - select(0.0, light_cdf[base + light - 1u], light > 0u);
+    return read_light_cdf(base + light) - select(0.0, read_light_cdf(base + light - 1u), light > 0u);
 }
 
 // The first light in first..light_count whose entry of the CDF at `base` exceeds u.
@@ -32,7 +32,7 @@ fn cdf_sample(base: u32, first: u32, u: f32) -> LightChoice {
     var hi = frame.light_count - 1u;
     while lo < hi {
         let mid = (lo + hi) / 2u;
-        if light_cdf[base + mid] <= u { lo = mid + 1u; } else { hi = mid; }
+        if read_light_cdf(base + mid) <= u { lo = mid + 1u; } else { hi = mid; }
     }
     return LightChoice(lo, cdf_pmf(base, lo));
 }
@@ -48,21 +48,21 @@ fn light_sampler_sample(u: f32) -> LightChoice {
 // The light index of emissive triangle `slot` on `instance` (NONE when it is not a light): the instance's
 // lights are sorted by slot.
 fn triangle_light_index(instance: u32, slot: u32) -> u32 {
-    let inst = instances[instance];
+    let inst = read_instance(instance);
     var lo = inst.first_light;
     var hi = inst.first_light + inst.light_count;
     while lo < hi {
         let mid = (lo + hi) / 2u;
-        if lights[mid].index_b < slot { lo = mid + 1u; } else { hi = mid; }
+        if read_light(mid).index_b < slot { lo = mid + 1u; } else { hi = mid; }
     }
-    return select(NONE, lo, lo < inst.first_light + inst.light_count && lights[lo].index_b == slot);
+    return select(NONE, lo, lo < inst.first_light + inst.light_count && read_light(lo).index_b == slot);
 }
 
 fn light_sampler_sample_at(ctx: LightSampleContext, u: f32) -> LightChoice {
     let base = next_event_cdf();
     let tree = frame.tree_light_count;
     if tree == 0u { return cdf_sample(base, 0u, u); }
-    let tree_share = light_cdf[base + tree - 1u];
+    let tree_share = read_light_cdf(base + tree - 1u);
     if u < tree_share {
         let choice = light_tree_sample(ctx, min(u / tree_share, ONE_MINUS_EPSILON));
         return LightChoice(choice.light, choice.pmf * tree_share);
@@ -75,5 +75,5 @@ fn light_sampler_pmf_at(ctx: LightSampleContext, light: u32) -> f32 {
     let base = next_event_cdf();
     let tree = frame.tree_light_count;
     if tree == 0u || light >= tree { return cdf_pmf(base, light); }
-    return light_cdf[base + tree - 1u] * light_tree_pmf(ctx, light);
+    return read_light_cdf(base + tree - 1u) * light_tree_pmf(ctx, light);
 }

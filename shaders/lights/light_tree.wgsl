@@ -47,9 +47,9 @@ fn light_tree_importance(node: LightTreeNode, p: vec3<f32>, n: vec3<f32>) -> f32
 
 // The chance of taking node `index`'s first child from ctx (-1: neither child can light ctx).
 fn light_tree_first_child_probability(index: u32, ctx: LightSampleContext) -> f32 {
-    let node = light_tree[index];
-    let i0 = light_tree_importance(light_tree[index + 1u], ctx.p, ctx.n);
-    let i1 = light_tree_importance(light_tree[node.child_or_light], ctx.p, ctx.n);
+    let node = read_light_tree_node(index);
+    let i0 = light_tree_importance(read_light_tree_node(index + 1u), ctx.p, ctx.n);
+    let i1 = light_tree_importance(read_light_tree_node(node.child_or_light), ctx.p, ctx.n);
     if i0 + i1 <= 0.0 { return -1.0; }
     return i0 / (i0 + i1);
 }
@@ -61,7 +61,7 @@ fn light_tree_sample(ctx: LightSampleContext, u_in: f32) -> LightChoice {
     var index = 0u;
     var pmf = 1.0;
     loop {
-        let node = light_tree[index];
+        let node = read_light_tree_node(index);
         if (node.flags & LIGHT_TREE_LEAF) != 0u { return LightChoice(node.child_or_light, pmf); }
         let p0 = light_tree_first_child_probability(index, ctx);
         if p0 < 0.0 { return LightChoice(NONE, 0.0); }
@@ -80,11 +80,11 @@ fn light_tree_sample(ctx: LightSampleContext, u_in: f32) -> LightChoice {
 
 // The probability that `light_tree_sample` from ctx picks `light` (which must be in the tree).
 fn light_tree_pmf(ctx: LightSampleContext, light: u32) -> f32 {
-    let trail = lights[light].flags;
+    let trail = read_light(light).flags;
     var index = 0u;
     var pmf = 1.0;
     for (var depth = 0u; depth < 32u; depth++) {
-        let node = light_tree[index];
+        let node = read_light_tree_node(index);
         if (node.flags & LIGHT_TREE_LEAF) != 0u { return select(0.0, pmf, node.child_or_light == light); }
         let p0 = light_tree_first_child_probability(index, ctx);
         if p0 < 0.0 { return 0.0; }

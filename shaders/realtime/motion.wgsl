@@ -34,9 +34,9 @@ fn previous_vertex(mesh_index: u32, mesh: Mesh, v: u32) -> vec3<f32> {
 
 // Where the point at barycentrics `bary` of triangle `slot` on `instance` was in the previous frame.
 fn previous_world_position(instance: u32, slot: u32, bary: vec2<f32>) -> vec3<f32> {
-    let mesh_index = instances[instance].mesh;
-    let mesh = meshes[mesh_index];
-    let tri = triangles[slot];
+    let mesh_index = read_instance(instance).mesh;
+    let mesh = read_mesh(mesh_index);
+    let tri = read_triangle(slot);
     let w = vec3<f32>(1.0 - bary.x - bary.y, bary.x, bary.y);
     let p = previous_vertex(mesh_index, mesh, tri.x) * w.x + previous_vertex(mesh_index, mesh, tri.y) * w.y
         + previous_vertex(mesh_index, mesh, tri.z) * w.z;

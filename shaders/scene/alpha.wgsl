@@ -2,7 +2,7 @@
 
 // False when the hit point's base-colour alpha is below the material's cutoff.
 fn alpha_passes(mesh: Mesh, tri: vec4<u32>, bary: vec2<f32>) -> bool {
-    let m = materials[tri.w];
+    let m = read_material(tri.w);
     if (m.flags & MATERIAL_ALPHA_MASK) == 0u { return true; }
     let w = vec3<f32>(1.0 - bary.x - bary.y, bary.x, bary.y);
     var alpha = m.base_color.a;

@@ -20,3 +20,30 @@
 @group(0) @binding(12) var<storage, read> environment_map: array<f32>;
 // The light sampler's tree over the lights at finite distance (lights/light_tree.wgsl).
 @group(0) @binding(13) var<storage, read> light_tree: array<LightTreeNode>;
+
+// Every read of the scene goes through these functions. On CPU adapters the composer replaces this module with
+// scene/bindings_texels.wgsl, which reads the same bytes from textures: lavapipe turns each storage-buffer load
+// into a loop over the SIMD lanes, several times slower than a texel fetch (docs/BENCHMARKS.md).
+fn read_tlas_node(i: u32) -> BvhNode { return tlas_nodes[i]; }
+fn read_blas_node(i: u32) -> BvhNode { return blas_nodes[i]; }
+fn read_instance(i: u32) -> Instance { return instances[i]; }
+fn read_mesh(i: u32) -> Mesh { return meshes[i]; }
+fn read_triangle(i: u32) -> vec4<u32> { return triangles[i]; }
+fn read_pool_word(i: u32) -> u32 { return vertex_pool[i]; }
+fn read_pool_vec2(i: u32) -> vec2<f32> {
+    return vec2<f32>(bitcast<f32>(vertex_pool[i]), bitcast<f32>(vertex_pool[i + 1u]));
+}
+fn read_pool_vec3(i: u32) -> vec3<f32> {
+    return vec3<f32>(bitcast<f32>(vertex_pool[i]), bitcast<f32>(vertex_pool[i + 1u]), bitcast<f32>(vertex_pool[i + 2u]));
+}
+fn read_material(i: u32) -> Material { return materials[i]; }
+fn read_texel(i: u32) -> u32 { return texels[i]; }
+fn read_texture_info(i: u32) -> TextureInfo { return texture_infos[i]; }
+fn read_light(i: u32) -> Light { return lights[i]; }
+fn read_wide_node(i: u32) -> WideNode { return wide_nodes[i]; }
+fn read_light_cdf(i: u32) -> f32 { return light_cdf[i]; }
+fn read_environment(i: u32) -> f32 { return environment_map[i]; }
+fn read_environment3(i: u32) -> vec3<f32> {
+    return vec3<f32>(environment_map[i], environment_map[i + 1u], environment_map[i + 2u]);
+}
+fn read_light_tree_node(i: u32) -> LightTreeNode { return light_tree[i]; }

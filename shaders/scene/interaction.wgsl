@@ -15,10 +15,10 @@ struct SurfaceInteraction {
 }
 
 fn resolve_hit(hit: Hit, ray: Ray) -> SurfaceInteraction {
-    let inst = instances[hit.instance];
-    let mesh = meshes[inst.mesh];
-    let tri = triangles[hit.triangle];
-    let m = materials[tri.w];
+    let inst = read_instance(hit.instance);
+    let mesh = read_mesh(inst.mesh);
+    let tri = read_triangle(hit.triangle);
+    let m = read_material(tri.w);
     let w = vec3<f32>(1.0 - hit.bary.x - hit.bary.y, hit.bary.x, hit.bary.y);
     let p0 = transform_point(inst.world_from_object, vertex_position(mesh, tri.x));
     let p1 = transform_point(inst.world_from_object, vertex_position(mesh, tri.y));
@@ -34,9 +34,9 @@ fn resolve_hit(hit: Hit, ray: Ray) -> SurfaceInteraction {
 
     var n = ng;
     if mesh.normal_offset != NONE {
-        let a = vertex_pool[mesh.normal_offset + tri.x];
-        let b = vertex_pool[mesh.normal_offset + tri.y];
-        let c = vertex_pool[mesh.normal_offset + tri.z];
+        let a = read_pool_word(mesh.normal_offset + tri.x);
+        let b = read_pool_word(mesh.normal_offset + tri.y);
+        let c = read_pool_word(mesh.normal_offset + tri.z);
         if a != INVALID_OCT && b != INVALID_OCT && c != INVALID_OCT {
             let interpolated = transform_normal(inst.object_from_world, oct_decode(a) * w.x + oct_decode(b) * w.y + oct_decode(c) * w.z);
             if dot(interpolated, interpolated) > 1e-12 {
@@ -93,11 +93,11 @@ fn resolve_hit(hit: Hit, ray: Ray) -> SurfaceInteraction {
 
 // `n` with the tangent-space normal of `texture` applied (scaled by `scale`); unchanged without usable tangents.
 fn normal_mapped(n: vec3<f32>, texture: u32, scale: f32, inst: Instance, mesh: Mesh, tri: vec4<u32>, w: vec3<f32>, front: bool) -> vec3<f32> {
-    let ta = vertex_pool[mesh.tangent_offset + 2u * tri.x];
-    let tb = vertex_pool[mesh.tangent_offset + 2u * tri.y];
-    let tc = vertex_pool[mesh.tangent_offset + 2u * tri.z];
+    let ta = read_pool_word(mesh.tangent_offset + 2u * tri.x);
+    let tb = read_pool_word(mesh.tangent_offset + 2u * tri.y);
+    let tc = read_pool_word(mesh.tangent_offset + 2u * tri.z);
     if ta != INVALID_OCT && tb != INVALID_OCT && tc != INVALID_OCT {
-        let sign = bitcast<f32>(vertex_pool[mesh.tangent_offset + 2u * tri.x + 1u]);
+        let sign = bitcast<f32>(read_pool_word(mesh.tangent_offset + 2u * tri.x + 1u));
         var t = transform_vector(inst.world_from_object, oct_decode(ta) * w.x + oct_decode(tb) * w.y + oct_decode(tc) * w.z);
         t = t - n * dot(n, t);
         if dot(t, t) > 1e-12 {
@@ -177,7 +177,7 @@ fn with_material_extensions(core: BsdfParams, m: Material, mesh: Mesh, tri: vec4
 // volume of IOR 1 transmits like a thin wall but still bounds its medium). Nested volumes are not tracked:
 // leaving an inner one returns to none (less absorption, never more energy).
 fn medium_after_transmission(s: SurfaceInteraction, medium: u32) -> u32 {
-    if thin_walled(s.bsdf) && all(materials[s.material].attenuation == vec3<f32>(0.0)) { return medium; }
+    if thin_walled(s.bsdf) && all(read_material(s.material).attenuation == vec3<f32>(0.0)) { return medium; }
     return select(NONE, s.material, s.front);
 }
 
@@ -185,5 +185,5 @@ fn medium_after_transmission(s: SurfaceInteraction, medium: u32) -> u32 {
 // ray that leaves the scene inside an absorbing volume carries nothing).
 fn transmittance(medium: u32, t: f32) -> vec3<f32> {
     if medium == NONE { return vec3<f32>(1.0); }
-    return exp(-materials[medium].attenuation * t);
+    return exp(-read_material(medium).attenuation * t);
 }

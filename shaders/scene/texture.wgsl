@@ -17,11 +17,11 @@ fn wrap_coord(i: i32, size: i32, mode: u32) -> i32 {
 fn texel(info: TextureInfo, x: i32, y: i32) -> vec4<f32> {
     let wx = wrap_coord(x, i32(info.width), info.flags & 3u);
     let wy = wrap_coord(y, i32(info.height), (info.flags >> 2u) & 3u);
-    return unpack4x8unorm(texels[info.offset + u32(wy) * info.width + u32(wx)]);
+    return unpack4x8unorm(read_texel(info.offset + u32(wy) * info.width + u32(wx)));
 }
 
 fn sample_texture(texture: u32, uv_in: vec2<f32>) -> vec4<f32> {
-    let info = texture_infos[texture & 0xffffffu];
+    let info = read_texture_info(texture & 0xffffffu);
     var uv = uv_in;
     if (info.flags & TEXTURE_TRANSFORMED) != 0u {
         let h = vec3<f32>(uv_in, 1.0);
@@ -45,7 +45,7 @@ fn sample_texture(texture: u32, uv_in: vec2<f32>) -> vec4<f32> {
 // frame: the texture's u axis runs along the frame's (cos, -sin) (the rotation applies to UVs whose v axis
 // points down the image, the bitangent up), as three.js and Filament do.
 fn untransform_tangent_normal(texture: u32, xy: vec2<f32>) -> vec2<f32> {
-    let info = texture_infos[texture & 0xffffffu];
+    let info = read_texture_info(texture & 0xffffffu);
     if (info.flags & TEXTURE_TRANSFORMED) == 0u { return xy; }
     let c = info.uv_u.w;
     let s = info.uv_v.w;

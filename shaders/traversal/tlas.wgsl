@@ -6,8 +6,8 @@
 // has. Object-space ray: t stays comparable with world space because the direction is transformed, not
 // renormalised.
 fn trace_blas(instance: u32, ray_world: Ray, hit: ptr<function, Hit>, any_hit: bool) -> bool {
-    let inst = instances[instance];
-    let mesh = meshes[inst.mesh];
+    let inst = read_instance(instance);
+    let mesh = read_mesh(inst.mesh);
     let o = transform_point(inst.object_from_world, ray_world.origin);
     let d = transform_vector(inst.object_from_world, ray_world.dir);
     if (mesh.blas_root & WIDE_BLAS) != 0u {
@@ -20,9 +20,9 @@ fn trace_blas(instance: u32, ray_world: Ray, hit: ptr<function, Hit>, any_hit: b
 // the light list and picking know. Once per ray, outside the traversal loops.
 fn member_hit(hit: Hit) -> Hit {
     if hit.instance == NONE { return hit; }
-    let origins = instances[hit.instance].merged_origins;
+    let origins = read_instance(hit.instance).merged_origins;
     if origins == NONE { return hit; }
-    let pair = triangles[origins + (hit.triangle >> 1u)];
+    let pair = read_triangle(origins + (hit.triangle >> 1u));
     let origin = select(pair.xy, pair.zw, (hit.triangle & 1u) == 1u);
     var member = hit;
     member.instance = origin.x;
@@ -37,7 +37,7 @@ fn trace(ray: Ray, t_max: f32, any_hit: bool) -> Hit {
     var sp = 0u;
     var node = 0u;
     loop {
-        let n = tlas_nodes[node];
+        let n = read_tlas_node(node);
         let ta = hit_child(n.a, ray.origin, inv_d, hit.t);
         let tb = hit_child(n.b, ray.origin, inv_d, hit.t);
         // Both leaf children's instances through one call site: the compiled kernel holds a copy of the BLAS

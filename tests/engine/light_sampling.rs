@@ -65,7 +65,7 @@ fn choose(@builtin(global_invocation_id) gid: vec3<u32>) {
 // The light's triangle in world space (for the CPU's closed forms).
 @compute @workgroup_size(1)
 fn light_triangle() {
-    let light = lights[probe.light];
+    let light = read_light(probe.light);
     let p = world_triangle(light.index_a, light.index_b);
     out[0] = vec4<f32>(p[0], 0.0);
     out[1] = vec4<f32>(p[1], 0.0);

@@ -24,13 +24,15 @@ fn all_wgsl_kernels_validate() {
 
 /// On CPU adapters compute kernels read their parameters from storage buffers (`gpu::params_in_storage`):
 /// lavapipe specialises a kernel on the values of uniforms that decide branches or loop counts and compiles it
-/// again (tens of seconds) for each new image size, depth or camera. That form of every compute kernel validates
-/// and reads no uniform.
+/// again (tens of seconds) for each new image size, depth or camera. They read the scene from textures
+/// (`gpu::scene_in_textures`). That form of every compute kernel validates, reads no uniform, and reads the
+/// scene from textures only.
 #[test]
-fn compute_kernels_validate_with_parameters_in_storage() {
+fn compute_kernels_validate_in_their_cpu_adapter_form() {
     let mut compute = 0;
+    let mut with_scene = 0;
     for (name, source) in passes::all_kernels() {
-        let source = raykin::gpu::params_in_storage(&source);
+        let source = raykin::gpu::scene_in_textures(&raykin::gpu::params_in_storage(&source));
         let module = naga::front::wgsl::parse_str(&source)
             .unwrap_or_else(|e| panic!("{name}.wgsl: {}", e.emit_to_string(&source)));
         if !module
@@ -58,9 +60,27 @@ fn compute_kernels_validate_with_parameters_in_storage() {
                 "{name}.wgsl: `{}` is still a uniform",
                 global.name.as_deref().unwrap_or("?")
             );
+            if global.binding.as_ref().is_some_and(|b| b.group == 0)
+                && source.contains("// ---- scene/bindings.wgsl ----")
+            {
+                assert_eq!(
+                    global.space,
+                    naga::AddressSpace::Handle,
+                    "{name}.wgsl: scene binding `{}` is not a texture",
+                    global.name.as_deref().unwrap_or("?")
+                );
+            }
+        }
+        if source.contains("// ---- scene/bindings.wgsl ----") {
+            assert!(
+                source.contains("var tlas_nodes: texture_2d<u32>"),
+                "{name}.wgsl"
+            );
+            with_scene += 1;
         }
     }
     assert!(compute >= 13, "only {compute} compute kernels found");
+    assert!(with_scene >= 5, "only {with_scene} kernels read the scene");
 }
 
 /// Size and member offsets (by name) of each named struct of a WGSL module.

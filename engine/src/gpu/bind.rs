@@ -160,14 +160,16 @@ pub fn clear_buffers<'a>(ctx: &GpuContext, buffers: impl IntoIterator<Item = &'a
 }
 
 /// A storage buffer holding `bytes`. wgpu rejects empty bindings and ones smaller than one element, so short
-/// data is padded to 128 bytes (larger than any element, an instance being 112).
+/// data is padded to 128 bytes (larger than any element, an instance being 112), and any data to whole 16-byte
+/// texels (CPU adapters copy scene buffers into textures: `render::scene_texels`).
 pub fn storage_with(ctx: &GpuContext, label: &str, bytes: &[u8]) -> wgpu::Buffer {
     const MIN_BYTES: usize = 128;
+    let size = bytes.len().max(MIN_BYTES).next_multiple_of(16);
     let padded;
-    let contents = if bytes.len() < MIN_BYTES {
+    let contents = if bytes.len() < size {
         padded = {
             let mut v = bytes.to_vec();
-            v.resize(MIN_BYTES, 0);
+            v.resize(size, 0);
             v
         };
         &padded[..]

@@ -65,6 +65,11 @@ pub struct GpuContext {
     /// tracer) for every new image size, depth or camera; storage buffers are never specialised. GPUs keep
     /// uniforms (the constant bank): storage parameters made the H200's trace kernel up to 13% slower.
     pub params_in_storage: bool,
+    /// Kernels read the scene's buffers through textures (`shaders/scene/bindings_texels.wgsl`, copied by
+    /// `render::scene_texels`): set on CPU adapters, where lavapipe compiles every storage-buffer load into a loop
+    /// over its SIMD lanes and a texel fetch into straight-line code. `RAYKIN_SCENE_READS=buffers|textures`
+    /// overrides the choice (kernel development and A/B runs).
+    pub scene_in_textures: bool,
     /// The staging buffer of the last readback, kept for the next: allocating (and on discrete GPUs pinning)
     /// host memory for every readback cost more than the copy.
     readback_staging: Arc<std::sync::Mutex<Option<wgpu::Buffer>>>,
@@ -117,6 +122,7 @@ impl GpuContext {
         Ok(Self {
             pipelines: PipelineCache::new(device.clone()),
             params_in_storage: info.device_type == wgpu::DeviceType::Cpu,
+            scene_in_textures: scene_in_textures_on(&info),
             readback_staging: Arc::default(),
             device,
             queue,
@@ -281,6 +287,52 @@ pub fn params_in_storage(source: &str) -> String {
     source.replace("var<uniform>", "var<storage, read>")
 }
 
+/// Whether kernels on this adapter read the scene through textures ([`GpuContext::scene_in_textures`]).
+fn scene_in_textures_on(info: &wgpu::AdapterInfo) -> bool {
+    match std::env::var("RAYKIN_SCENE_READS").as_deref() {
+        Ok("textures") => true,
+        Ok("buffers") => false,
+        Ok(other) => {
+            tracing::warn!(
+                "RAYKIN_SCENE_READS={other} is neither `buffers` nor `textures`; ignored"
+            );
+            info.device_type == wgpu::DeviceType::Cpu
+        }
+        Err(_) => info.device_type == wgpu::DeviceType::Cpu,
+    }
+}
+
+/// The scene module of composed kernels (`render::shaders::compose` heads each module with this line).
+const SCENE_BINDINGS_HEADER: &str = "// ---- scene/bindings.wgsl ----\n";
+/// The scene module as CPU adapters read it.
+const SCENE_BINDINGS_TEXELS: &str = include_str!("../../../shaders/scene/bindings_texels.wgsl");
+
+/// `source` with the scene read from textures ([`GpuContext::scene_in_textures`]): the composed
+/// `scene/bindings.wgsl` module is replaced by `scene/bindings_texels.wgsl`, which declares the same bindings as
+/// textures and defines the same `read_*` functions. Kernels without the scene module are returned unchanged.
+/// The naga test validates this form of every kernel.
+pub fn scene_in_textures(source: &str) -> String {
+    let Some(start) = source.find(SCENE_BINDINGS_HEADER) else {
+        return source.to_string();
+    };
+    let body = start + SCENE_BINDINGS_HEADER.len();
+    let end = source[body..]
+        .find("\n// ---- ")
+        .map_or(source.len(), |i| body + i + 1);
+    // Kernel development, as for the library's modules: `$RAYKIN_SHADER_DIR/scene/bindings_texels.wgsl`.
+    let texels = std::env::var_os("RAYKIN_SHADER_DIR")
+        .and_then(|dir| {
+            std::fs::read_to_string(std::path::Path::new(&dir).join("scene/bindings_texels.wgsl"))
+                .ok()
+        })
+        .unwrap_or_else(|| SCENE_BINDINGS_TEXELS.to_string());
+    format!(
+        "{}{SCENE_BINDINGS_HEADER}{texels}\n{}",
+        &source[..start],
+        &source[end..]
+    )
+}
+
 /// One WGSL module over its bind group layouts, from which pipelines are compiled: per entry point, and per
 /// set of values of its pipeline-overridable constants. Compiled pipelines come from (and go to) the device's
 /// [`PipelineCache`].
@@ -298,6 +350,11 @@ impl ComputeModule {
     ) -> Self {
         let source = if ctx.params_in_storage {
             params_in_storage(&source)
+        } else {
+            source
+        };
+        let source = if ctx.scene_in_textures {
+            scene_in_textures(&source)
         } else {
             source
         };

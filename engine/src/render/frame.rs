@@ -24,7 +24,7 @@
 use super::accumulation::Accumulation;
 use super::display::{Display, tonemap_params};
 use super::frame_constants::{FrameConstants, write_frame_constants};
-use super::gpu_scene::GpuScene;
+use super::gpu_scene::{GpuScene, SceneWrites};
 use super::host_denoised::HostDenoised;
 use super::layout::{LIGHT_DIRECTIONAL, LIGHT_ENVIRONMENT, LIGHT_SUN};
 use super::material_lobes::MaterialLobes;
@@ -131,12 +131,8 @@ pub fn render_frame(
             MaterialLobes::of(&scene.material_data),
             accumulation.records_denoiser_inputs(&settings),
         );
-        trace.encode(
-            &mut encoder,
-            bindings.group(&ctx, &scene),
-            &view,
-            stats.pass_writes(TRACE_PAIR),
-        );
+        let group = bindings.group(&ctx, &mut scene, &mut encoder, deformed_on_gpu(&deform));
+        trace.encode(&mut encoder, group, &view, stats.pass_writes(TRACE_PAIR));
         accumulation.samples += spp;
     }
     let handover = realtime_runs(&settings).then(|| handover_weight(&settings, &accumulation));
@@ -171,6 +167,16 @@ pub fn render_frame(
     stats.after_submit();
     if stats.time_passes {
         stats.last_pass_times = stats.read_pass_times(&ctx);
+    }
+}
+
+/// The scene buffers the GPU deformer's command buffers of this frame write (skinned positions, refit BLAS
+/// nodes): CPU adapters copy them into the kernels' textures after those commands.
+fn deformed_on_gpu(deform: &[wgpu::CommandBuffer]) -> SceneWrites {
+    if deform.is_empty() {
+        SceneWrites::NONE
+    } else {
+        SceneWrites::VERTEX_POOL | SceneWrites::BLAS_NODES
     }
 }
 
@@ -250,13 +256,15 @@ pub fn encode_realtime_frame(
     );
     ctx.queue
         .write_buffer(&targets.uniform, 0, bytemuck::bytes_of(&plan.uniform));
-    let scene_group = bindings.group(ctx, scene).clone();
+    let mut encoder = ctx.device.create_command_encoder(&Default::default());
+    let scene_group = bindings
+        .group(ctx, scene, &mut encoder, deformed_on_gpu(&deform))
+        .clone();
     let groups = SceneGroups {
         scene: &scene_group,
         motion: &motion_group,
     };
     let targets = &*targets;
-    let mut encoder = ctx.device.create_command_encoder(&Default::default());
     encoder.clear_buffer(&view.ray_counter, 0, None);
     passes.gbuffer.encode(
         ctx,

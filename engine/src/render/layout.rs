@@ -31,6 +31,10 @@ pub const TEXTURE_TRANSFORMED: u32 = 1 << 5;
 /// Set in `GpuMesh::blas_root` when the root indexes the compressed wide node buffer.
 pub const WIDE_BLAS: u32 = 1 << 31;
 
+/// CPU adapters read the scene's buffers from textures (`render::scene_texels`): rows of `1 << SCENE_TEXEL_ROW_LOG2`
+/// 16-byte texels (64 KiB), so a 128 MiB buffer needs 2048 rows.
+pub const SCENE_TEXEL_ROW_LOG2: u32 = 12;
+
 /// An object-to-world placement of a mesh (rows of 3x4 matrices).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
@@ -227,6 +231,7 @@ pub const WGSL_CONSTANTS: &[(&str, u32)] = &[
     ("TEXTURE_NEAREST", TEXTURE_NEAREST),
     ("TEXTURE_TRANSFORMED", TEXTURE_TRANSFORMED),
     ("WIDE_BLAS", WIDE_BLAS),
+    ("SCENE_TEXEL_ROW_LOG2", SCENE_TEXEL_ROW_LOG2),
     ("FRAME_NEE", FRAME_NEE),
     ("FRAME_HIT_AOV", FRAME_HIT_AOV),
     ("LIGHT_TRIANGLE", LIGHT_TRIANGLE),

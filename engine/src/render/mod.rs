@@ -26,6 +26,7 @@ pub mod queries;
 pub mod realtime;
 pub mod realtime_targets;
 pub mod scene_bindings;
+pub mod scene_texels;
 pub mod settings;
 pub mod shaders;
 pub mod stats;

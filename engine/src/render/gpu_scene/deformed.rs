@@ -1,8 +1,8 @@
 //! Deformed meshes on the CPU backend: their new vertices written over their own vertex-pool ranges, their
 //! BLASes refit or rebuilt in place.
 
-use super::GpuScene;
 use super::packing::{OrderedTriangles, order_triangles};
+use super::{GpuScene, SceneWrites};
 use crate::bvh::refit::RebuildPolicy;
 use crate::bvh::{Blas, MeshBvh};
 use crate::gpu::GpuContext;
@@ -32,6 +32,7 @@ impl GpuScene {
             /// The triangle order went back to the upload tree's.
             restored: Option<OrderedTriangles>,
         }
+        self.written |= SceneWrites::VERTEX_POOL | SceneWrites::BLAS_NODES | SceneWrites::TRIANGLES;
         let (materials, quality, variant) = (&self.material_data, self.bvh_quality, self.variant);
         let mut changed = vec![false; self.mesh_slots.len()];
         for &m in &deformed.changed {
@@ -172,6 +173,7 @@ impl GpuScene {
             );
             return false;
         }
+        self.written |= SceneWrites::BLAS_NODES | SceneWrites::TRIANGLES;
         let mut nodes = bvh.flat.nodes.clone();
         nodes.resize(slot.blas_capacity as usize, crate::bvh::GpuBvhNode::EMPTY);
         let ordered = order_triangles(

@@ -1,11 +1,11 @@
 //! Placements: instances in top-level BVH leaf order, the top-level BVH, and the emissive triangles of the
 //! light list that follow them (and follow material edits that change emission).
 
-use super::GpuScene;
 use super::light_tree::LightBounds;
 use super::lights::WeightedLight;
 use super::packing::{emissive_slots, gpu_material, luminance};
 use super::static_merge::{self, MergeMember};
+use super::{GpuScene, SceneWrites};
 use crate::bvh::FlatBvh;
 use crate::gpu::GpuContext;
 use crate::gpu::bind::write_or_grow;
@@ -34,6 +34,14 @@ impl GpuScene {
         scene: &SceneAsset,
         inputs: &[InstanceInput],
     ) -> Result<(), crate::bvh::BvhTooDeep> {
+        // The merged static tree may be rebuilt in place (its positions, triangles and nodes) and its
+        // pseudo-instance's mesh entry written.
+        self.written |= SceneWrites::INSTANCES
+            | SceneWrites::TLAS_NODES
+            | SceneWrites::MESHES
+            | SceneWrites::VERTEX_POOL
+            | SceneWrites::TRIANGLES
+            | SceneWrites::WIDE_NODES;
         let members = self.merged_inputs(ctx, scene, inputs);
         let mut merged = vec![false; inputs.len()];
         members.iter().for_each(|&i| merged[i] = true);
@@ -184,6 +192,7 @@ impl GpuScene {
         leaves: &[usize],
         mut tlas: FlatBvh,
     ) {
+        self.written |= SceneWrites::INSTANCES | SceneWrites::TLAS_NODES;
         let placed = |i: usize| GpuInstance::new(inputs[i].world, inputs[i].mesh);
         let mut ordered: Vec<GpuInstance> = members.iter().map(|&i| placed(i)).collect();
         let mut order: Vec<u32> = members.iter().map(|&i| i as u32).collect();
@@ -254,6 +263,7 @@ impl GpuScene {
                 self.merge_materials_changed |= self.merge.is_some();
             }
             self.material_data[i] = gpu;
+            self.written |= SceneWrites::MATERIALS;
             ctx.queue.write_buffer(
                 &self.materials,
                 (i * std::mem::size_of::<GpuMaterial>()) as u64,
@@ -279,6 +289,7 @@ impl GpuScene {
     /// Rebuilds the light list's emissive triangles (and the instances' ranges into it) for the current
     /// instances, after the emissive triangles changed.
     pub(super) fn refresh_triangle_lights(&mut self, ctx: &GpuContext, scene: &SceneAsset) {
+        self.written |= SceneWrites::INSTANCES;
         let mut instances = std::mem::take(&mut self.uploaded_instances);
         let triangles = self.triangle_lights(scene, &mut instances);
         self.lights.set_triangles(triangles);

@@ -13,9 +13,9 @@
 //! 2 pi I (1 - (cos inner + cos outer) / 2), directional pi r^2 E, environment pi r^2 x the luminance integral
 //! over the sphere, sun pi r^2 L x its solid angle; r is the radius of the scene's bounding sphere.
 
-use super::GpuScene;
 use super::light_tree::{self, LightBounds};
 use super::packing::luminance;
+use super::{GpuScene, SceneWrites};
 use crate::environment::{BakedEnvironment, EnvironmentDistribution, NextEventSampling};
 use crate::gpu::GpuContext;
 use crate::gpu::bind::write_or_grow;
@@ -188,6 +188,7 @@ impl GpuScene {
                 words.extend(&d.conditional_cdf);
                 words.extend(&d.marginal_cdf);
             }
+            self.written |= SceneWrites::ENVIRONMENT_MAP;
             if write_or_grow(
                 ctx,
                 &mut self.environment_map,
@@ -298,6 +299,7 @@ impl GpuScene {
             );
         }
         let mut gpu: Vec<GpuLight> = all.iter().map(|w| w.light).collect();
+        self.written |= SceneWrites::LIGHTS | SceneWrites::LIGHT_CDF | SceneWrites::LIGHT_TREE;
         let mut recreated = false;
         let tree_count = match &tree {
             Some((nodes, trails)) => {

@@ -134,6 +134,46 @@ impl GpuMemory {
     }
 }
 
+/// A set of the scene's buffers, one bit per binding of `shaders/scene/bindings.wgsl` (binding order).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct SceneWrites(pub u16);
+
+impl SceneWrites {
+    pub const NONE: Self = Self(0);
+    pub const TLAS_NODES: Self = Self(1 << 0);
+    pub const BLAS_NODES: Self = Self(1 << 1);
+    pub const INSTANCES: Self = Self(1 << 2);
+    pub const MESHES: Self = Self(1 << 3);
+    pub const TRIANGLES: Self = Self(1 << 4);
+    pub const VERTEX_POOL: Self = Self(1 << 5);
+    pub const MATERIALS: Self = Self(1 << 6);
+    pub const TEXELS: Self = Self(1 << 7);
+    pub const TEXTURE_INFOS: Self = Self(1 << 8);
+    pub const LIGHTS: Self = Self(1 << 9);
+    pub const WIDE_NODES: Self = Self(1 << 10);
+    pub const LIGHT_CDF: Self = Self(1 << 11);
+    pub const ENVIRONMENT_MAP: Self = Self(1 << 12);
+    pub const LIGHT_TREE: Self = Self(1 << 13);
+    pub const ALL: Self = Self((1 << 14) - 1);
+
+    pub fn contains(self, binding: usize) -> bool {
+        self.0 & (1 << binding) != 0
+    }
+}
+
+impl std::ops::BitOr for SceneWrites {
+    type Output = Self;
+    fn bitor(self, other: Self) -> Self {
+        Self(self.0 | other.0)
+    }
+}
+
+impl std::ops::BitOrAssign for SceneWrites {
+    fn bitor_assign(&mut self, other: Self) {
+        self.0 |= other.0;
+    }
+}
+
 #[derive(bevy_ecs::prelude::Resource)]
 pub struct GpuScene {
     pub blas_nodes: wgpu::Buffer,
@@ -176,6 +216,9 @@ pub struct GpuScene {
     pub binding_limit: u64,
     /// Bumped whenever buffers are recreated, so bind groups are rebuilt.
     pub generation: u64,
+    /// The buffers written since the kernels' texture copies were last made (CPU adapters only read those:
+    /// `render::scene_texels`); every method that writes a buffer marks it.
+    pub written: SceneWrites,
     /// Build quality of the upload (rebuilds of the upload tree use it).
     bvh_quality: crate::bvh::BvhQuality,
     /// The static instances traced through one tree, while at least two are.
@@ -382,6 +425,7 @@ impl GpuScene {
             uploaded_instances: Vec::new(),
             motion: None,
             generation: 1,
+            written: SceneWrites::ALL,
             binding_limit: limit,
             bvh_quality: quality,
             merge,

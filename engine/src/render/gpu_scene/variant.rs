@@ -2,8 +2,8 @@
 //! material changes, in place. Geometry, BVHs and vertex data stay as they are; only a change in emission
 //! rebuilds the light list's triangles.
 
-use super::GpuScene;
 use super::packing::{emissive_slots, pack_triangles};
+use super::{GpuScene, SceneWrites};
 use crate::gpu::GpuContext;
 use crate::scene::SceneAsset;
 
@@ -50,6 +50,7 @@ impl GpuScene {
                 &order[first..=last],
                 &after,
             );
+            self.written |= SceneWrites::TRIANGLES;
             ctx.queue.write_buffer(
                 &self.triangles,
                 (slot.gpu.triangle_offset as u64 + first as u64) * 16,
