@@ -73,7 +73,7 @@ fn compute_kernels_validate_in_their_cpu_adapter_form() {
         }
         if source.contains("// ---- scene/bindings.wgsl ----") {
             assert!(
-                source.contains("var tlas_nodes: texture_2d<u32>"),
+                source.contains("var tlas_nodes: texture_storage_2d<rgba32uint, read>"),
                 "{name}.wgsl"
             );
             with_scene += 1;

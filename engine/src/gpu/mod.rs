@@ -65,10 +65,10 @@ pub struct GpuContext {
     /// tracer) for every new image size, depth or camera; storage buffers are never specialised. GPUs keep
     /// uniforms (the constant bank): storage parameters made the H200's trace kernel up to 13% slower.
     pub params_in_storage: bool,
-    /// Kernels read the scene's buffers through textures (`shaders/scene/bindings_texels.wgsl`, copied by
-    /// `render::scene_texels`): set on CPU adapters, where lavapipe compiles every storage-buffer load into a loop
-    /// over its SIMD lanes and a texel fetch into straight-line code. `RAYKIN_SCENE_READS=buffers|textures`
-    /// overrides the choice (kernel development and A/B runs).
+    /// Kernels read the scene's buffers through read-only storage textures (`shaders/scene/bindings_texels.wgsl`,
+    /// copied by `render::scene_texels`): set on CPU adapters, where lavapipe compiles every storage-buffer load
+    /// into a loop over its SIMD lanes and a texel load into straight-line code. `RAYKIN_SCENE_READS=buffers|
+    /// textures` overrides the choice (kernel development and A/B runs).
     pub scene_in_textures: bool,
     /// The staging buffer of the last readback, kept for the next: allocating (and on discrete GPUs pinning)
     /// host memory for every readback cost more than the copy.
@@ -122,7 +122,7 @@ impl GpuContext {
         Ok(Self {
             pipelines: PipelineCache::new(device.clone()),
             params_in_storage: info.device_type == wgpu::DeviceType::Cpu,
-            scene_in_textures: scene_in_textures_on(&info),
+            scene_in_textures: scene_in_textures_on(&info, &limits),
             readback_staging: Arc::default(),
             device,
             queue,
@@ -287,18 +287,24 @@ pub fn params_in_storage(source: &str) -> String {
     source.replace("var<uniform>", "var<storage, read>")
 }
 
-/// Whether kernels on this adapter read the scene through textures ([`GpuContext::scene_in_textures`]).
-fn scene_in_textures_on(info: &wgpu::AdapterInfo) -> bool {
+/// Storage textures a kernel binds when it reads the scene through textures (one per scene buffer).
+pub const SCENE_TEXTURES: u32 = 14;
+
+/// Whether kernels on this adapter read the scene through textures ([`GpuContext::scene_in_textures`]): CPU
+/// adapters that bind enough storage textures.
+fn scene_in_textures_on(info: &wgpu::AdapterInfo, limits: &wgpu::Limits) -> bool {
+    let fits = limits.max_storage_textures_per_shader_stage >= SCENE_TEXTURES;
+    let cpu = info.device_type == wgpu::DeviceType::Cpu;
     match std::env::var("RAYKIN_SCENE_READS").as_deref() {
-        Ok("textures") => true,
+        Ok("textures") => fits,
         Ok("buffers") => false,
         Ok(other) => {
             tracing::warn!(
                 "RAYKIN_SCENE_READS={other} is neither `buffers` nor `textures`; ignored"
             );
-            info.device_type == wgpu::DeviceType::Cpu
+            fits && cpu
         }
-        Err(_) => info.device_type == wgpu::DeviceType::Cpu,
+        Err(_) => fits && cpu,
     }
 }
 

@@ -1,8 +1,9 @@
 //! The scene's buffers as textures, which kernels on CPU adapters read instead ([`GpuContext::scene_in_textures`],
 //! `shaders/scene/bindings_texels.wgsl`). lavapipe compiles every storage-buffer load into a loop over its SIMD
-//! lanes with a bounds check per word, and a texel fetch into straight-line vector code: about 6x the loads per
-//! second (docs/BENCHMARKS.md, "The CPU path"). Each buffer's bytes are the rgba32uint texels of one texture, in
-//! rows of `1 << SCENE_TEXEL_ROW_LOG2`. A buffer is copied again only when the scene marked it written
+//! lanes with a bounds check per word, and a texel load into straight-line vector code: 6.5x the 16-byte loads
+//! per second (docs/BENCHMARKS.md, "The CPU path"). Each buffer's bytes are the rgba32uint texels of one
+//! read-only storage texture (cheaper there than a sampled one: no mip level looked up per lane), in rows of
+//! `1 << SCENE_TEXEL_ROW_LOG2`. A buffer is copied again only when the scene marked it written
 //! ([`GpuScene::written`]) or a GPU pass of the frame wrote it.
 
 use super::gpu_scene::{GpuScene, SceneWrites};
@@ -35,7 +36,7 @@ impl Mirror {
             sample_count: 1,
             dimension: wgpu::TextureDimension::D2,
             format: wgpu::TextureFormat::Rgba32Uint,
-            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+            usage: wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_DST,
             view_formats: &[],
         });
         let view = texture.create_view(&Default::default());
@@ -139,16 +140,16 @@ impl SceneTexels {
     }
 }
 
-/// Compute-visible layout entries for `count` scene textures at bindings 0, 1, 2, ...
+/// Compute-visible layout entries for `count` read-only scene textures at bindings 0, 1, 2, ...
 pub fn layout_entries(count: usize) -> Vec<wgpu::BindGroupLayoutEntry> {
     (0..count as u32)
         .map(|binding| wgpu::BindGroupLayoutEntry {
             binding,
             visibility: wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::Texture {
-                sample_type: wgpu::TextureSampleType::Uint,
+            ty: wgpu::BindingType::StorageTexture {
+                access: wgpu::StorageTextureAccess::ReadOnly,
+                format: wgpu::TextureFormat::Rgba32Uint,
                 view_dimension: wgpu::TextureViewDimension::D2,
-                multisampled: false,
             },
             count: None,
         })
