@@ -41,6 +41,13 @@ fn environment_texel(width: u32, i: u32, j: u32) -> vec3<f32> {
     return read_environment3(k);
 }
 
+// Column `i` wrapped into 0..w, for i in [-w, 2w) (every caller's column is in [-1, w]): selects instead of an
+// integer remainder, which CPU adapters compute as one scalar division per SIMD lane.
+fn environment_wrap_column(i: i32, w: u32) -> u32 {
+    let n = i32(w);
+    return u32(select(select(i, i + n, i < 0), i - n, i >= n));
+}
+
 // Radiance arriving from world direction `dir`: texel column i sits at u = (i + 1/2) / W (wrapping), row j
 // at v = j / (H - 1).
 fn environment_le(light: Light, dir: vec3<f32>) -> vec3<f32> {
@@ -51,8 +58,8 @@ fn environment_le(light: Light, dir: vec3<f32>) -> vec3<f32> {
     let y = clamp(uv.y * f32(h - 1u), 0.0, f32(h - 1u));
     let x0 = floor(x);
     let fx = x - x0;
-    let i0 = u32((i32(x0) + i32(w)) % i32(w));
-    let i1 = (i0 + 1u) % w;
+    let i0 = environment_wrap_column(i32(x0), w);
+    let i1 = environment_wrap_column(i32(i0) + 1, w);
     let j0 = min(u32(y), h - 2u);
     let fy = y - f32(j0);
     let top = mix(environment_texel(w, i0, j0), environment_texel(w, i1, j0), fx);
@@ -110,7 +117,7 @@ fn environment_cell_density(dist: EnvironmentDistribution, w: u32, rows: u32, i:
 // The distribution's values at the corners of cell (i, j): (i, j), (i + 1, j), (i, j + 1), (i + 1, j + 1),
 // columns wrapping.
 fn environment_corners(dist: EnvironmentDistribution, w: u32, i: u32, j: u32) -> vec4<f32> {
-    let i1 = (i + 1u) % w;
+    let i1 = environment_wrap_column(i32(i) + 1, w);
     let l = vec4<f32>(
         luminance(environment_texel(w, i, j)),
         luminance(environment_texel(w, i1, j)),
@@ -145,7 +152,7 @@ fn environment_pdf(light: Light, dir: vec3<f32>, compensated: bool) -> f32 {
     if sin_theta <= 0.0 { return 0.0; }
     let uv = environment_uv(d);
     let x = uv.x * f32(w) - 0.5;
-    let i = u32((i32(floor(x)) + i32(w)) % i32(w));
+    let i = environment_wrap_column(i32(floor(x)), w);
     let y = uv.y * f32(rows);
     let j = min(u32(y), rows - 1u);
     var inside = 1.0;
