@@ -81,6 +81,8 @@ impl PipelineCache {
                 label: Some(label),
                 entries,
             });
+        // Storage textures count too: on CPU adapters the scene's read-only storage textures stand in one for
+        // one for the storage buffers GPUs bind (`render::scene_texels`), so both forms give one figure.
         let storage = entries
             .iter()
             .filter(|e| {
@@ -89,7 +91,7 @@ impl PipelineCache {
                     wgpu::BindingType::Buffer {
                         ty: wgpu::BufferBindingType::Storage { .. },
                         ..
-                    }
+                    } | wgpu::BindingType::StorageTexture { .. }
                 )
             })
             .count() as u32;
@@ -176,7 +178,8 @@ impl PipelineCache {
         self.lock().compiled
     }
 
-    /// The most storage buffers one compiled pipeline binds (in its one stage), counting the layouts made here.
+    /// The most storage buffers one compiled pipeline binds (in its one stage), counting the layouts made here;
+    /// storage textures count as the buffers they stand in for.
     pub fn most_storage_buffers_per_stage(&self) -> u32 {
         self.lock().most_storage_buffers
     }
