@@ -34,14 +34,6 @@ impl GpuScene {
         scene: &SceneAsset,
         inputs: &[InstanceInput],
     ) -> Result<(), crate::bvh::BvhTooDeep> {
-        // The merged static tree may be rebuilt in place (its positions, triangles and nodes) and its
-        // pseudo-instance's mesh entry written.
-        self.written |= SceneWrites::INSTANCES
-            | SceneWrites::TLAS_NODES
-            | SceneWrites::MESHES
-            | SceneWrites::VERTEX_POOL
-            | SceneWrites::TRIANGLES
-            | SceneWrites::WIDE_NODES;
         let members = self.merged_inputs(ctx, scene, inputs);
         let mut merged = vec![false; inputs.len()];
         members.iter().for_each(|&i| merged[i] = true);
@@ -154,6 +146,11 @@ impl GpuScene {
             }
         );
         if let Some(m) = &rebuilt {
+            // Rebuilt in place: its positions, triangles and nodes, and the pseudo-instance's mesh entry.
+            self.written |= SceneWrites::VERTEX_POOL
+                | SceneWrites::TRIANGLES
+                | SceneWrites::WIDE_NODES
+                | SceneWrites::MESHES;
             let index = self.mesh_slots.len() as u64;
             ctx.queue.write_buffer(
                 &self.meshes,
