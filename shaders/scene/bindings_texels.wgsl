@@ -21,9 +21,9 @@
 @group(0) @binding(12) var environment_map: texture_storage_2d<rgba32uint, read>;
 @group(0) @binding(13) var light_tree: texture_storage_2d<rgba32uint, read>;
 
-// Where texel i of a buffer is.
-fn scene_texel_at(i: u32) -> vec2<u32> {
-    return vec2<u32>(i & ((1u << SCENE_TEXEL_ROW_LOG2) - 1u), i >> SCENE_TEXEL_ROW_LOG2);
+// Texel i of a buffer's texture.
+fn scene_texel(buffer: texture_storage_2d<rgba32uint, read>, i: u32) -> vec4<u32> {
+    return textureLoad(buffer, vec2<u32>(i & ((1u << SCENE_TEXEL_ROW_LOG2) - 1u), i >> SCENE_TEXEL_ROW_LOG2));
 }
 
 // Word j (0..7) of two consecutive texels.
@@ -31,84 +31,83 @@ fn word_of_pair(a: vec4<u32>, b: vec4<u32>, j: u32) -> u32 {
     return select(a[j & 3u], b[j & 3u], j >= 4u);
 }
 
-// Three consecutive words from word i of a word array: the two texels they can span, read unconditionally
-// (a branch would not save the second fetch: lanes take both sides).
-fn words3(first: vec4<u32>, second: vec4<u32>, i: u32) -> vec3<u32> {
+// Word i of a buffer of words.
+fn scene_word(buffer: texture_storage_2d<rgba32uint, read>, i: u32) -> u32 {
+    return scene_texel(buffer, i >> 2u)[i & 3u];
+}
+
+// Words i .. i + 2 of a buffer of words, from the two texels they can span, both read (a branch would not save
+// the second load: lanes take both sides).
+fn scene_words3(buffer: texture_storage_2d<rgba32uint, read>, i: u32) -> vec3<u32> {
+    let a = scene_texel(buffer, i >> 2u);
+    let b = scene_texel(buffer, (i >> 2u) + 1u);
     let k = i & 3u;
-    return vec3<u32>(word_of_pair(first, second, k), word_of_pair(first, second, k + 1u), word_of_pair(first, second, k + 2u));
+    return vec3<u32>(word_of_pair(a, b, k), word_of_pair(a, b, k + 1u), word_of_pair(a, b, k + 2u));
 }
 
 fn bvh_child(lo: vec4<u32>, hi: vec4<u32>) -> BvhChild {
     return BvhChild(bitcast<vec3<f32>>(lo.xyz), lo.w, bitcast<vec3<f32>>(hi.xyz), hi.w);
 }
 
-fn read_tlas_node(i: u32) -> BvhNode {
+// A child-pair BVH node (4 texels) of either tree.
+fn scene_bvh_node(buffer: texture_storage_2d<rgba32uint, read>, i: u32) -> BvhNode {
     let t = 4u * i;
     return BvhNode(
-        bvh_child(textureLoad(tlas_nodes, scene_texel_at(t)), textureLoad(tlas_nodes, scene_texel_at(t + 1u))),
-        bvh_child(textureLoad(tlas_nodes, scene_texel_at(t + 2u)), textureLoad(tlas_nodes, scene_texel_at(t + 3u))));
+        bvh_child(scene_texel(buffer, t), scene_texel(buffer, t + 1u)),
+        bvh_child(scene_texel(buffer, t + 2u), scene_texel(buffer, t + 3u)));
 }
 
-fn read_blas_node(i: u32) -> BvhNode {
-    let t = 4u * i;
-    return BvhNode(
-        bvh_child(textureLoad(blas_nodes, scene_texel_at(t)), textureLoad(blas_nodes, scene_texel_at(t + 1u))),
-        bvh_child(textureLoad(blas_nodes, scene_texel_at(t + 2u)), textureLoad(blas_nodes, scene_texel_at(t + 3u))));
-}
+fn read_tlas_node(i: u32) -> BvhNode { return scene_bvh_node(tlas_nodes, i); }
+fn read_blas_node(i: u32) -> BvhNode { return scene_bvh_node(blas_nodes, i); }
 
 fn read_instance(i: u32) -> Instance {
     let t = 7u * i;
     let w = mat3x4<f32>(
-        bitcast<vec4<f32>>(textureLoad(instances, scene_texel_at(t))),
-        bitcast<vec4<f32>>(textureLoad(instances, scene_texel_at(t + 1u))),
-        bitcast<vec4<f32>>(textureLoad(instances, scene_texel_at(t + 2u))));
+        bitcast<vec4<f32>>(scene_texel(instances, t)),
+        bitcast<vec4<f32>>(scene_texel(instances, t + 1u)),
+        bitcast<vec4<f32>>(scene_texel(instances, t + 2u)));
     let o = mat3x4<f32>(
-        bitcast<vec4<f32>>(textureLoad(instances, scene_texel_at(t + 3u))),
-        bitcast<vec4<f32>>(textureLoad(instances, scene_texel_at(t + 4u))),
-        bitcast<vec4<f32>>(textureLoad(instances, scene_texel_at(t + 5u))));
-    let m = textureLoad(instances, scene_texel_at(t + 6u));
+        bitcast<vec4<f32>>(scene_texel(instances, t + 3u)),
+        bitcast<vec4<f32>>(scene_texel(instances, t + 4u)),
+        bitcast<vec4<f32>>(scene_texel(instances, t + 5u)));
+    let m = scene_texel(instances, t + 6u);
     return Instance(w, o, m.x, m.y, m.z, m.w);
 }
 
 fn read_mesh(i: u32) -> Mesh {
-    let a = textureLoad(meshes, scene_texel_at(2u * i));
-    let b = textureLoad(meshes, scene_texel_at(2u * i + 1u));
+    let a = scene_texel(meshes, 2u * i);
+    let b = scene_texel(meshes, 2u * i + 1u);
     return Mesh(a.x, a.y, a.z, a.w, b.x, b.y, b.z, b.w);
 }
 
 fn read_triangle(i: u32) -> vec4<u32> {
-    return textureLoad(triangles, scene_texel_at(i));
+    return scene_texel(triangles, i);
 }
 
 fn read_pool_word(i: u32) -> u32 {
-    return textureLoad(vertex_pool, scene_texel_at(i >> 2u))[i & 3u];
+    return scene_word(vertex_pool, i);
 }
 
 fn read_pool_vec2(i: u32) -> vec2<f32> {
-    let a = textureLoad(vertex_pool, scene_texel_at(i >> 2u));
-    let b = textureLoad(vertex_pool, scene_texel_at((i >> 2u) + 1u));
-    let k = i & 3u;
-    return bitcast<vec2<f32>>(vec2<u32>(word_of_pair(a, b, k), word_of_pair(a, b, k + 1u)));
+    return bitcast<vec2<f32>>(scene_words3(vertex_pool, i).xy);
 }
 
 fn read_pool_vec3(i: u32) -> vec3<f32> {
-    let a = textureLoad(vertex_pool, scene_texel_at(i >> 2u));
-    let b = textureLoad(vertex_pool, scene_texel_at((i >> 2u) + 1u));
-    return bitcast<vec3<f32>>(words3(a, b, i));
+    return bitcast<vec3<f32>>(scene_words3(vertex_pool, i));
 }
 
 fn read_material(i: u32) -> Material {
     let t = 10u * i;
-    let t0 = textureLoad(materials, scene_texel_at(t));
-    let t1 = textureLoad(materials, scene_texel_at(t + 1u));
-    let t2 = textureLoad(materials, scene_texel_at(t + 2u));
-    let t3 = textureLoad(materials, scene_texel_at(t + 3u));
-    let t4 = textureLoad(materials, scene_texel_at(t + 4u));
-    let t5 = textureLoad(materials, scene_texel_at(t + 5u));
-    let t6 = textureLoad(materials, scene_texel_at(t + 6u));
-    let t7 = textureLoad(materials, scene_texel_at(t + 7u));
-    let t8 = textureLoad(materials, scene_texel_at(t + 8u));
-    let t9 = textureLoad(materials, scene_texel_at(t + 9u));
+    let t0 = scene_texel(materials, t);
+    let t1 = scene_texel(materials, t + 1u);
+    let t2 = scene_texel(materials, t + 2u);
+    let t3 = scene_texel(materials, t + 3u);
+    let t4 = scene_texel(materials, t + 4u);
+    let t5 = scene_texel(materials, t + 5u);
+    let t6 = scene_texel(materials, t + 6u);
+    let t7 = scene_texel(materials, t + 7u);
+    let t8 = scene_texel(materials, t + 8u);
+    let t9 = scene_texel(materials, t + 9u);
     return Material(
         bitcast<vec4<f32>>(t0),
         bitcast<vec3<f32>>(t1.xyz), bitcast<f32>(t1.w),
@@ -123,23 +122,23 @@ fn read_material(i: u32) -> Material {
 }
 
 fn read_texel(i: u32) -> u32 {
-    return textureLoad(texels, scene_texel_at(i >> 2u))[i & 3u];
+    return scene_word(texels, i);
 }
 
 fn read_texture_info(i: u32) -> TextureInfo {
     let t = 3u * i;
-    let a = textureLoad(texture_infos, scene_texel_at(t));
+    let a = scene_texel(texture_infos, t);
     return TextureInfo(a.x, a.y, a.z, a.w,
-        bitcast<vec4<f32>>(textureLoad(texture_infos, scene_texel_at(t + 1u))),
-        bitcast<vec4<f32>>(textureLoad(texture_infos, scene_texel_at(t + 2u))));
+        bitcast<vec4<f32>>(scene_texel(texture_infos, t + 1u)),
+        bitcast<vec4<f32>>(scene_texel(texture_infos, t + 2u)));
 }
 
 fn read_light(i: u32) -> Light {
     let t = 4u * i;
-    let a = textureLoad(lights, scene_texel_at(t));
-    let p = textureLoad(lights, scene_texel_at(t + 1u));
-    let d = textureLoad(lights, scene_texel_at(t + 2u));
-    let r = textureLoad(lights, scene_texel_at(t + 3u));
+    let a = scene_texel(lights, t);
+    let p = scene_texel(lights, t + 1u);
+    let d = scene_texel(lights, t + 2u);
+    let r = scene_texel(lights, t + 3u);
     return Light(a.x, a.y, a.z, a.w,
         bitcast<vec3<f32>>(p.xyz), bitcast<f32>(p.w),
         bitcast<vec3<f32>>(d.xyz), bitcast<f32>(d.w),
@@ -149,33 +148,31 @@ fn read_light(i: u32) -> Light {
 fn read_wide_node(i: u32) -> WideNode {
     let t = 5u * i;
     return WideNode(
-        textureLoad(wide_nodes, scene_texel_at(t)),
-        textureLoad(wide_nodes, scene_texel_at(t + 1u)),
-        textureLoad(wide_nodes, scene_texel_at(t + 2u)),
-        textureLoad(wide_nodes, scene_texel_at(t + 3u)),
-        textureLoad(wide_nodes, scene_texel_at(t + 4u)));
+        scene_texel(wide_nodes, t),
+        scene_texel(wide_nodes, t + 1u),
+        scene_texel(wide_nodes, t + 2u),
+        scene_texel(wide_nodes, t + 3u),
+        scene_texel(wide_nodes, t + 4u));
 }
 
 fn read_light_cdf(i: u32) -> f32 {
-    return bitcast<f32>(textureLoad(light_cdf, scene_texel_at(i >> 2u))[i & 3u]);
+    return bitcast<f32>(scene_word(light_cdf, i));
 }
 
 fn read_environment(i: u32) -> f32 {
-    return bitcast<f32>(textureLoad(environment_map, scene_texel_at(i >> 2u))[i & 3u]);
+    return bitcast<f32>(scene_word(environment_map, i));
 }
 
 fn read_environment3(i: u32) -> vec3<f32> {
-    let a = textureLoad(environment_map, scene_texel_at(i >> 2u));
-    let b = textureLoad(environment_map, scene_texel_at((i >> 2u) + 1u));
-    return bitcast<vec3<f32>>(words3(a, b, i));
+    return bitcast<vec3<f32>>(scene_words3(environment_map, i));
 }
 
 fn read_light_tree_node(i: u32) -> LightTreeNode {
     let t = 4u * i;
-    let lo = textureLoad(light_tree, scene_texel_at(t));
-    let hi = textureLoad(light_tree, scene_texel_at(t + 1u));
-    let w = textureLoad(light_tree, scene_texel_at(t + 2u));
-    let c = textureLoad(light_tree, scene_texel_at(t + 3u));
+    let lo = scene_texel(light_tree, t);
+    let hi = scene_texel(light_tree, t + 1u);
+    let w = scene_texel(light_tree, t + 2u);
+    let c = scene_texel(light_tree, t + 3u);
     return LightTreeNode(
         bitcast<vec3<f32>>(lo.xyz), bitcast<f32>(lo.w),
         bitcast<vec3<f32>>(hi.xyz), bitcast<f32>(hi.w),

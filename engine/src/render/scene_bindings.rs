@@ -8,8 +8,8 @@ use crate::gpu::GpuContext;
 use crate::gpu::bind::{Binding, bind_group, compute_layout};
 use bevy_ecs::prelude::Resource;
 
-/// Buffers bound, in binding order.
-const SCENE_BINDINGS: usize = 14;
+/// Buffers bound, in binding order (on CPU adapters, one storage texture each).
+const SCENE_BINDINGS: usize = crate::gpu::SCENE_TEXTURES as usize;
 
 #[derive(Resource)]
 pub struct SceneBindings {
