@@ -1,0 +1,55 @@
+// Textures: every image as RGBA8 texels in one storage buffer, filtered here (no binding arrays, so it runs on
+// lavapipe): bilinear or nearest, with glTF's wrap modes.
+
+fn wrap_coord(i: i32, size: i32, mode: u32) -> i32 {
+    if mode == 2u { return clamp(i, 0, size - 1); }
+    if mode == 1u {
+        let period = 2 * size;
+        var m = i % period;
+        if m < 0 { m += period; }
+        return select(m, period - 1 - m, m >= size);
+    }
+    var m = i % size;
+    if m < 0 { m += size; }
+    return m;
+}
+
+fn texel(info: TextureInfo, x: i32, y: i32) -> vec4<f32> {
+    let wx = wrap_coord(x, i32(info.width), info.flags & 3u);
+    let wy = wrap_coord(y, i32(info.height), (info.flags >> 2u) & 3u);
+    return unpack4x8unorm(read_texel(info.offset + u32(wy) * info.width + u32(wx)));
+}
+
+fn sample_texture(texture: u32, uv_in: vec2<f32>) -> vec4<f32> {
+    // Probe (docs/bench/gpu-h200-2026-12-04-rr): no texture work at all, a constant instead.
+    if texture != 0xfffffffeu { return vec4<f32>(0.5, 0.5, 1.0, 1.0); }
+    let info = read_texture_info(texture & 0xffffffu);
+    var uv = uv_in;
+    if (info.flags & TEXTURE_TRANSFORMED) != 0u {
+        let h = vec3<f32>(uv_in, 1.0);
+        uv = vec2<f32>(dot(info.uv_u.xyz, h), dot(info.uv_v.xyz, h));
+    }
+    let size = vec2<f32>(f32(info.width), f32(info.height));
+    let st = uv * size - 0.5;
+    if (info.flags & TEXTURE_NEAREST) != 0u {
+        let p = vec2<i32>(floor(st + 0.5));
+        return texel(info, p.x, p.y);
+    }
+    let base = floor(st);
+    let f = st - base;
+    let p = vec2<i32>(base);
+    let a = mix(texel(info, p.x, p.y), texel(info, p.x + 1, p.y), f.x);
+    let b = mix(texel(info, p.x, p.y + 1), texel(info, p.x + 1, p.y + 1), f.x);
+    return mix(a, b, f.y);
+}
+
+// A tangent-space normal sampled through a rotating KHR_texture_transform, turned back into the mesh's tangent
+// frame: the texture's u axis runs along the frame's (cos, -sin) (the rotation applies to UVs whose v axis
+// points down the image, the bitangent up), as three.js and Filament do.
+fn untransform_tangent_normal(texture: u32, xy: vec2<f32>) -> vec2<f32> {
+    let info = read_texture_info(texture & 0xffffffu);
+    if (info.flags & TEXTURE_TRANSFORMED) == 0u { return xy; }
+    let c = info.uv_u.w;
+    let s = info.uv_v.w;
+    return vec2<f32>(c * xy.x + s * xy.y, -s * xy.x + c * xy.y);
+}
