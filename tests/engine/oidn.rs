@@ -506,22 +506,33 @@ fn mirror_aovs_show_the_mirrored_surface() {
 
 /// The GPU pass that writes OIDN's inputs into shared GPU memory (`render::queries::write_denoiser_inputs`)
 /// writes what the host path hands OIDN: per pixel the sums divided by the sample count (the radiance less its
-/// unscattered part, at least 0), then NaN -> 0, radiance clamped to [0, 1e30], albedo to [0, 1], normal to
-/// [-1, 1] (computed here from the sums the GPU holds, with poisoned pixels written into them to reach every
-/// rule), within 2 ulps (the GPU's division).
+/// unscattered part where every sample met a surface: `oidn::inputs::PixelSplit`), then NaN -> 0, radiance
+/// clamped to [0, 1e30], albedo to [0, 1], normal to [-1, 1] (computed here from the sums the GPU holds, with
+/// poisoned pixels written into them to reach every rule and every split), within 2 ulps (the GPU's division).
 #[test]
 fn denoiser_inputs_pass_writes_the_host_paths_inputs() {
+    use raykin::oidn::inputs::{OidnInputs, PixelSplit};
     let (ctx, _gpu) = gpu();
     let mut app = cornell::app(ctx, true, 16, 5);
     app.accumulate(3, 3, |_| {});
     let view = app.view();
-    let poison: [(&wgpu::Buffer, usize, [f32; 4]); 5] = [
+    let (width, height) = (view.width as usize, view.height as usize);
+    let corner = |dx: usize, dy: usize| (height - 1 - dy) * width + width - 1 - dx;
+    let mut poison: Vec<(&wgpu::Buffer, usize, [f32; 4])> = vec![
         (&view.accum, 0, [f32::NAN, f32::INFINITY, -2.0, 3.0]),
         (&view.accum, 1, [3e38, 1.0, 0.5, 0.0]),
         (&view.albedo_depth, 2, [4.5, -1.0, f32::NAN, 7.0]),
         (&view.normal_hits, 3, [9.0, -9.0, f32::NEG_INFINITY, 3.0]),
         (&view.normal_hits, 4, [f32::NAN, 0.3, -0.6, 3.0]),
+        // An outline: one of three samples met a surface, the others saw the environment.
+        (&view.normal_hits, 5, [0.0, 0.0, 1.0, 1.0]),
+        (&view.moments, 5, [0.5, 0.5, 0.5, 0.0]),
     ];
+    // The bottom-right corner and its neighbours saw only the environment: the corner is kept.
+    for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+        poison.push((&view.normal_hits, corner(dx, dy), [0.0; 4]));
+        poison.push((&view.moments, corner(dx, dy), [0.25, 0.5, 0.75, 0.0]));
+    }
     for (buffer, pixel, value) in poison {
         app.ctx
             .queue
@@ -540,17 +551,21 @@ fn denoiser_inputs_pass_writes_the_host_paths_inputs() {
         moments.iter().any(|m| m[0] > 0.0),
         "the light is seen directly: some radiance is unscattered"
     );
-    // The colour: the mean less the unscattered mean, at least 0, then sanitised; its tolerance is 2 ulps of
-    // each mean (the difference cancels where the light is seen directly).
-    let (colour, colour_tolerance): (Vec<[f32; 3]>, Vec<[f32; 3]>) = accum
+    let splits = PixelSplit::of_image(view.width, view.height, &accum, &normal);
+    assert_eq!(splits[5], PixelSplit::Whole);
+    assert_eq!(splits[corner(0, 0)], PixelSplit::Kept);
+    assert_eq!(splits[corner(1, 1)], PixelSplit::Whole);
+    assert_eq!(splits[3], PixelSplit::Scattered);
+    // The colour: the host path's, sanitised; its tolerance is 2 ulps of each mean (the difference cancels where
+    // the light is seen directly).
+    let host = OidnInputs::from_sums(view.width, view.height, &accum, &albedo, &normal, &moments);
+    let (colour, colour_tolerance): (Vec<[f32; 3]>, Vec<[f32; 3]>) = host
+        .color
         .iter()
-        .zip(&moments)
-        .map(|(a, m)| {
+        .zip(accum.iter().zip(&moments))
+        .map(|(v, (a, m))| {
             let n = a[3].max(1.0);
-            let value = [0, 1, 2].map(|c| {
-                let v = (a[c] / n - m[c] / n).max(0.0);
-                if v.is_nan() { 0.0 } else { v.min(1e30) }
-            });
+            let value = v.map(|v| if v.is_nan() { 0.0 } else { v.clamp(0.0, 1e30) });
             // A poisoned (NaN) mean has an exact expected value (0) and no tolerance.
             let tolerance = [0, 1, 2].map(|c| {
                 let t = 2.0 * f32::EPSILON * ((a[c] / n).abs() + (m[c] / n).abs());
@@ -559,6 +574,9 @@ fn denoiser_inputs_pass_writes_the_host_paths_inputs() {
             (value, tolerance)
         })
         .unzip();
+    // The outline pixel's colour is its whole mean (its unscattered part not taken off).
+    let n5 = accum[5][3].max(1.0);
+    assert_eq!(colour[5], [0, 1, 2].map(|c| accum[5][c] / n5));
     let expected = |plane: &[[f32; 4]], lo: f32, hi: f32| -> Vec<[f32; 3]> {
         plane
             .iter()
@@ -632,7 +650,8 @@ fn denoiser_inputs_pass_writes_the_host_paths_inputs() {
 /// The pass that brings OIDN's output from shared memory to the display writes each pixel in the
 /// accumulation's layout with a count of 1: the output (negative channels as 0; a non-finite pixel as the noisy
 /// colour OIDN was given, as the host path's repair does) plus the mean unscattered radiance, which OIDN never
-/// saw.
+/// saw, where every sample met a surface; the output alone at outlines; the colour OIDN was given where only the
+/// environment was seen (`oidn::inputs::PixelSplit`).
 #[test]
 fn denoised_output_pass_shows_the_output_and_keeps_the_noisy_colour_where_it_is_not_finite() {
     use wgpu::util::DeviceExt;
@@ -660,46 +679,64 @@ fn denoised_output_pass_shows_the_output_and_keeps_the_noisy_colour_where_it_is_
                 usage: wgpu::BufferUsages::STORAGE,
             })
     };
-    // 2 samples per pixel (0 in the last: counted as 1); unscattered sums.
-    let accum = sums([[0.0, 0.0, 0.0, 2.0]; 4].map(|mut a| {
-        a[3] = 2.0;
-        a
-    }));
-    let moments = sums([
+    // 2 samples per pixel; unscattered sums.
+    let moments = [
         [0.0, 0.0, 0.0, 5.0],
         [1.0, 0.0, 0.0, 5.0],
         [0.0, 0.5, 0.0, 5.0],
         [f32::NAN, 0.0, 4.0, 5.0],
-    ]);
-    let sources = raykin::render::passes::denoiser_planes::DenoiserSources {
-        accum,
-        albedo_depth: plane(&color),
-        normal_hits: plane(&color),
-        moments,
-        width: 2,
-        height: 2,
+    ];
+    // The display's pixels for the samples' first-surface hits per pixel (`PixelSplit`).
+    let show = |hits: [f32; 4]| -> Vec<[f32; 4]> {
+        let sources = raykin::render::passes::denoiser_planes::DenoiserSources {
+            accum: sums([[0.0, 0.0, 0.0, 2.0]; 4]),
+            albedo_depth: sums([[0.5; 4]; 4]),
+            normal_hits: sums(hits.map(|h| [0.0, 0.0, h, h])),
+            moments: sums(moments),
+            width: 2,
+            height: 2,
+        };
+        let shown = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("test shown"),
+            size: 4 * 16,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
+        raykin::render::queries::write_denoised_output(
+            &ctx,
+            &sources,
+            [&plane(&output), &plane(&color)],
+            &shown,
+        );
+        bytemuck::pod_collect_to_vec(&ctx.read_buffer(&shown, 64))
     };
-    let shown = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("test shown"),
-        size: 4 * 16,
-        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-        mapped_at_creation: false,
-    });
-    raykin::render::queries::write_denoised_output(
-        &ctx,
-        &sources,
-        [&plane(&output), &plane(&color)],
-        &shown,
-    );
-    let got: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&ctx.read_buffer(&shown, 64));
+    // Every sample met a surface: the output plus the unscattered mean.
     assert_eq!(
-        got,
+        show([2.0; 4]),
         vec![
             [1.0, 2.0, 3.0, 1.0],
             [0.5, 0.5, 2.0, 1.0],
             [0.25, 0.75, 0.75, 1.0],
             [4.0, 5.0, 8.0, 1.0]
         ]
+    );
+    // An outline (pixel 0 half covered): the output alone everywhere, nothing added back.
+    assert_eq!(
+        show([1.0, 0.0, 0.0, 0.0]),
+        vec![
+            [1.0, 2.0, 3.0, 1.0],
+            [0.0, 0.5, 2.0, 1.0],
+            [0.25, 0.5, 0.75, 1.0],
+            [4.0, 5.0, 6.0, 1.0]
+        ]
+    );
+    // Only the environment: every pixel shows the colour OIDN was given, its output ignored.
+    assert_eq!(
+        show([0.0; 4]),
+        color
+            .iter()
+            .map(|c| [c[0], c[1], c[2], 1.0])
+            .collect::<Vec<_>>()
     );
 }
 

@@ -137,8 +137,8 @@ impl Oidn {
         &self.lib.path
     }
 
-    /// Denoises `images.color`, guided by the albedo and normal images when given, and adds
-    /// `images.unscattered` (not denoised) to the result.
+    /// Denoises `images.color`, guided by the albedo and normal images when given, shows `images.kept` pixels
+    /// as their (sanitised) input colour, and adds `images.unscattered` (not denoised) to the result.
     pub fn denoise(
         &mut self,
         images: &Images,
@@ -151,6 +151,14 @@ impl Oidn {
         let mut out = self.read(output, color.len())?;
         timings.download_ms = ms_since(start);
         let repaired = repair(&mut out, &color);
+        if let Some(kept) = images.kept {
+            use rayon::prelude::*;
+            out.par_iter_mut()
+                .zip(&color)
+                .zip(kept)
+                .filter(|(_, k)| **k)
+                .for_each(|((o, c), _)| *o = *c);
+        }
         if let Some(unscattered) = images.unscattered {
             use rayon::prelude::*;
             out.par_iter_mut().zip(unscattered).for_each(|(o, u)| {

@@ -58,6 +58,8 @@ pub struct Images<'a> {
     pub normal: Option<&'a [[f32; 3]]>,
     /// Radiance added to the output as it is, not denoised: what reached the camera unscattered (exact).
     pub unscattered: Option<&'a [[f32; 3]]>,
+    /// Pixels shown as their input colour, not denoised (where no sample met a surface: exact).
+    pub kept: Option<&'a [bool]>,
 }
 
 impl Images<'_> {
@@ -75,6 +77,7 @@ impl Images<'_> {
             ("albedo", self.albedo.map(<[_]>::len)),
             ("normal", self.normal.map(<[_]>::len)),
             ("unscattered", self.unscattered.map(<[_]>::len)),
+            ("kept", self.kept.map(<[_]>::len)),
         ] {
             if let Some(len) = len
                 && len != pixels
@@ -112,6 +115,7 @@ mod tests {
             albedo: Some(&albedo),
             normal: None,
             unscattered: None,
+            kept: None,
         };
         let text = images.validate().unwrap_err().to_string();
         assert!(
@@ -125,6 +129,7 @@ mod tests {
             albedo: None,
             normal: None,
             unscattered: None,
+            kept: None,
         };
         assert!(empty.validate().is_err());
     }

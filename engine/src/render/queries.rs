@@ -46,9 +46,10 @@ pub fn write_denoiser_inputs(
     ctx.wait_idle();
 }
 
-/// Writes a denoiser's packed float3 `output` plus the unscattered radiance of `sources` into `shown` in the
-/// accumulation's layout (sample count 1, what the display shows from `HostDenoised`), non-finite pixels
-/// replaced by the `color` plane it was given, and waits for the GPU.
+/// Writes a denoiser's packed float3 `output` plus the unscattered radiance of `sources` where it was split off
+/// into `shown` in the accumulation's layout (sample count 1, what the display shows from `HostDenoised`),
+/// non-finite and kept pixels (`oidn::inputs::PixelSplit`) from the `color` plane it was given, and waits for the
+/// GPU.
 pub fn write_denoised_output(
     ctx: &GpuContext,
     sources: &DenoiserSources,

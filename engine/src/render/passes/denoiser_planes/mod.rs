@@ -1,4 +1,5 @@
-//! The denoiser-planes pass: the accumulation's mean scattered radiance and first-hit albedo and normal,
+//! The denoiser-planes pass: the accumulation's mean radiance (split as `oidn::inputs::PixelSplit` says, in
+//! `split.wgsl`) and first-hit albedo and normal,
 //! sanitised, written as packed float3 planes (`pack.wgsl`) into buffers an external denoiser (Open Image
 //! Denoise's GPU device) reads in place, and its packed output plus the exact unscattered radiance turned back
 //! into the accumulation's layout for display (`unpack.wgsl`), so that neither the inputs nor a displayed result
@@ -13,13 +14,14 @@ pub use crate::render::view::DenoiserSources;
 
 pub const PACK_KERNEL: ShaderModule = ShaderModule {
     name: "denoiser_pack",
-    source: include_str!("pack.wgsl"),
+    // The pixel split both kernels share, then the kernel.
+    source: concat!(include_str!("split.wgsl"), include_str!("pack.wgsl")),
     requires: &["math"],
 };
 
 pub const UNPACK_KERNEL: ShaderModule = ShaderModule {
     name: "denoiser_unpack",
-    source: include_str!("unpack.wgsl"),
+    source: concat!(include_str!("split.wgsl"), include_str!("unpack.wgsl")),
     requires: &["math"],
 };
 
@@ -63,7 +65,7 @@ impl DenoiserPlanesPass {
         let unpack_layout = compute_layout(
             ctx,
             "denoiser_unpack",
-            &[Read, Read, Read, Read, ReadWrite, Params],
+            &[Read, Read, Read, Read, Read, ReadWrite, Params],
         );
         let pipeline = |label, kernel: &ShaderModule, layout, entry| {
             crate::gpu::compute_pipeline(ctx, label, compose(kernel), &[Some(layout)], entry)
@@ -122,8 +124,8 @@ impl DenoiserPlanesPass {
     }
 
     /// Records the unpacking of the denoiser's `output` plane (with the `color` plane it was given, for pixels
-    /// it returned non-finite), plus the unscattered radiance of `sources`, into `shown`, in the
-    /// accumulation's layout.
+    /// it returned non-finite and pixels the split keeps), plus the unscattered radiance of `sources` where it
+    /// was split off, into `shown`, in the accumulation's layout.
     pub fn encode_unpack(
         &self,
         ctx: &GpuContext,
@@ -142,6 +144,7 @@ impl DenoiserPlanesPass {
                 output,
                 color,
                 &sources.accum,
+                &sources.normal_hits,
                 &sources.moments,
                 shown,
                 &self.params,

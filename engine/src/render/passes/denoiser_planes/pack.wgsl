@@ -1,6 +1,6 @@
 // An external denoiser's inputs (Open Image Denoise's) from the accumulation, written in GPU memory it shares:
-// per pixel the mean scattered radiance (the mean minus what reached the camera unscattered, at least 0: that
-// part is exact and unpack.wgsl adds it back), first-hit albedo and first-hit normal (each sum over the samples
+// per pixel the mean radiance, less its unscattered part where split.wgsl's `pixel_split` says so (that part is
+// exact and unpack.wgsl adds it back), first-hit albedo and first-hit normal (each sum over the samples
 // divided by the sample count, as oidn::inputs does on the host), sanitised as oidn::filter does (NaN -> 0;
 // radiance in [0, max_radiance], albedo in [0, 1], normal in [-1, 1]) and stored as tightly packed float3
 // planes, the layout of OIDN's FLOAT3 images.
@@ -29,7 +29,9 @@ fn pack(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = gid.y * params.width + gid.x;
     let sum = accum[i];
     let n = max(sum.w, 1.0);
-    let color = sanitised3(max(sum.rgb / n - moments[i].rgb / n, vec3<f32>(0.0)), 0.0, params.max_radiance);
+    var mean = sum.rgb / n;
+    if pixel_split(gid.x, gid.y) == SPLIT_SCATTERED { mean = max(mean - moments[i].rgb / n, vec3<f32>(0.0)); }
+    let color = sanitised3(mean, 0.0, params.max_radiance);
     let albedo = sanitised3(albedo_depth[i].rgb / n, 0.0, 1.0);
     let normal = sanitised3(normal_hits[i].rgb / n, -1.0, 1.0);
     for (var c = 0u; c < 3u; c++) {
