@@ -41,7 +41,7 @@ impl PixelSplit {
         use rayon::prelude::*;
         let (w, h) = (width as usize, height as usize);
         let met_surface = |i: usize| normal_hits.get(i).is_some_and(|p| p[3] > 0.0);
-        (0..accum.len().min(w * h))
+        (0..accum.len().min(normal_hits.len()).min(w * h))
             .into_par_iter()
             .map(|i| {
                 let (hits, samples) = (normal_hits[i][3], accum[i][3]);
