@@ -710,26 +710,31 @@ fn denoised_output_pass_shows_the_output_and_keeps_the_noisy_colour_where_it_is_
         );
         bytemuck::pod_collect_to_vec(&ctx.read_buffer(&shown, 64))
     };
-    // Every sample met a surface: the output plus the unscattered mean.
-    assert_eq!(
-        show([2.0; 4]),
-        vec![
-            [1.0, 2.0, 3.0, 1.0],
-            [0.5, 0.5, 2.0, 1.0],
-            [0.25, 0.75, 0.75, 1.0],
-            [4.0, 5.0, 8.0, 1.0]
-        ]
-    );
-    // An outline (pixel 0 half covered): the output alone everywhere, nothing added back.
-    assert_eq!(
-        show([1.0, 0.0, 0.0, 0.0]),
-        vec![
-            [1.0, 2.0, 3.0, 1.0],
-            [0.0, 0.5, 2.0, 1.0],
-            [0.25, 0.5, 0.75, 1.0],
-            [4.0, 5.0, 6.0, 1.0]
-        ]
-    );
+    for (hits, expected, case) in [
+        (
+            [2.0; 4],
+            [
+                [1.0, 2.0, 3.0],
+                [0.5, 0.5, 2.0],
+                [0.25, 0.75, 0.75],
+                [4.0, 5.0, 8.0],
+            ],
+            "every sample met a surface: the output plus the unscattered mean",
+        ),
+        (
+            [1.0, 0.0, 0.0, 0.0],
+            [
+                [1.0, 2.0, 3.0],
+                [0.0, 0.5, 2.0],
+                [0.25, 0.5, 0.75],
+                [4.0, 5.0, 6.0],
+            ],
+            "an outline (pixel 0 half covered): the output alone, nothing added back",
+        ),
+    ] {
+        let expected: Vec<[f32; 4]> = expected.iter().map(|c| [c[0], c[1], c[2], 1.0]).collect();
+        assert_eq!(show(hits), expected, "{case}");
+    }
     // Only the environment: every pixel shows the colour OIDN was given, its output ignored.
     assert_eq!(
         show([0.0; 4]),

@@ -2,7 +2,8 @@
 # Device call: Russian roulette variants as error-vs-time curves (bench --curve RR: the default, from depth 2 or 5,
 # survival threshold 0.5 or 0.25, throughput relative to the first bounce's, that from depth 2) on the five static
 # bench scenes, then FlightHelmet's frame loop with and without texture work (a RAYKIN_SHADER_DIR probe whose
-# sample_texture returns a constant: notex-texture.wgsl copied to rel/var/notex/scene/texture.wgsl), alternating.
+# sample_texture returns a constant: rel/var/notex/scene/texture.wgsl is shaders/scene/texture.wgsl with
+# notex-texture.patch applied), alternating.
 # `rr.sh BINARY`: rel/BINARY.xz is 94c7a94 with rr-variants.patch, opt-level 3, stripped; rel/assets as in the
 # other scripts; results under $OUT. The first call ran the five scenes in one bench to 1024 spp and ran out of
 # time (its texture rows are call1/textures.txt); the second (call2/) set SKIP_TEXTURES=1.
