@@ -150,15 +150,7 @@ impl Oidn {
         let start = Instant::now();
         let mut out = self.read(output, color.len())?;
         timings.download_ms = ms_since(start);
-        let repaired = repair(&mut out, &color);
-        if let Some(kept) = images.kept {
-            use rayon::prelude::*;
-            out.par_iter_mut()
-                .zip(&color)
-                .zip(kept)
-                .filter(|(_, k)| **k)
-                .for_each(|((o, c), _)| *o = *c);
-        }
+        let repaired = repair(&mut out, &color, images.kept);
         if let Some(unscattered) = images.unscattered {
             use rayon::prelude::*;
             out.par_iter_mut().zip(unscattered).for_each(|(o, u)| {
@@ -604,15 +596,21 @@ unsafe fn host_pixels<'a>(lib: &Library, buffer: library::Buffer, pixels: usize)
     unsafe { std::slice::from_raw_parts((lib.get_buffer_data)(buffer).cast(), pixels) }
 }
 
-/// Replaces each non-finite output pixel by its input and clamps negative channels to 0; returns how many
-/// pixels were replaced.
-fn repair(out: &mut [[f32; 3]], input: &[[f32; 3]]) -> usize {
+/// Replaces each non-finite output pixel, and each pixel `kept` marks, by its input and clamps negative
+/// channels to 0 (unpack.wgsl's rule on the GPU path); returns how many non-finite pixels there were.
+fn repair(out: &mut [[f32; 3]], input: &[[f32; 3]], kept: Option<&[bool]>) -> usize {
     use rayon::prelude::*;
     out.par_iter_mut()
         .zip(input)
-        .map(|(o, i)| {
+        .enumerate()
+        .map(|(p, (o, i))| {
             let finite = o.iter().all(|v| v.is_finite());
-            *o = if finite { o.map(|v| v.max(0.0)) } else { *i };
+            let keep = kept.is_some_and(|k| k[p]);
+            *o = if finite && !keep {
+                o.map(|v| v.max(0.0))
+            } else {
+                *i
+            };
             usize::from(!finite)
         })
         .sum()
