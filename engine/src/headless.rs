@@ -53,6 +53,10 @@ impl HeadlessApp {
         app.insert_resource(ctx.clone())
             .insert_resource(settings.clone())
             .init_resource::<crate::oidn::HeadlessOidn>()
+            // OIDN per real-time frame, where the settings ask for it.
+            .insert_resource(crate::render::frame_denoiser::FrameDenoiser::install(
+                Box::<crate::oidn::OidnPerFrame>::default(),
+            ))
             .add_plugins(ScenePlugin {
                 scene: scene.clone(),
             })
@@ -362,6 +366,21 @@ impl HeadlessApp {
     /// The real-time path's colour history: mean radiance and history length per pixel.
     pub fn realtime_history(&self) -> Vec<([f32; 3], f32)> {
         crate::render::queries::realtime_history(self.app.world())
+    }
+
+    /// What OIDN per frame did since the last call (taken: `None` when no real-time frame went to it), or why
+    /// it failed (then the real-time path uses its a-trous filter).
+    pub fn take_frame_denoise_report(
+        &mut self,
+    ) -> Result<Option<crate::render::frame_denoiser::FrameDenoiseReport>, String> {
+        let mut d = self
+            .app
+            .world_mut()
+            .resource_mut::<crate::render::frame_denoiser::FrameDenoiser>();
+        match &d.failed {
+            Some(why) => Err(why.clone()),
+            None => Ok(d.last.take()),
+        }
     }
 
     /// The real-time G-buffer of the last real-time frame.

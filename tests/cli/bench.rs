@@ -107,7 +107,8 @@ fn quick_suite_motion_part_beats_restarting() {
 
 /// The motion part (issue 13): per scene, every method's evaluated frames have finite errors; on the animated
 /// interior every temporal method beats restart + spatial at the same frame count (settled relMSE at least 10%
-/// lower; measured at 40x30 on lavapipe 2026-12-02: 0.16 against 0.28).
+/// lower; measured at 40x30 on lavapipe 2026-12-02: 0.16 against 0.28), and OIDN per frame (on its CPU device)
+/// settles at least 20% below the a-trous filter it replaces.
 fn check_motion(results: &Value) {
     let scenes = results["motion"].as_array().expect("a motion part");
     assert!(!scenes.is_empty(), "no motion scenes");
@@ -134,6 +135,27 @@ fn check_motion(results: &Value) {
                     settled(c)
                 );
             }
+            // OIDN per frame in place of the a-trous filter (measured 2026-12-04: 0.10 against 0.17).
+            let method = |name: &str| {
+                curves
+                    .iter()
+                    .find(|c| c["method"] == name)
+                    .unwrap_or_else(|| panic!("interior: no {name} curve (is OIDN installed?)"))
+            };
+            let (oidn, atrous) = (method("gradients + OIDN balanced"), method("+ gradients"));
+            assert!(
+                oidn["oidn_device"]
+                    .as_str()
+                    .is_some_and(|d| d.starts_with("CPU")),
+                "{}",
+                oidn["oidn_device"]
+            );
+            assert!(
+                settled(oidn) < 0.8 * settled(atrous),
+                "interior: OIDN per frame settles at relMSE {} against the a-trous filter's {}",
+                settled(oidn),
+                settled(atrous)
+            );
         }
         for curve in curves {
             let points = curve["points"].as_array().unwrap();

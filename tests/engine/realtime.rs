@@ -706,3 +706,81 @@ fn the_adapter_check_asks_for_what_the_kernels_bind() {
         assert!(most <= raykin::gpu::MIN_STORAGE_BUFFERS_PER_STAGE, "{most}");
     }
 }
+
+/// A denoiser outside the renderer that asks to run on every frame and fails, counting its calls.
+struct FailingDenoiser(Arc<std::sync::atomic::AtomicUsize>);
+
+impl raykin::render::frame_denoiser::ExternalDenoise for FailingDenoiser {
+    fn wanted(&mut self, _: &raykin::gpu::GpuContext, _: &RenderSettings) -> bool {
+        true
+    }
+
+    fn denoise(
+        &mut self,
+        _: &raykin::gpu::GpuContext,
+        _: &raykin::render::view::DenoiserSources,
+        _: &wgpu::Buffer,
+        _: &RenderSettings,
+    ) -> Result<raykin::render::frame_denoiser::FrameDenoiseReport, String> {
+        self.0.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+        Err("the test's denoiser fails".into())
+    }
+}
+
+/// OIDN per frame replaces the a-trous filter only where it runs: with the default `FrameOidn::Shared` on a CPU
+/// adapter (OIDN's CPU device cannot read the GPU's memory) every moving frame is the a-trous filter's, bit for
+/// bit, and nothing is sent to OIDN; a per-frame denoiser that fails is asked once, its reason is kept, and that
+/// frame and the next show the a-trous image, bit for bit. (OIDN's own per-frame image: tests/engine/oidn.rs.)
+#[test]
+fn per_frame_denoiser_runs_only_where_wanted_and_falls_back_when_it_fails() {
+    use raykin::render::frame_denoiser::FrameDenoiser;
+    use raykin::render::{DenoiserKind, FrameOidn};
+    let (ctx, _gpu) = gpu();
+    let scene = cornell();
+    const SIZE: u32 = 24;
+    let run = |oidn: FrameOidn, denoiser: Option<FrameDenoiser>| {
+        let mut settings = cornell_settings(SIZE, 4);
+        settings.mode = RenderMode::Realtime;
+        settings.realtime.handover = false;
+        settings.denoiser = DenoiserKind::Oidn;
+        settings.realtime.oidn = oidn;
+        let mut app = HeadlessApp::new(ctx.clone(), scene.clone(), settings, &cornell_camera(0.0))
+            .expect("uploads");
+        if let Some(d) = denoiser {
+            app.app.world_mut().insert_resource(d);
+        }
+        let mut images = Vec::new();
+        for k in 0..3 {
+            app.pose(None, 0.0, &cornell_camera(10.0 * k as f32))
+                .unwrap();
+            steps(&mut app, 1);
+            images.push(app.displayed_radiance());
+        }
+        (images, app.take_frame_denoise_report())
+    };
+    let (atrous, report) = run(FrameOidn::Off, None);
+    assert_eq!(report, Ok(None));
+    for image in &atrous {
+        assert_all_finite(image, "a-trous frame");
+    }
+    let (shared, report) = run(FrameOidn::Shared, None);
+    assert_eq!(report, Ok(None), "OIDN ran per frame on a CPU adapter");
+    assert_eq!(
+        shared, atrous,
+        "FrameOidn::Shared changed a CPU adapter's frames"
+    );
+    let calls = Arc::new(std::sync::atomic::AtomicUsize::new(0));
+    let failing = FrameDenoiser::install(Box::new(FailingDenoiser(calls.clone())));
+    let (fallback, report) = run(FrameOidn::Always, Some(failing));
+    assert_eq!(calls.load(std::sync::atomic::Ordering::SeqCst), 1);
+    assert!(
+        report
+            .as_ref()
+            .is_err_and(|why| why.contains("the test's denoiser fails")),
+        "{report:?}"
+    );
+    assert_eq!(
+        fallback, atrous,
+        "a failed per-frame denoise showed another image"
+    );
+}

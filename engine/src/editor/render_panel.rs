@@ -2,7 +2,9 @@
 
 use super::EditorState;
 use crate::environment::{MapSettings, SunSkySettings};
-use crate::render::{AovView, DenoiserKind, Environment, RenderMode, RenderSettings, Tonemapper};
+use crate::render::{
+    AovView, DenoiserKind, Environment, FrameOidn, RenderMode, RenderSettings, Tonemapper,
+};
 use bevy_ecs::prelude::*;
 
 pub fn show(ui: &mut egui::Ui, world: &mut World, state: &mut EditorState) {
@@ -24,6 +26,14 @@ pub fn show(ui: &mut egui::Ui, world: &mut World, state: &mut EditorState) {
             ui.end_row();
             if s.mode == RenderMode::Realtime {
                 realtime_rows(ui, &mut s);
+                if let Some(d) = world.get_resource::<crate::render::frame_denoiser::FrameDenoiser>()
+                    && s.realtime.oidn != FrameOidn::Off
+                    && s.denoiser == DenoiserKind::Oidn
+                {
+                    ui.label("");
+                    ui.label(frame_oidn_status(d));
+                    ui.end_row();
+                }
             }
             ui.label("samples / frame");
             ui.add(egui::DragValue::new(&mut s.spp_per_frame).range(1..=256));
@@ -168,6 +178,23 @@ fn realtime_rows(ui: &mut egui::Ui, s: &mut RenderSettings) {
         ui.checkbox(&mut r.spatial, "spatial filter");
     });
     ui.end_row();
+    ui.label("  OIDN per frame");
+    ui.horizontal(|ui| {
+        for o in FrameOidn::ALL {
+            ui.selectable_value(&mut r.oidn, o, o.name());
+        }
+        ui.separator();
+        for q in crate::oidn::Quality::ALL {
+            ui.selectable_value(&mut r.oidn_quality, q, q.name());
+        }
+    })
+    .response
+    .on_hover_text(
+        "Open Image Denoise over the temporal history instead of the spatial filter, while anything \
+         moves (with OIDN as the denoiser). shared: only where OIDN's GPU device reads the GPU's memory \
+         (a few ms per frame); always: also through host copies (OIDN's CPU device: slow)",
+    );
+    ui.end_row();
     ui.label("  history length");
     ui.add(egui::DragValue::new(&mut r.history_cap).range(1..=1024))
         .on_hover_text(
@@ -204,6 +231,24 @@ fn realtime_rows(ui: &mut egui::Ui, s: &mut RenderSettings) {
         );
     });
     ui.end_row();
+}
+
+/// One line on the real-time path's per-frame OIDN.
+fn frame_oidn_status(d: &crate::render::frame_denoiser::FrameDenoiser) -> String {
+    match (&d.failed, &d.last) {
+        (Some(why), _) => format!("OIDN per frame failed, spatial filter instead: {why}"),
+        (None, Some(r)) => format!(
+            "last moving frame denoised on {} in {:.1} ms{}",
+            r.device,
+            r.ms,
+            if r.shared_memory {
+                " (GPU memory shared with wgpu)"
+            } else {
+                " (through host copies)"
+            }
+        ),
+        (None, None) => "moving frames use the spatial filter (OIDN per frame not run here)".into(),
+    }
 }
 
 /// One line on OIDN's state for the panel.

@@ -11,13 +11,15 @@
 //!   GPU device and the adapter allow it;
 //! - [`headless`]: OIDN for renders that wait for their image (CLI, recorder, benches);
 //! - [`worker`]: a background thread, so a denoise never blocks the viewer's frame loop;
-//! - [`viewer`]: when the viewer denoises with OIDN (a still image) and how its result reaches the display.
+//! - [`viewer`]: when the viewer denoises with OIDN (a still image) and how its result reaches the display;
+//! - [`per_frame`]: OIDN over each real-time frame's history, in place of the a-trous filter, where fast.
 
 pub mod device;
 pub mod filter;
 pub mod headless;
 pub mod inputs;
 pub mod library;
+pub mod per_frame;
 pub mod shared;
 pub mod viewer;
 pub mod worker;
@@ -26,6 +28,7 @@ pub use device::{AdapterIdentity, DeviceKind};
 pub use filter::{Denoised, Oidn, SharedImages, Timings};
 pub use headless::{HeadlessOidn, OidnImage};
 pub use inputs::{OidnInputs, read_inputs};
+pub use per_frame::OidnPerFrame;
 pub use viewer::{OidnStatus, OidnViewerPlugin, ViewerOidn};
 
 pub use crate::render::settings::{AuxMode, DenoiseOptions, Quality};

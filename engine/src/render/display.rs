@@ -4,7 +4,7 @@
 use super::passes::denoise::{DenoiseInputs, Denoiser};
 use super::passes::handover::{HandoverBuffers, HandoverParams};
 use super::passes::tonemap::{TonemapInput, TonemapParams, TonemapPass};
-use super::realtime::{Realtime, RealtimeTargets, Shown};
+use super::realtime::{Realtime, RealtimeImage, RealtimeTargets, Shown};
 use super::settings::RenderSettings;
 use super::stats::{FrameStats, TONEMAP_PAIR};
 use super::view::ViewTargets;
@@ -58,7 +58,7 @@ impl<'a> Display<'a> {
             self.ctx,
             encoder,
             &HandoverBuffers {
-                realtime: realtime_image(targets, realtime.spatial_filter.as_ref(), settings),
+                realtime: realtime_image(realtime, targets),
                 accumulated,
                 output: &targets.handover,
             },
@@ -116,19 +116,21 @@ impl<'a> Display<'a> {
     }
 }
 
-/// The last real-time frame's displayed radiance (in the accumulation's layout): the spatial filter's output,
-/// or the history itself when the filter is off.
+/// The last real-time frame's displayed radiance (in the accumulation's layout): the external denoiser's
+/// output, the spatial filter's, or the history itself, as that frame recorded.
 pub fn realtime_image<'t>(
+    realtime: &'t Realtime,
     targets: &'t RealtimeTargets,
-    spatial_filter: Option<&'t Denoiser>,
-    settings: &RenderSettings,
 ) -> &'t wgpu::Buffer {
-    if settings.realtime.spatial {
-        spatial_filter
+    let history = &targets.history.accum;
+    match realtime.state.image {
+        RealtimeImage::External => realtime.external_image.as_ref().unwrap_or(history),
+        RealtimeImage::Spatial => realtime
+            .spatial_filter
+            .as_ref()
             .and_then(Denoiser::output)
-            .unwrap_or(&targets.history.accum)
-    } else {
-        &targets.history.accum
+            .unwrap_or(history),
+        RealtimeImage::History => history,
     }
 }
 

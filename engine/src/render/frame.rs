@@ -15,7 +15,9 @@
 //! 4. gradient: last frame's gradient samples shaded again, filtered (A-SVGF);
 //! 5. realtime_trace: one path per pixel from the G-buffer hit;
 //! 6. temporal: history reprojected, shortened by the gradients, the new sample blended in;
-//! 7. denoise: the a-trous filter over the history, with its temporal variance;
+//! 7. denoise: the a-trous filter over the history, with its temporal variance; or, where OIDN runs per frame
+//!    ([`FrameDenoiser`]), the frame so far is submitted, OIDN denoises the history, and the rest follows in
+//!    a second submission;
 //! 8. tonemap.
 //!
 //! Once nothing moves, the still accumulates as above and the display hands over from the last real-time image
@@ -24,6 +26,7 @@
 use super::accumulation::Accumulation;
 use super::display::{Display, tonemap_params};
 use super::frame_constants::{FrameConstants, write_frame_constants};
+use super::frame_denoiser::FrameDenoiser;
 use super::gpu_scene::{GpuScene, SceneWrites};
 use super::host_denoised::HostDenoised;
 use super::layout::{LIGHT_DIRECTIONAL, LIGHT_ENVIRONMENT, LIGHT_SUN};
@@ -32,7 +35,9 @@ use super::passes::denoise::{DenoiseInputs, Denoiser};
 use super::passes::gradient::FILTERED;
 use super::passes::tonemap::{TonemapInput, TonemapPass};
 use super::passes::trace::TracePass;
-use super::realtime::{Realtime, RealtimePasses, SceneGroups, Shown, runs as realtime_runs};
+use super::realtime::{
+    Realtime, RealtimeImage, RealtimePasses, SceneGroups, Shown, runs as realtime_runs,
+};
 use super::scene_bindings::SceneBindings;
 use super::settings::RenderSettings;
 use super::stats::*;
@@ -65,6 +70,7 @@ pub fn render_frame(
     mut deform: ResMut<DeformCommands>,
     mut realtime: ResMut<Realtime>,
     host_denoised: Res<HostDenoised>,
+    mut frame_denoiser: ResMut<FrameDenoiser>,
 ) {
     if view.resize(&ctx, settings.width, settings.height) {
         denoiser.release();
@@ -85,7 +91,7 @@ pub fn render_frame(
                 &mut scene,
                 &mut bindings,
                 &view,
-                &mut realtime,
+                (&mut realtime, &mut frame_denoiser),
                 &tonemap,
                 &mut stats,
                 deform,
@@ -198,10 +204,10 @@ pub fn encode_realtime_frame(
     scene: &mut GpuScene,
     bindings: &mut SceneBindings,
     view: &ViewTargets,
-    realtime: &mut Realtime,
+    (realtime, frame_denoiser): (&mut Realtime, &mut FrameDenoiser),
     tonemap: &TonemapPass,
     stats: &mut FrameStats,
-    deform: Vec<wgpu::CommandBuffer>,
+    mut deform: Vec<wgpu::CommandBuffer>,
 ) {
     // ReSTIR DI runs when some light is at a finite distance. A scene lit only from infinity (sky, sun,
     // directional lights) keeps next-event estimation at the first hit: on the H200's sky-lit crowd ReSTIR
@@ -217,6 +223,7 @@ pub fn encode_realtime_frame(
         passes,
         targets,
         spatial_filter,
+        external_image,
         state,
     } = realtime;
     let targets = targets.as_mut().expect("made by targets_for");
@@ -308,25 +315,54 @@ pub fn encode_realtime_frame(
         targets,
         stats.realtime_writes(TEMPORAL_PAIR),
     );
-    let image = if plan.spatial {
-        let h = &targets.history;
-        spatial_filter.encode(
+    let h = &targets.history;
+    let history = DenoiseInputs {
+        accum: &h.accum,
+        albedo_depth: &h.albedo_depth,
+        normal_hits: &h.normal_hits,
+        moments: &h.moments,
+        width: view.width,
+        height: view.height,
+    };
+    let mut shown = if plan.spatial {
+        RealtimeImage::Spatial
+    } else {
+        RealtimeImage::History
+    };
+    if plan.spatial && frame_denoiser.runs(ctx, settings) {
+        // The denoiser reads the history once this much has run: submit it, then record the rest anew.
+        let first = std::mem::replace(
+            &mut encoder,
+            ctx.device.create_command_encoder(&Default::default()),
+        );
+        ctx.queue.submit(
+            std::mem::take(&mut deform)
+                .into_iter()
+                .chain([first.finish()]),
+        );
+        let output = external_image.get_or_insert_with(|| {
+            super::host_denoised::HostDenoised::image_buffer_sized(ctx, view.accum.size())
+        });
+        if frame_denoiser.denoise(ctx, &h.denoiser_sources(view), output, settings) {
+            shown = RealtimeImage::External;
+        }
+    }
+    let image = match shown {
+        RealtimeImage::Spatial => spatial_filter.encode(
             ctx,
             &mut encoder,
-            &DenoiseInputs {
-                accum: &h.accum,
-                albedo_depth: &h.albedo_depth,
-                normal_hits: &h.normal_hits,
-                moments: &h.moments,
-                width: view.width,
-                height: view.height,
-            },
+            &history,
             &settings.denoise_params,
             stats.realtime_writes(SPATIAL_PAIR),
-        )
-    } else {
-        stats.time_skipped(&mut encoder, SPATIAL_PAIR);
-        &targets.history.accum
+        ),
+        RealtimeImage::External => {
+            stats.time_skipped(&mut encoder, SPATIAL_PAIR);
+            external_image.as_ref().expect("written above")
+        }
+        RealtimeImage::History => {
+            stats.time_skipped(&mut encoder, SPATIAL_PAIR);
+            &h.accum
+        }
     };
     tonemap.encode(
         ctx,
@@ -351,5 +387,5 @@ pub fn encode_realtime_frame(
     if stats.time_passes {
         stats.last_pass_times = stats.read_pass_times(ctx);
     }
-    state.end_frame(camera, &plan);
+    state.end_frame(camera, &plan, shown);
 }

@@ -4,6 +4,7 @@
 //!   lights); [`scene_bindings`]: group 0 over them; [`environment`]: the environment setting as lights.
 //! - [`view`]: the view's targets (accumulation, AOVs, display image); [`accumulation`]: its sample count and
 //!   restart flag; [`host_denoised`]: an image denoised on the host (OIDN) for the display to show;
+//!   [`frame_denoiser`]: the denoiser outside the renderer that a real-time frame may hand its history to;
 //!   [`realtime`]: the real-time path's targets and state (G-buffers, histories, reservoirs).
 //! - [`passes`]: one struct per GPU pass beside its WGSL kernel; [`shaders`]: the WGSL library they compose.
 //! - [`frame`]: the frame's passes in order, in one submission; [`systems`]: what runs before it (refit on the
@@ -16,6 +17,7 @@ pub mod display;
 pub mod environment;
 pub mod frame;
 pub mod frame_constants;
+pub mod frame_denoiser;
 pub mod gpu_scene;
 pub mod host_denoised;
 pub mod layout;
@@ -38,8 +40,8 @@ pub use gpu_scene::{GpuMemory, GpuScene, InstanceInput, UploadError};
 pub use host_denoised::HostDenoised;
 pub use passes::denoise::{DenoiseParams, Denoiser};
 pub use settings::{
-    AovView, DenoiserKind, Environment, LightSampler, RealtimeSettings, RenderMode, RenderSettings,
-    RestirSettings, ThinLens, Tonemapper,
+    AovView, DenoiserKind, Environment, FrameOidn, LightSampler, RealtimeSettings, RenderMode,
+    RenderSettings, RestirSettings, ThinLens, Tonemapper,
 };
 pub use stats::{FrameStats, GpuFrameStats, PassTimes, RayCastTiming};
 pub use view::{Aovs, PrimaryHit, ViewTargets};
@@ -109,6 +111,7 @@ impl Plugin for RenderPlugin {
             .init_resource::<DeformedElsewhere>()
             .init_resource::<Accumulation>()
             .init_resource::<HostDenoised>()
+            .init_resource::<frame_denoiser::FrameDenoiser>()
             .init_resource::<GeometryChanged>()
             .init_resource::<InstanceMap>()
             .init_resource::<frame::DeformCommands>()

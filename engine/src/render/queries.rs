@@ -148,9 +148,7 @@ pub fn displayed_radiance(world: &World) -> Vec<[f32; 3]> {
     let settings = world.resource::<RenderSettings>();
     let realtime = world.resource::<Realtime>();
     let buffer = match (&realtime.targets, realtime.state.shown, runs(settings)) {
-        (Some(t), Shown::Realtime, true) => {
-            super::display::realtime_image(t, realtime.spatial_filter.as_ref(), settings)
-        }
+        (Some(t), Shown::Realtime, true) => super::display::realtime_image(realtime, t),
         (Some(t), Shown::Handover, true) => &t.handover,
         _ => {
             if let Some(image) = host_denoised(world) {

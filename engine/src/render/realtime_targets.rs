@@ -68,6 +68,21 @@ pub struct HistoryBuffers {
 }
 
 impl HistoryBuffers {
+    /// The history as an external denoiser reads an accumulation of `view`'s size.
+    pub fn denoiser_sources(
+        &self,
+        view: &super::view::ViewTargets,
+    ) -> super::view::DenoiserSources {
+        super::view::DenoiserSources {
+            accum: self.accum.clone(),
+            albedo_depth: self.albedo_depth.clone(),
+            normal_hits: self.normal_hits.clone(),
+            moments: self.moments.clone(),
+            width: view.width,
+            height: view.height,
+        }
+    }
+
     fn new(ctx: &GpuContext, pixels: u64, label: &str) -> Self {
         let b = |what: &str| storage_buffer(ctx, &format!("{label} {what}"), pixels * 16);
         Self {

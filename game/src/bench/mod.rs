@@ -434,7 +434,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             let m = motion::measure(&ctx, scene, &base, &plan, &args.cache)?;
             for c in &m.curves {
                 eprintln!(
-                    "raykin bench: {} motion {}x{}: {}: relMSE {:.4} FLIP {:.4} settled, GPU {:.2} ms/frame{}{}",
+                    "raykin bench: {} motion {}x{}: {}: relMSE {:.4} FLIP {:.4} settled, GPU {:.2} ms/frame, wall {:.2} ms{}{}{}",
                     m.scene,
                     m.width,
                     m.height,
@@ -442,6 +442,12 @@ pub fn run(args: &BenchArgs) -> Result<()> {
                     c.steady_rel_mse,
                     c.steady_flip,
                     c.gpu_ms.median,
+                    c.wall_ms.median,
+                    c.oidn_ms.as_ref().map_or(String::new(), |o| format!(
+                        ", OIDN {:.2} ms on {}",
+                        o.median,
+                        c.oidn_device.as_deref().unwrap_or("?")
+                    )),
                     c.band_to_rest.map_or(String::new(), |r| format!(
                         ", disoccluded/rest error {r:.2}"
                     )),
@@ -715,18 +721,24 @@ path-trace kernel; relMSE on tone-mapped images against the cached reference, it
 ray casting: the shading-free pass (camera rays through pixel centres, then one cosine-distributed bounce ray \
 per hit), per size.\n";
     if !r.motion.is_empty() {
-        s += "\n| scene | size | method | GPU ms/frame (median, p99) | settled relMSE | settled FLIP | disoccluded / rest error | lamp switch settles in |\n";
-        s += "|---|---|---|---|---|---|---|---|\n";
+        s += "\n| scene | size | method | GPU ms/frame (median, p99) | wall ms/frame (median) | OIDN ms/frame (median, device) | settled relMSE | settled FLIP | disoccluded / rest error | lamp switch settles in |\n";
+        s += "|---|---|---|---|---|---|---|---|---|---|\n";
         for m in &r.motion {
             for c in &m.curves {
                 s += &format!(
-                    "| {} | {}x{} | {} | {:.2} / {:.2} | {:.4} | {:.4} | {} | {} |\n",
+                    "| {} | {}x{} | {} | {:.2} / {:.2} | {:.2} | {} | {:.4} | {:.4} | {} | {} |\n",
                     m.scene,
                     m.width,
                     m.height,
                     c.method,
                     c.gpu_ms.median,
                     c.gpu_ms.p99,
+                    c.wall_ms.median,
+                    c.oidn_ms.as_ref().map_or("-".into(), |o| format!(
+                        "{:.2} ({})",
+                        o.median,
+                        c.oidn_device.as_deref().unwrap_or("?")
+                    )),
                     c.steady_rel_mse,
                     c.steady_flip,
                     c.band_to_rest.map_or("-".into(), |x| format!("{x:.2}")),

@@ -5,7 +5,10 @@
 //!   accumulate mode plus the denoiser shows in motion;
 //! - + reprojection: temporal accumulation through the motion vectors (SVGF);
 //! - + gradients: A-SVGF temporal gradients shorten the history where lighting changed;
-//! - + ReSTIR DI: direct light by ReSTIR (candidates, temporal, spatial and visibility reuse).
+//! - + ReSTIR DI: direct light by ReSTIR (candidates, temporal, spatial and visibility reuse);
+//! - OIDN per frame (fast, balanced, high): the gradients method with Open Image Denoise over the history in
+//!   place of the a-trous filter (through host copies where OIDN cannot read the GPU's memory; skipped, with a
+//!   note, where OIDN cannot run at all).
 //!
 //! Per frame: relMSE and FLIP of the tone-mapped image, GPU time (every pass of the frame) and wall time;
 //! the error of pixels disoccluded within the last [`BAND_FRAMES`] frames against the rest; and, where the
@@ -19,7 +22,8 @@ use crate::stats::Spread;
 use anyhow::Result;
 use raykin::gpu::GpuContext;
 use raykin::headless::HeadlessApp;
-use raykin::render::{RealtimeSettings, RenderMode, RenderSettings};
+use raykin::oidn::Quality;
+use raykin::render::{DenoiserKind, FrameOidn, RealtimeSettings, RenderMode, RenderSettings};
 use std::path::Path;
 
 /// One curve: a method of making frames in motion, as a change of the real-time settings.
@@ -36,6 +40,7 @@ pub const METHODS: &[Method] = &[
             r.temporal = false;
             r.gradients = false;
             r.restir.enabled = false;
+            r.oidn = FrameOidn::Off;
         },
     },
     Method {
@@ -43,17 +48,43 @@ pub const METHODS: &[Method] = &[
         apply: |r| {
             r.gradients = false;
             r.restir.enabled = false;
+            r.oidn = FrameOidn::Off;
         },
     },
     Method {
         name: "+ gradients",
-        apply: |r| r.restir.enabled = false,
+        apply: |r| {
+            r.restir.enabled = false;
+            r.oidn = FrameOidn::Off;
+        },
     },
     Method {
         name: "+ ReSTIR DI",
-        apply: |r| r.restir.enabled = true,
+        apply: |r| {
+            r.restir.enabled = true;
+            r.oidn = FrameOidn::Off;
+        },
+    },
+    Method {
+        name: "gradients + OIDN fast",
+        apply: |r| oidn_per_frame(r, Quality::Fast),
+    },
+    Method {
+        name: "gradients + OIDN balanced",
+        apply: |r| oidn_per_frame(r, Quality::Balanced),
+    },
+    Method {
+        name: "gradients + OIDN high",
+        apply: |r| oidn_per_frame(r, Quality::High),
     },
 ];
+
+/// The gradients method with OIDN over the history each frame.
+fn oidn_per_frame(r: &mut RealtimeSettings, quality: Quality) {
+    r.restir.enabled = false;
+    r.oidn = FrameOidn::Always;
+    r.oidn_quality = quality;
+}
 
 /// Index of the method whose history lengths define the disocclusion band (temporal, no gradients: a short
 /// history there means the surface was not visible a few frames ago).
@@ -93,9 +124,13 @@ pub struct LagResult {
 pub struct MotionCurve {
     pub method: String,
     pub points: Vec<MotionPoint>,
-    /// Every pass of each frame summed (GPU timestamps), and wall time of frames without a readback.
+    /// Every pass of each frame summed (GPU timestamps; OIDN per frame not included), and wall time of frames
+    /// without a readback.
     pub gpu_ms: Spread,
     pub wall_ms: Spread,
+    /// OIDN per frame: its wall time per frame and the device that ran it (None for the a-trous methods).
+    pub oidn_ms: Option<Spread>,
+    pub oidn_device: Option<String>,
     /// Median per pass.
     pub passes_median_ms: PassMedians,
     /// Mean tone-mapped relMSE over the evaluated frames from K/4 on (before any switch): the displayed
@@ -194,8 +229,21 @@ pub fn measure(
         };
         settings.realtime.handover = false;
         (method.apply)(&mut settings.realtime);
+        let oidn = settings.realtime.oidn != FrameOidn::Off;
+        if oidn {
+            settings.denoiser = DenoiserKind::Oidn;
+        }
         let mut app = super::open_app(ctx, scene, settings)?;
-        let run = run_method(&mut app, scene, plan, &frames, switch)?;
+        let run = match run_method(&mut app, scene, plan, &frames, switch, oidn)? {
+            Ok(run) => run,
+            Err(why) => {
+                eprintln!(
+                    "raykin bench: {}: {} skipped: {why}",
+                    scene.name, method.name
+                );
+                continue;
+            }
+        };
         if m == BAND_METHOD {
             bands = run
                 .lengths
@@ -234,21 +282,27 @@ struct Run {
     gpu_ms: Vec<f64>,
     wall_ms: Vec<f64>,
     passes: Vec<raykin::render::PassTimes>,
+    oidn_ms: Vec<f64>,
+    oidn_device: Option<String>,
 }
 
+/// One method's frames; the inner error says why OIDN per frame (`oidn`) did not run.
 fn run_method(
     app: &mut HeadlessApp,
     scene: &BenchScene,
     plan: &MotionPlan,
     frames: &[usize],
     switch: Option<usize>,
-) -> Result<Run> {
+    oidn: bool,
+) -> Result<std::result::Result<Run, String>> {
     let mut run = Run {
         images: Vec::new(),
         lengths: Vec::new(),
         gpu_ms: Vec::new(),
         wall_ms: Vec::new(),
         passes: Vec::new(),
+        oidn_ms: Vec::new(),
+        oidn_device: None,
     };
     for k in 0..plan.frames {
         if Some(k) == switch {
@@ -257,6 +311,16 @@ fn run_method(
         let start = std::time::Instant::now();
         app.step();
         let wall = start.elapsed().as_secs_f64() * 1e3;
+        if oidn {
+            match app.take_frame_denoise_report() {
+                Ok(Some(report)) => {
+                    run.oidn_ms.push(report.ms);
+                    run.oidn_device = Some(report.device);
+                }
+                Ok(None) => return Ok(Err("OIDN per frame did not run".into())),
+                Err(why) => return Ok(Err(why)),
+            }
+        }
         if let Some(p) = app.pass_times() {
             run.gpu_ms.push(
                 p.skin_ms
@@ -285,7 +349,7 @@ fn run_method(
             run.wall_ms.push(wall);
         }
     }
-    Ok(run)
+    Ok(Ok(run))
 }
 
 /// Switches the scene's lamp on (a material edit, as the editor makes it).
@@ -376,6 +440,8 @@ fn score(
         method: method.name.to_string(),
         gpu_ms: Spread::of(&run.gpu_ms),
         wall_ms: Spread::of(&run.wall_ms),
+        oidn_ms: (!run.oidn_ms.is_empty()).then(|| Spread::of(&run.oidn_ms)),
+        oidn_device: run.oidn_device.clone(),
         passes_median_ms: PassMedians {
             deform: pass(|p| p.skin_ms + p.refit_ms),
             gbuffer: pass(|p| p.gbuffer_ms),

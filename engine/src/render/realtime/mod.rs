@@ -97,6 +97,18 @@ pub enum Shown {
     Handover,
 }
 
+/// Which image a real-time frame displayed.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum RealtimeImage {
+    /// The colour history itself (no spatial filter).
+    #[default]
+    History,
+    /// The a-trous filter's output over the history.
+    Spatial,
+    /// The external denoiser's (`render::frame_denoiser`, OIDN per frame): [`Realtime::external_image`].
+    External,
+}
+
 /// What the real-time path remembers between frames.
 #[derive(Default)]
 pub struct RealtimeState {
@@ -116,6 +128,8 @@ pub struct RealtimeState {
     /// Drop every history at the next frame (a camera cut, a scene change).
     pub reset_requested: bool,
     pub shown: Shown,
+    /// What the last real-time frame displayed.
+    pub image: RealtimeImage,
     /// How many times every history was dropped (resize, cut, settings, reset).
     pub resets: u64,
 }
@@ -128,6 +142,9 @@ pub struct Realtime {
     /// The SVGF spatial filter over the history, with its own view-size buffers (the accumulation's
     /// denoiser keeps its own); made and released with the targets.
     pub spatial_filter: Option<Denoiser>,
+    /// The external denoiser's output in the display's layout (`HostDenoised::image_buffer`), made at its
+    /// first frame; released with the targets.
+    pub external_image: Option<wgpu::Buffer>,
     pub state: RealtimeState,
 }
 
@@ -156,6 +173,7 @@ impl Realtime {
         {
             self.targets = Some(RealtimeTargets::new(ctx, width, height));
             self.spatial_filter = Some(Denoiser::new(ctx));
+            self.external_image = None;
             self.state.invalidate();
         }
         self.targets.as_mut().expect("made above")
@@ -165,6 +183,7 @@ impl Realtime {
     pub fn release_targets(&mut self) {
         self.targets = None;
         self.spatial_filter = None;
+        self.external_image = None;
         self.state.invalidate();
     }
 }
@@ -266,8 +285,14 @@ impl RealtimeState {
         }
     }
 
-    /// After the frame's passes were recorded: what the next frame may reuse.
-    pub fn end_frame(&mut self, camera: &CameraView, plan: &RealtimeFramePlan) {
+    /// After the frame's passes were recorded: what the next frame may reuse, and which `image` it showed.
+    pub fn end_frame(
+        &mut self,
+        camera: &CameraView,
+        plan: &RealtimeFramePlan,
+        image: RealtimeImage,
+    ) {
+        self.image = image;
         self.prev_camera = Some(*camera);
         self.history_valid = true;
         self.reservoirs_valid = plan.restir;

@@ -7,7 +7,7 @@ mod denoise;
 mod realtime;
 
 pub use denoise::{AuxMode, DenoiseOptions, DenoiseParams, DenoiserKind, Quality};
-pub use realtime::{RealtimeSettings, RenderMode, RestirSettings};
+pub use realtime::{FrameOidn, RealtimeSettings, RenderMode, RestirSettings};
 
 /// What rays leaving the scene see. Every kind is a light the light sampler picks (importance-sampled,
 /// with MIS against BSDF sampling): `crate::environment` turns it into a map (and a sun).

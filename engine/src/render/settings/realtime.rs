@@ -1,5 +1,6 @@
 //! The real-time path's settings (`RenderMode::Realtime`): its passes, ReSTIR DI and the still's hand-over.
 
+use super::denoise::Quality;
 use serde::{Deserialize, Serialize};
 
 /// How frames are made while the camera or scene moves.
@@ -65,6 +66,12 @@ pub struct RealtimeSettings {
     pub gradients: bool,
     /// The a-trous filter (the denoiser, with `denoise_params`) over the temporally accumulated signal.
     pub spatial: bool,
+    /// Open Image Denoise over the temporally accumulated signal each frame, in place of the a-trous filter
+    /// (with `spatial` on and `RenderSettings::denoiser` OIDN).
+    pub oidn: FrameOidn,
+    /// The per-frame OIDN filter's quality (its albedo and normal come from the history of one camera ray per
+    /// pixel, so they are used as they are, without prefiltering).
+    pub oidn_quality: Quality,
     /// Longest history in frames: beyond it, an exponential average with weight 1 / cap.
     pub history_cap: u32,
     /// Relative depth difference a history tap may have (plus the plane's slope over a pixel).
@@ -88,6 +95,8 @@ impl Default for RealtimeSettings {
             temporal: true,
             gradients: true,
             spatial: true,
+            oidn: FrameOidn::default(),
+            oidn_quality: Quality::Balanced,
             history_cap: 32,
             depth_tolerance: 0.02,
             normal_tolerance: 0.9,
@@ -95,6 +104,33 @@ impl Default for RealtimeSettings {
             handover: true,
             handover_spp: 64,
             inject_nonfinite: false,
+        }
+    }
+}
+
+/// When the real-time path denoises each frame with Open Image Denoise.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum FrameOidn {
+    /// Never: the a-trous filter.
+    Off,
+    /// Where OIDN's GPU device reads the history in GPU memory it shares with wgpu (CUDA beside Vulkan on
+    /// NVIDIA): a few milliseconds per frame at 1440p on the H200. Elsewhere the a-trous filter.
+    #[default]
+    Shared,
+    /// On every device, through host copies where memory cannot be shared (OIDN's CPU device takes a
+    /// second or more per 1080p frame on a few cores).
+    Always,
+}
+
+impl FrameOidn {
+    pub const ALL: [FrameOidn; 3] = [FrameOidn::Off, FrameOidn::Shared, FrameOidn::Always];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            FrameOidn::Off => "off",
+            FrameOidn::Shared => "shared",
+            FrameOidn::Always => "always",
         }
     }
 }

@@ -1,0 +1,101 @@
+//! OIDN per frame in the real-time path (`RealtimeSettings::oidn`): the renderer hands each frame's colour
+//! history to [`OidnPerFrame`] (through `render::frame_denoiser`) in place of its a-trous filter, and shows
+//! what it writes. With [`FrameOidn::Shared`] it runs only where OIDN's GPU device reads the history in GPU
+//! memory it shares with wgpu (a few milliseconds per 1440p frame on the H200, docs/BENCHMARKS.md); with
+//! [`FrameOidn::Always`] also through host copies (OIDN's CPU device: far from real time, but the same image).
+//! Unlike the viewer's still-image denoise ([`super::viewer`]) it blocks the frame: the frame's image is its
+//! output.
+
+use super::device::{AdapterIdentity, DeviceRequest};
+use super::{AuxMode, DenoiseOptions, Oidn, OidnError};
+use crate::gpu::GpuContext;
+use crate::render::frame_denoiser::{ExternalDenoise, FrameDenoiseReport};
+use crate::render::settings::FrameOidn;
+use crate::render::view::DenoiserSources;
+use crate::render::{HostDenoised, RenderSettings};
+use std::time::Instant;
+
+/// The real-time path's OIDN: its own device (the viewer's still-image worker keeps another), opened at the
+/// first frame that asks for it.
+#[derive(Default)]
+pub struct OidnPerFrame {
+    oidn: Option<Result<Oidn, OidnError>>,
+    /// Denoising in shared GPU memory failed once: host copies from then on (`Always`) or not at all.
+    shared_failed: bool,
+}
+
+impl OidnPerFrame {
+    /// What a frame is denoised with: the settings' quality, HDR radiance, and the history's albedo and normal
+    /// trusted as they are (averages of one camera ray per pixel per frame: no path noise to prefilter).
+    pub fn options(settings: &RenderSettings) -> DenoiseOptions {
+        DenoiseOptions {
+            quality: settings.realtime.oidn_quality,
+            hdr: true,
+            aux: AuxMode::Clean,
+        }
+    }
+
+    fn open(&mut self, ctx: &GpuContext) -> Result<&mut Oidn, OidnError> {
+        let request = DeviceRequest::MatchAdapter(AdapterIdentity::from_wgpu(&ctx.info));
+        match self.oidn.get_or_insert_with(|| Oidn::new(&request)) {
+            Ok(o) => Ok(o),
+            Err(e) => Err(e.clone()),
+        }
+    }
+
+    /// OIDN's GPU device reads wgpu's memory here (opens the device the first time on a GPU adapter it has a
+    /// backend for; never on CPU adapters).
+    fn shares_memory(&mut self, ctx: &GpuContext) -> bool {
+        if self.shared_failed || AdapterIdentity::from_wgpu(&ctx.info).gpu_kind().is_none() {
+            return false;
+        }
+        self.open(ctx).is_ok_and(|o| o.shares_memory_with(ctx))
+    }
+}
+
+impl ExternalDenoise for OidnPerFrame {
+    fn wanted(&mut self, ctx: &GpuContext, settings: &RenderSettings) -> bool {
+        match settings.realtime.oidn {
+            FrameOidn::Off => false,
+            FrameOidn::Shared => self.shares_memory(ctx),
+            FrameOidn::Always => true,
+        }
+    }
+
+    fn denoise(
+        &mut self,
+        ctx: &GpuContext,
+        sources: &DenoiserSources,
+        shown: &wgpu::Buffer,
+        settings: &RenderSettings,
+    ) -> Result<FrameDenoiseReport, String> {
+        let options = Self::options(settings);
+        // The frame so far first, so that the time below is the denoise's alone.
+        ctx.wait_idle();
+        let start = Instant::now();
+        let mut shared_failed = self.shared_failed;
+        let oidn = self.open(ctx).map_err(|e| e.to_string())?;
+        let shared = super::shared::attempt(oidn, ctx, &mut shared_failed, |o| {
+            super::shared::denoise_into(o, ctx, sources, &options, shown)
+        });
+        let shared_memory = shared.is_some();
+        if !shared_memory {
+            if settings.realtime.oidn == FrameOidn::Shared {
+                self.shared_failed = shared_failed;
+                return Err("Open Image Denoise cannot read the GPU's memory here".into());
+            }
+            let (inputs, _) = super::inputs::read_sources(ctx, sources);
+            let denoised = oidn
+                .denoise(&inputs.images(), &options)
+                .map_err(|e| e.to_string())?;
+            HostDenoised::write_image(ctx, shown, &denoised.color);
+        }
+        let device = oidn.device_description();
+        self.shared_failed = shared_failed;
+        Ok(FrameDenoiseReport {
+            device,
+            shared_memory,
+            ms: start.elapsed().as_secs_f64() * 1e3,
+        })
+    }
+}
