@@ -84,6 +84,32 @@ pub struct ViewArgs {
     /// accumulate: restart accumulation whenever anything moves.
     #[arg(long, value_enum)]
     pub mode: Option<ModeArg>,
+    /// Open Image Denoise over each real-time frame in place of the spatial filter (with OIDN the denoiser):
+    /// shared (where OIDN's GPU device reads the GPU's memory: CUDA on NVIDIA), always (also through host
+    /// copies: slow on the CPU), off. Default: the settings file's, else shared.
+    #[arg(long, value_enum)]
+    pub frame_oidn: Option<FrameOidnArg>,
+    /// The per-frame OIDN filter's quality (default: the settings file's, else balanced).
+    #[arg(long, value_enum)]
+    pub frame_oidn_quality: Option<DenoiseQuality>,
+}
+
+/// `--frame-oidn`.
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FrameOidnArg {
+    Off,
+    Shared,
+    Always,
+}
+
+impl From<FrameOidnArg> for raykin::render::FrameOidn {
+    fn from(a: FrameOidnArg) -> Self {
+        match a {
+            FrameOidnArg::Off => Self::Off,
+            FrameOidnArg::Shared => Self::Shared,
+            FrameOidnArg::Always => Self::Always,
+        }
+    }
 }
 
 /// `--mode`: how frames are made while anything moves.

@@ -62,6 +62,8 @@ pub fn run(args: &ViewArgs) -> Result<()> {
         max_depth: args.max_depth,
         load: args.load.options(),
         mode: args.mode.map(Into::into),
+        frame_oidn: args.frame_oidn.map(Into::into),
+        frame_oidn_quality: args.frame_oidn_quality.map(Into::into),
     };
     if args.offscreen {
         let ctx = crate::adapter::open_gpu()?;
@@ -108,6 +110,8 @@ pub fn run_default() -> Result<()> {
         assets: PathBuf::from("../shared/assets"),
         no_settings: false,
         mode: None,
+        frame_oidn: None,
+        frame_oidn_quality: None,
     };
     match run(&args) {
         Err(e) if e.downcast_ref::<window::WindowUnavailable>().is_some() => {

@@ -116,6 +116,8 @@ pub fn run(ctx: GpuContext, setup: OffscreenSetup) -> Result<()> {
     // every pass of the frame.
     let (mut gbuffer, mut restir, mut gradient, mut temporal, mut realtime_total) =
         (Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    // OIDN per real-time frame (wall ms of each denoise, once the frame before it finished on the GPU).
+    let (mut oidn_frame, mut oidn_device, mut oidn_failed) = (Vec::new(), None, None);
     let mut pacer = super::ui_render::FramePacer::default();
     let mut rss_after_warmup = None;
     // Resident memory every tenth of the run, to see that it stays flat.
@@ -134,6 +136,7 @@ pub fn run(ctx: GpuContext, setup: OffscreenSetup) -> Result<()> {
         let mut output = session.ui(raw);
         let ui_ms = t0.elapsed().as_secs_f64() * 1e3;
         let gpu = session.step();
+        let oidn_report = session.engine.take_frame_denoise_report();
         let waited_schedule = setup.sync_passes.then(|| wait_ms(&ctx));
         let t1 = Instant::now();
         let submission = ui.render(
@@ -162,6 +165,14 @@ pub fn run(ctx: GpuContext, setup: OffscreenSetup) -> Result<()> {
             cpu.frame.push(frame_ms);
             wait_schedule.extend(waited_schedule);
             wait_ui.extend(waited_ui);
+            match oidn_report {
+                Ok(Some(r)) => {
+                    oidn_frame.push(r.ms);
+                    oidn_device = Some(r.device);
+                }
+                Ok(None) => {}
+                Err(why) => oidn_failed = Some(why),
+            }
             for g in &gpu {
                 if let Some(p) = g.passes {
                     trace.push(p.trace_ms);
@@ -258,6 +269,12 @@ pub fn run(ctx: GpuContext, setup: OffscreenSetup) -> Result<()> {
             "gradients": spread(&gradient),
             "temporal": spread(&temporal),
             "realtime_frame_total": spread(&realtime_total),
+        },
+        "oidn_per_frame": {
+            "frames": oidn_frame.len(),
+            "wall_ms": spread(&oidn_frame),
+            "device": oidn_device,
+            "failed": oidn_failed,
         },
         "mode": format!("{:?}", settings.mode),
         "realtime": settings.realtime,

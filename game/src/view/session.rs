@@ -54,6 +54,9 @@ pub struct SessionOptions {
     pub load: LoadOptions,
     /// Real-time or accumulation (default: the settings file's, else real-time while anything moves).
     pub mode: Option<raykin::render::RenderMode>,
+    /// OIDN per real-time frame, and its quality (default: the settings file's).
+    pub frame_oidn: Option<raykin::render::FrameOidn>,
+    pub frame_oidn_quality: Option<raykin::oidn::Quality>,
 }
 
 /// Settings as read at start-up.
@@ -487,6 +490,12 @@ fn build_engine(
         }
         if let Some(mode) = options.mode {
             s.mode = mode;
+        }
+        if let Some(o) = options.frame_oidn {
+            s.realtime.oidn = o;
+        }
+        if let Some(q) = options.frame_oidn_quality {
+            s.realtime.oidn_quality = q;
         }
     }
     if matches!(source, SceneSource::Embedded) {
