@@ -86,7 +86,8 @@ pub struct ViewArgs {
     pub mode: Option<ModeArg>,
     /// Open Image Denoise over each real-time frame in place of the spatial filter (with OIDN the denoiser):
     /// shared (where OIDN's GPU device reads the GPU's memory: CUDA on NVIDIA), always (also through host
-    /// copies: slow on the CPU), off. Default: the settings file's, else shared.
+    /// copies: slow on the CPU), off. Default: the settings file's, else off (docs/BENCHMARKS.md, "OIDN per
+    /// real-time frame").
     #[arg(long, value_enum)]
     pub frame_oidn: Option<FrameOidnArg>,
     /// The per-frame OIDN filter's quality (default: the settings file's, else balanced).

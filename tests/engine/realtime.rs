@@ -727,7 +727,7 @@ impl raykin::render::frame_denoiser::ExternalDenoise for FailingDenoiser {
     }
 }
 
-/// OIDN per frame replaces the a-trous filter only where it runs: with the default `FrameOidn::Shared` on a CPU
+/// OIDN per frame replaces the a-trous filter only where it runs: with `FrameOidn::Shared` on a CPU
 /// adapter (OIDN's CPU device cannot read the GPU's memory) every moving frame is the a-trous filter's, bit for
 /// bit, and nothing is sent to OIDN; a per-frame denoiser that fails is asked once, its reason is kept, and that
 /// frame and the next show the a-trous image, bit for bit. (OIDN's own per-frame image: tests/engine/oidn.rs.)

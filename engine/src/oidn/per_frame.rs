@@ -1,7 +1,7 @@
 //! OIDN per frame in the real-time path (`RealtimeSettings::oidn`): the renderer hands each frame's colour
 //! history to [`OidnPerFrame`] (through `render::frame_denoiser`) in place of its a-trous filter, and shows
 //! what it writes. With [`FrameOidn::Shared`] it runs only where OIDN's GPU device reads the history in GPU
-//! memory it shares with wgpu (a few milliseconds per 1440p frame on the H200, docs/BENCHMARKS.md); with
+//! memory it shares with wgpu (5-13 ms per 1440p frame on the H200 by quality, docs/BENCHMARKS.md); with
 //! [`FrameOidn::Always`] also through host copies (OIDN's CPU device: far from real time, but the same image).
 //! Unlike the viewer's still-image denoise ([`super::viewer`]) it blocks the frame: the frame's image is its
 //! output.

@@ -108,15 +108,18 @@ impl Default for RealtimeSettings {
     }
 }
 
-/// When the real-time path denoises each frame with Open Image Denoise.
+/// When the real-time path denoises each frame with Open Image Denoise. Off by default: on the H200 it lowered
+/// the animated interior's settled relMSE by 16% and left the crowd's unchanged (FLIP 7% worse) at 1280x720,
+/// while the viewer's 1440p crowd frame went from 19.9 to 30.6 ms (OIDN balanced 7.3 ms, the rest the frame's
+/// CPU and GPU work no longer overlapping: the frame waits for its history); docs/BENCHMARKS.md.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "lowercase")]
 pub enum FrameOidn {
     /// Never: the a-trous filter.
+    #[default]
     Off,
     /// Where OIDN's GPU device reads the history in GPU memory it shares with wgpu (CUDA beside Vulkan on
-    /// NVIDIA): a few milliseconds per frame at 1440p on the H200. Elsewhere the a-trous filter.
-    #[default]
+    /// NVIDIA): 5-13 ms per 1440p frame on the H200 by quality. Elsewhere the a-trous filter.
     Shared,
     /// On every device, through host copies where memory cannot be shared (OIDN's CPU device takes a
     /// second or more per 1080p frame on a few cores).
