@@ -229,6 +229,12 @@ impl HeadlessApp {
     /// The shading-free ray-casting pass (camera rays, plus one diffuse bounce per hit when asked) on the
     /// current pose and camera; `None` where the adapter has no timestamp queries.
     pub fn cast_rays(&mut self, diffuse_bounce: bool) -> Option<crate::render::RayCastTiming> {
+        self.prepare_ray_casting();
+        crate::render::queries::cast_rays(self.app.world(), diffuse_bounce)
+    }
+
+    /// The scene uploaded (by a first frame) and the view at the settings' size.
+    fn prepare_ray_casting(&mut self) {
         if self.frame_stats().frames == 0 {
             // Instances and the top-level BVH are uploaded by the first frame.
             self.step();
@@ -241,7 +247,16 @@ impl HeadlessApp {
         world
             .resource_mut::<ViewTargets>()
             .resize(&self.ctx, width, height);
-        crate::render::queries::cast_rays(world, diffuse_bounce)
+    }
+
+    /// The rays of [`Self::cast_rays`] once more, counting their traversal work (nodes fetched by kind,
+    /// triangles tested) instead of timing it; with the number of rays cast.
+    pub fn count_traversal_work(
+        &mut self,
+        diffuse_bounce: bool,
+    ) -> (crate::render::passes::raycast::TraversalWork, u64) {
+        self.prepare_ray_casting();
+        crate::render::queries::count_traversal_work(self.app.world(), diffuse_bounce)
     }
 
     /// The scene's GPU buffers (mesh slots, materials, emitters, memory).

@@ -18,6 +18,7 @@ fn trace_blas_binary(mesh: Mesh, instance: u32, o: vec3<f32>, d: vec3<f32>, hit:
     var found = false;
     loop {
         let n = read_blas_node(node);
+        count_work(WORK_BVH2_NODE);
         let ta = hit_child(n.a, o, inv_d, (*hit).t);
         let tb = hit_child(n.b, o, inv_d, (*hit).t);
         if n.a.count > 0u && ta < MISS {

@@ -64,6 +64,7 @@ fn trace_blas_wide(mesh: Mesh, instance: u32, o: vec3<f32>, d: vec3<f32>, hit: p
                 sp++;
             }
             let n = read_wide_node(child);
+            count_work(WORK_WIDE_NODE);
             let mask = intersect_wide(n, o, inv_d, oct_inv4, (*hit).t);
             // Child indices are relative to the mesh's first node.
             group = vec2<u32>(root + n.w1.x, (mask & 0xff000000u) | (n.w0.w >> 24u));

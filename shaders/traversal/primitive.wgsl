@@ -3,6 +3,7 @@
 
 // Intersects one triangle slot; true when it became the closest hit.
 fn hit_slot(mesh: Mesh, instance: u32, slot: u32, o: vec3<f32>, d: vec3<f32>, hit: ptr<function, Hit>) -> bool {
+    count_work(WORK_TRIANGLE);
     let tri = read_triangle(slot);
     let r = hit_triangle(o, d, vertex_position(mesh, tri.x), vertex_position(mesh, tri.y), vertex_position(mesh, tri.z), (*hit).t);
     if r.x < MISS && alpha_passes(mesh, tri, r.yz) {

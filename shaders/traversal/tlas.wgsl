@@ -38,6 +38,7 @@ fn trace(ray: Ray, t_max: f32, any_hit: bool) -> Hit {
     var node = 0u;
     loop {
         let n = read_tlas_node(node);
+        count_work(WORK_TLAS_NODE);
         let ta = hit_child(n.a, ray.origin, inv_d, hit.t);
         let tb = hit_child(n.b, ray.origin, inv_d, hit.t);
         // Both leaf children's instances through one call site: the compiled kernel holds a copy of the BLAS

@@ -9,7 +9,7 @@ use super::host_denoised::HostDenoised;
 use super::passes::OnFirstUse;
 use super::passes::denoise::Denoiser;
 use super::passes::denoiser_planes::{DenoiserPlanesPass, DenoiserSources};
-use super::passes::raycast::RaycastPass;
+use super::passes::raycast::{RaycastPass, TraversalWork};
 use super::passes::tonemap::TonemapPass;
 use super::scene_bindings::SceneBindings;
 use super::settings::RenderSettings;
@@ -103,12 +103,52 @@ pub fn cast_rays(world: &World, diffuse_bounce: bool) -> Option<RayCastTiming> {
     let stats = world.resource::<FrameStats>();
     stats.timestamps.as_ref()?;
     let ctx = world.resource::<GpuContext>();
+    let view = world.resource::<ViewTargets>();
+    let pass = raycast_pass(world, diffuse_bounce);
+    let mut encoder = ctx.device.create_command_encoder(&Default::default());
+    let scene = world
+        .resource::<SceneBindings>()
+        .fresh(ctx, world.resource::<GpuScene>());
+    pass.encode(
+        ctx,
+        &mut encoder,
+        &scene,
+        view,
+        false,
+        stats.pass_writes(TRACE_PAIR),
+    );
+    if let Some(t) = &stats.timestamps {
+        t.resolve(&mut encoder, 1);
+    }
+    ctx.queue.submit([encoder.finish()]);
+    let gpu_ms = stats.timestamps.as_ref()?.read_ms(ctx)[0];
+    Some(RayCastTiming {
+        gpu_ms,
+        rays: view.read_ray_count(ctx),
+    })
+}
+
+/// The rays of [`cast_rays`] once more, counting their traversal work (nodes fetched by kind, triangles tested)
+/// instead of timing it, with the number of rays cast. Blocks for the result.
+pub fn count_traversal_work(world: &World, diffuse_bounce: bool) -> (TraversalWork, u64) {
+    let ctx = world.resource::<GpuContext>();
+    let view = world.resource::<ViewTargets>();
+    let pass = raycast_pass(world, diffuse_bounce);
+    let mut encoder = ctx.device.create_command_encoder(&Default::default());
+    let scene = world
+        .resource::<SceneBindings>()
+        .fresh(ctx, world.resource::<GpuScene>());
+    pass.encode(ctx, &mut encoder, &scene, view, true, None);
+    ctx.queue.submit([encoder.finish()]);
+    (pass.read_work(ctx), view.read_ray_count(ctx))
+}
+
+/// The ray-casting pass (made on first use), its frame constants written for `diffuse_bounce`.
+fn raycast_pass(world: &World, diffuse_bounce: bool) -> &RaycastPass {
+    let ctx = world.resource::<GpuContext>();
     let scene = world.resource::<GpuScene>();
     let view = world.resource::<ViewTargets>();
     let bindings = world.resource::<SceneBindings>();
-    let pass = world
-        .resource::<OnFirstUse<RaycastPass>>()
-        .get_or_init(|| RaycastPass::new(ctx, &bindings.layout));
     write_frame_constants(
         ctx,
         view,
@@ -121,23 +161,9 @@ pub fn cast_rays(world: &World, diffuse_bounce: bool) -> Option<RayCastTiming> {
             max_depth: u32::from(diffuse_bounce),
         },
     );
-    let mut encoder = ctx.device.create_command_encoder(&Default::default());
-    pass.encode(
-        ctx,
-        &mut encoder,
-        &bindings.fresh(ctx, scene),
-        view,
-        stats.pass_writes(TRACE_PAIR),
-    );
-    if let Some(t) = &stats.timestamps {
-        t.resolve(&mut encoder, 1);
-    }
-    ctx.queue.submit([encoder.finish()]);
-    let gpu_ms = stats.timestamps.as_ref()?.read_ms(ctx)[0];
-    Some(RayCastTiming {
-        gpu_ms,
-        rays: view.read_ray_count(ctx),
-    })
+    world
+        .resource::<OnFirstUse<RaycastPass>>()
+        .get_or_init(|| RaycastPass::new(ctx, &bindings.layout))
 }
 
 /// The linear radiance the display shows: the last real-time image, the hand-over's mix, or the accumulation

@@ -94,6 +94,55 @@ pub struct FrameRow {
     /// timestamp queries.
     pub raycast_camera_rays_per_s: f64,
     pub raycast_diffuse_rays_per_s: f64,
+    /// The same rays' traversal work per ray, counted in a second run (`HeadlessApp::count_traversal_work`).
+    pub traversal_per_camera_ray: WorkPerRay,
+    pub traversal_per_bounce_ray: WorkPerRay,
+}
+
+/// Traversal work of one ray on average, and the bytes it fetches if nothing were cached.
+#[derive(Clone, Copy, Debug, Default, serde::Serialize)]
+pub struct WorkPerRay {
+    pub tlas_nodes: f64,
+    pub bvh2_nodes: f64,
+    pub wide_nodes: f64,
+    pub triangles: f64,
+    pub bytes: f64,
+}
+
+/// Bytes fetched per top-level or BVH2 node (two child boxes), per wide node (CWBVH, five 16-byte texels) and
+/// per triangle tested (its 16-byte record and three 12-byte positions; the material's flag word for the alpha
+/// test is left out: it shares a cache line with the rest of the material).
+const BVH2_NODE_BYTES: f64 = 64.0;
+const WIDE_NODE_BYTES: f64 = 80.0;
+const TRIANGLE_BYTES: f64 = 16.0 + 3.0 * 12.0;
+
+impl WorkPerRay {
+    fn of(counts: [u64; 4], rays: u64) -> Self {
+        let per = |c: u64| c as f64 / rays.max(1) as f64;
+        let [tlas_nodes, bvh2_nodes, wide_nodes, triangles] = counts.map(per);
+        Self {
+            tlas_nodes,
+            bvh2_nodes,
+            wide_nodes,
+            triangles,
+            bytes: (tlas_nodes + bvh2_nodes) * BVH2_NODE_BYTES
+                + wide_nodes * WIDE_NODE_BYTES
+                + triangles * TRIANGLE_BYTES,
+        }
+    }
+}
+
+/// The ray-casting pass's work per camera ray and per bounce ray (one counting run with the diffuse bounce).
+fn traversal_per_ray(app: &mut HeadlessApp) -> (WorkPerRay, WorkPerRay) {
+    let (work, rays) = app.count_traversal_work(true);
+    let pixels = {
+        let s = app.app.world().resource::<raykin::render::RenderSettings>();
+        s.width as u64 * s.height as u64
+    };
+    (
+        WorkPerRay::of(work.camera, pixels),
+        WorkPerRay::of(work.bounce, rays.saturating_sub(pixels)),
+    )
 }
 
 /// A frame loop over `scene` at `settings`' size: `warmup` frames (more on a GPU: [`super::warm_up`]), then
@@ -145,6 +194,7 @@ pub fn measure(
     let pixels = width as f64 * height as f64;
     let spp = settings.spp_per_frame as f64;
     let (raycast_camera, raycast_diffuse) = raycast_rates(&mut app, frames.clamp(1, 50));
+    let (traversal_camera, traversal_bounce) = traversal_per_ray(&mut app);
     let memory = app.gpu_scene().memory;
     let triangles = scene.scene.triangle_count();
     let deformable_triangles: usize = scene
@@ -197,6 +247,8 @@ pub fn measure(
         max_sah_ratio_last_frame: stats.sah_ratio.iter().copied().fold(0.0, f32::max),
         raycast_camera_rays_per_s: raycast_camera,
         raycast_diffuse_rays_per_s: raycast_diffuse,
+        traversal_per_camera_ray: traversal_camera,
+        traversal_per_bounce_ray: traversal_bounce,
     })
 }
 

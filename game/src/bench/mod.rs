@@ -267,6 +267,21 @@ pub fn run(args: &BenchArgs) -> Result<()> {
                     row.raycast_camera_rays_per_s / 1e6,
                     row.raycast_diffuse_rays_per_s / 1e6
                 );
+                let (c, b) = (&row.traversal_per_camera_ray, &row.traversal_per_bounce_ray);
+                eprintln!(
+                    "raykin bench: {} {width}x{height}: traversal per camera ray {:.1} TLAS + {:.1} BVH2 + {:.1} wide nodes, {:.1} triangles ({:.0} B); per diffuse ray {:.1} + {:.1} + {:.1}, {:.1} ({:.0} B)",
+                    row.scene,
+                    c.tlas_nodes,
+                    c.bvh2_nodes,
+                    c.wide_nodes,
+                    c.triangles,
+                    c.bytes,
+                    b.tlas_nodes,
+                    b.bvh2_nodes,
+                    b.wide_nodes,
+                    b.triangles,
+                    b.bytes
+                );
                 if row.animated {
                     let p = &row.passes_median_ms;
                     eprintln!(
@@ -720,6 +735,34 @@ path-trace kernel; relMSE on tone-mapped images against the cached reference, it
 ~ = extrapolated along the fitted power law (the curve did not get there within the suite's samples); \
 ray casting: the shading-free pass (camera rays through pixel centres, then one cosine-distributed bounce ray \
 per hit), per size.\n";
+    if r.rows
+        .iter()
+        .any(|row| row.traversal_per_camera_ray.bytes > 0.0)
+    {
+        s += "\n| scene | size | per camera ray: TLAS / BVH2 / wide nodes, triangles, bytes | per diffuse bounce ray: the same | diffuse rays/s x bytes per ray |\n";
+        s += "|---|---|---|---|---|\n";
+        let work = |w: &frame_loop::WorkPerRay| {
+            format!(
+                "{:.1} / {:.1} / {:.1}, {:.1}, {:.0} B",
+                w.tlas_nodes, w.bvh2_nodes, w.wide_nodes, w.triangles, w.bytes
+            )
+        };
+        for row in &r.rows {
+            let b = &row.traversal_per_bounce_ray;
+            s += &format!(
+                "| {} | {}x{} | {} | {} | {:.0} GB/s |\n",
+                row.scene,
+                row.width,
+                row.height,
+                work(&row.traversal_per_camera_ray),
+                work(b),
+                row.raycast_diffuse_rays_per_s * b.bytes / 1e9
+            );
+        }
+        s += "\nTraversal work: the ray-casting pass run once more with counters (`shaders/traversal/stats.wgsl`), \
+averages per ray; bytes = nodes x 64 B (BVH2) or 80 B (wide) + triangles x 52 B (record and three positions), what \
+the rays would fetch if nothing were cached; times the diffuse rays/s, the bandwidth that would need.\n";
+    }
     if !r.motion.is_empty() {
         s += "\n| scene | size | method | GPU ms/frame (median, p99) | wall ms/frame (median) | OIDN ms/frame (median, device) | settled relMSE | settled FLIP | disoccluded / rest error | lamp switch settles in |\n";
         s += "|---|---|---|---|---|---|---|---|---|---|\n";
