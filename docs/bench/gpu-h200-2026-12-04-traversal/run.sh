@@ -11,14 +11,14 @@ export VK_DRIVER_FILES=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
 (cd rel && for b in raykin-t raykin-o; do xz -dkf $b.xz && chmod +x $b; done)
 nvidia-smi --query-gpu=name,driver_version --format=csv,noheader
 w=$(mktemp -d)
-run() { # binary scene
-  timeout 150 rel/$1 bench --suite full --parts frames --scene "$2" --assets rel/assets --out "$w/$1-$2" \
-    --cache "$w/c" > "$w/$1-$2.log" 2>&1
-  echo "$1 $2 rc $?"; grep -h "raykin bench: $2 " "$w/$1-$2.log" | grep -v "deform backend"
+run() { # binary scene round
+  timeout 150 rel/$1 bench --suite full --parts frames --scene "$2" --assets rel/assets --out "$w/$1-$2-$3" \
+    --cache "$w/c" > "$w/$1-$2-$3.log" 2>&1
+  echo "$1 $2 round $3 rc $?"; grep -h "raykin bench: $2 " "$w/$1-$2-$3.log" | grep -v "deform backend" | cut -c1-400
 }
-for s in spheres flight-helmet cornell env-lit; do run raykin-t "$s"; run raykin-o "$s"; done
-for s in spheres flight-helmet cornell; do run raykin-o "$s"; run raykin-t "$s"; done
-run raykin-t seed-interior
+for s in spheres flight-helmet cornell env-lit; do run raykin-t "$s" 1; run raykin-o "$s" 1; done
+for s in spheres flight-helmet cornell; do run raykin-o "$s" 2; run raykin-t "$s" 2; done
+run raykin-t seed-interior 1
 mkdir -p "$w/out"
 for d in "$w"/raykin-*; do [ -d "$d" ] && cp "$d/results.json" "$w/out/$(basename "$d").json" 2>/dev/null; done
 (cd "$w/out" && tar -cf "$OUT/results.tar" .)
