@@ -1,7 +1,7 @@
 //! Traversal: static meshes traced through compressed 8-wide BVHs give the same image as through the
 //! child-pair BVH2 (both trees hold the same triangles, so with the same seed every path takes the same hits;
 //! scenes with deep trees, several meshes, textures and alpha-masked materials), and the shading-free
-//! ray-casting pass casts exactly the rays it reports.
+//! ray-casting pass casts exactly the rays it reports and counts the work they must do.
 
 use crate::common::*;
 use raykin::bvh::StaticLayout;
@@ -324,6 +324,64 @@ fn raycast_pass_casts_one_camera_ray_per_pixel_and_one_bounce_per_hit() {
             "{layout:?}: every camera ray hits inside the box"
         );
         assert!(primary.gpu_ms.is_finite() && bounce.gpu_ms > 0.0);
+    }
+}
+
+/// The ray-casting pass's counting run counts what the rays must do, in either static layout: from inside the
+/// Cornell box every camera ray fetches the top-level root, at least one node of the layout's kind (none of the
+/// other) and tests at least one triangle and at most all of them, and every hit casts a bounce ray that does the
+/// same at the top level; looking away from the box, every ray stops at the top-level root's box.
+#[test]
+fn traversal_work_counts_what_the_rays_must_do() {
+    let scene = load("CornellBox/CornellBox.glb");
+    let triangles = scene.triangle_count() as u64;
+    let (ctx, _gpu) = gpu();
+    let inside = CameraChoice::LookAt {
+        eye: glam::Vec3::new(-278.0, 450.0, -60.0),
+        target: glam::Vec3::new(-278.0, 300.0, -559.0),
+        yfov: 60f32.to_radians(),
+    };
+    let away = CameraChoice::LookAt {
+        eye: glam::Vec3::new(-278.0, 273.0, 800.0),
+        target: glam::Vec3::new(-278.0, 273.0, 1600.0),
+        yfov: 40f32.to_radians(),
+    };
+    let pixels = 24 * 16;
+    for layout in [StaticLayout::Wide, StaticLayout::Binary] {
+        let run = |camera: &CameraChoice| {
+            let settings = RenderSettings {
+                width: 24,
+                height: 16,
+                static_bvh: layout,
+                ..Default::default()
+            };
+            let mut app =
+                raykin::headless::HeadlessApp::new(ctx.clone(), scene.clone(), settings, camera)
+                    .expect("scene uploads");
+            app.count_traversal_work(true)
+        };
+        let (work, rays) = run(&inside);
+        assert_eq!(rays, 2 * pixels, "{layout:?}: every camera ray hits");
+        let [tlas, bvh2, wide, tested] = work.camera;
+        let (own, other) = match layout {
+            StaticLayout::Wide => (wide, bvh2),
+            _ => (bvh2, wide),
+        };
+        assert!(tlas >= pixels, "{layout:?}: {work:?}");
+        assert!(own >= pixels && other == 0, "{layout:?}: {work:?}");
+        assert!(
+            tested >= pixels && tested <= pixels * triangles,
+            "{layout:?}: {work:?}"
+        );
+        assert!(work.bounce[0] >= pixels, "{layout:?}: {work:?}");
+        let (work, rays) = run(&away);
+        assert_eq!(rays, pixels, "{layout:?}: no camera ray hits");
+        assert!(work.camera[0] >= pixels, "{layout:?}: {work:?}");
+        assert_eq!(
+            (work.camera[1], work.camera[2], work.camera[3], work.bounce),
+            (0, 0, 0, [0; 4]),
+            "{layout:?}"
+        );
     }
 }
 
