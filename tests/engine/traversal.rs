@@ -290,6 +290,32 @@ fn scene_size(scene: &raykin::scene::SceneAsset) -> f32 {
     (hi - lo).max_element()
 }
 
+/// A 24x16 view of `scene` with its static meshes in `layout`.
+fn ray_casting_app(
+    ctx: &raykin::gpu::GpuContext,
+    scene: &Arc<raykin::scene::SceneAsset>,
+    layout: StaticLayout,
+    camera: &CameraChoice,
+) -> raykin::headless::HeadlessApp {
+    let settings = RenderSettings {
+        width: 24,
+        height: 16,
+        static_bvh: layout,
+        ..Default::default()
+    };
+    raykin::headless::HeadlessApp::new(ctx.clone(), scene.clone(), settings, camera)
+        .expect("scene uploads")
+}
+
+/// From inside the Cornell box every camera ray hits a wall.
+fn inside_the_box() -> CameraChoice {
+    CameraChoice::LookAt {
+        eye: glam::Vec3::new(-278.0, 450.0, -60.0),
+        target: glam::Vec3::new(-278.0, 300.0, -559.0),
+        yfov: 60f32.to_radians(),
+    }
+}
+
 #[test]
 fn raycast_pass_casts_one_camera_ray_per_pixel_and_one_bounce_per_hit() {
     let path = shared_assets().join("CornellBox/CornellBox.glb");
@@ -299,22 +325,8 @@ fn raycast_pass_casts_one_camera_ray_per_pixel_and_one_bounce_per_hit() {
         eprintln!("adapter has no timestamp queries: the ray-casting pass reports nothing");
         return;
     }
-    // From inside the box every camera ray hits a wall, so the bounce pass doubles the count.
-    let camera = CameraChoice::LookAt {
-        eye: glam::Vec3::new(-278.0, 450.0, -60.0),
-        target: glam::Vec3::new(-278.0, 300.0, -559.0),
-        yfov: 60f32.to_radians(),
-    };
     for layout in [StaticLayout::Wide, StaticLayout::Binary] {
-        let settings = RenderSettings {
-            width: 24,
-            height: 16,
-            static_bvh: layout,
-            ..Default::default()
-        };
-        let mut app =
-            raykin::headless::HeadlessApp::new(ctx.clone(), scene.clone(), settings, &camera)
-                .expect("scene uploads");
+        let mut app = ray_casting_app(&ctx, &scene, layout, &inside_the_box());
         let primary = app.cast_rays(false).expect("timestamps");
         let bounce = app.cast_rays(true).expect("timestamps");
         assert_eq!(primary.rays, 24 * 16, "{layout:?}");
@@ -336,11 +348,7 @@ fn traversal_work_counts_what_the_rays_must_do() {
     let scene = load("CornellBox/CornellBox.glb");
     let triangles = scene.triangle_count() as u64;
     let (ctx, _gpu) = gpu();
-    let inside = CameraChoice::LookAt {
-        eye: glam::Vec3::new(-278.0, 450.0, -60.0),
-        target: glam::Vec3::new(-278.0, 300.0, -559.0),
-        yfov: 60f32.to_radians(),
-    };
+    let inside = inside_the_box();
     let away = CameraChoice::LookAt {
         eye: glam::Vec3::new(-278.0, 273.0, 800.0),
         target: glam::Vec3::new(-278.0, 273.0, 1600.0),
@@ -349,16 +357,7 @@ fn traversal_work_counts_what_the_rays_must_do() {
     let pixels = 24 * 16;
     for layout in [StaticLayout::Wide, StaticLayout::Binary] {
         let run = |camera: &CameraChoice| {
-            let settings = RenderSettings {
-                width: 24,
-                height: 16,
-                static_bvh: layout,
-                ..Default::default()
-            };
-            let mut app =
-                raykin::headless::HeadlessApp::new(ctx.clone(), scene.clone(), settings, camera)
-                    .expect("scene uploads");
-            app.count_traversal_work(true)
+            ray_casting_app(&ctx, &scene, layout, camera).count_traversal_work(true)
         };
         let (work, rays) = run(&inside);
         assert_eq!(rays, 2 * pixels, "{layout:?}: every camera ray hits");

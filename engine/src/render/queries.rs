@@ -103,28 +103,11 @@ pub fn cast_rays(world: &World, diffuse_bounce: bool) -> Option<RayCastTiming> {
     let stats = world.resource::<FrameStats>();
     stats.timestamps.as_ref()?;
     let ctx = world.resource::<GpuContext>();
-    let view = world.resource::<ViewTargets>();
-    let pass = raycast_pass(world, diffuse_bounce);
-    let mut encoder = ctx.device.create_command_encoder(&Default::default());
-    let scene = world
-        .resource::<SceneBindings>()
-        .fresh(ctx, world.resource::<GpuScene>());
-    pass.encode(
-        ctx,
-        &mut encoder,
-        &scene,
-        view,
-        false,
-        stats.pass_writes(TRACE_PAIR),
-    );
-    if let Some(t) = &stats.timestamps {
-        t.resolve(&mut encoder, 1);
-    }
-    ctx.queue.submit([encoder.finish()]);
+    submit_raycast(world, diffuse_bounce, false);
     let gpu_ms = stats.timestamps.as_ref()?.read_ms(ctx)[0];
     Some(RayCastTiming {
         gpu_ms,
-        rays: view.read_ray_count(ctx),
+        rays: world.resource::<ViewTargets>().read_ray_count(ctx),
     })
 }
 
@@ -132,15 +115,35 @@ pub fn cast_rays(world: &World, diffuse_bounce: bool) -> Option<RayCastTiming> {
 /// instead of timing it, with the number of rays cast. Blocks for the result.
 pub fn count_traversal_work(world: &World, diffuse_bounce: bool) -> (TraversalWork, u64) {
     let ctx = world.resource::<GpuContext>();
-    let view = world.resource::<ViewTargets>();
+    let pass = submit_raycast(world, diffuse_bounce, true);
+    (
+        pass.read_work(ctx),
+        world.resource::<ViewTargets>().read_ray_count(ctx),
+    )
+}
+
+/// Records and submits the ray-casting pass over the view: the counting kernel with `count_work`, else the
+/// timed one (its timestamps resolved).
+fn submit_raycast(world: &World, diffuse_bounce: bool, count_work: bool) -> &RaycastPass {
+    let ctx = world.resource::<GpuContext>();
+    let stats = world.resource::<FrameStats>();
     let pass = raycast_pass(world, diffuse_bounce);
     let mut encoder = ctx.device.create_command_encoder(&Default::default());
     let scene = world
         .resource::<SceneBindings>()
         .fresh(ctx, world.resource::<GpuScene>());
-    pass.encode(ctx, &mut encoder, &scene, view, true, None);
+    let timestamps = if count_work {
+        None
+    } else {
+        stats.pass_writes(TRACE_PAIR)
+    };
+    let view = world.resource::<ViewTargets>();
+    pass.encode(ctx, &mut encoder, &scene, view, count_work, timestamps);
+    if let (false, Some(t)) = (count_work, &stats.timestamps) {
+        t.resolve(&mut encoder, 1);
+    }
     ctx.queue.submit([encoder.finish()]);
-    (pass.read_work(ctx), view.read_ray_count(ctx))
+    pass
 }
 
 /// The ray-casting pass (made on first use), its frame constants written for `diffuse_bounce`.
