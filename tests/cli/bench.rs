@@ -409,7 +409,11 @@ fn check_oidn(results: &Value) {
         );
     }
     let gains = results["oidn_gains"].as_array().unwrap();
-    assert_eq!(gains.len(), 3 * 4 * 5, "3 scenes x 4 spp x 5 methods");
+    assert_eq!(
+        gains.len(),
+        3 * 4 * 6,
+        "3 scenes x 4 spp x 6 methods (none, svgf, three OIDN qualities, the converged-AOV bound)"
+    );
     for g in gains {
         let method = g["method"].as_str().unwrap();
         let gain = finite_positive(&g["rel_mse_gain"], "relMSE gain");

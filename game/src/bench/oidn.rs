@@ -266,6 +266,8 @@ fn display_path(
 
 /// The samples per pixel the gains are measured at.
 pub const GAIN_SPP: [u32; 4] = [1, 4, 16, 64];
+/// Samples per pixel of the converged AOVs of the bound row.
+const CONVERGED_AOV_SPP: u32 = 256;
 
 /// Error against the cached reference at [`GAIN_SPP`] of the noisy image, svgf's and OIDN's at each quality.
 /// Animated scenes are measured in their rest pose (no players).
@@ -297,6 +299,22 @@ pub fn gains(
         seed: 0xD0_0015E,
         ..base.clone()
     };
+    // An upper bound, not a method: the albedo and normal of a long accumulation (another seed), as if the AOVs
+    // had converged, given to OIDN with the noisy colour (`cleanAux`, no prefilters).
+    let converged_aovs = {
+        let mut app = super::open_app(
+            ctx,
+            &still,
+            RenderSettings {
+                seed: 0xA0_5EED,
+                ..base.clone()
+            },
+        )?;
+        app.set_keep_denoiser_inputs(true);
+        app.accumulate(CONVERGED_AOV_SPP, 16, |_| {});
+        let (inputs, _) = read_inputs(&app.ctx, app.view());
+        (inputs.albedo, inputs.normal)
+    };
     let mut app = super::open_app(ctx, &still, settings)?;
     // svgf's row filters these samples too: its moments must accumulate although the settings do not denoise.
     app.set_keep_denoiser_inputs(true);
@@ -313,6 +331,14 @@ pub fn gains(
             let d = oidn.denoise(&inputs.images(), &DenoiseOptions::at(quality))?;
             images.push((format!("oidn {}", quality.name()), d.color));
         }
+        let mut bound = inputs.clone();
+        (bound.albedo, bound.normal) = converged_aovs.clone();
+        let options = DenoiseOptions {
+            aux: AuxMode::Clean,
+            ..DenoiseOptions::at(Quality::High)
+        };
+        let d = oidn.denoise(&bound.images(), &options)?;
+        images.push(("oidn high, converged AOVs (bound)".to_string(), d.color));
         let luminance = |img: &[[f32; 3]]| -> f64 {
             img.iter()
                 .map(|p| 0.2126 * p[0] as f64 + 0.7152 * p[1] as f64 + 0.0722 * p[2] as f64)
