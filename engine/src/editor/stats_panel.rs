@@ -102,6 +102,7 @@ pub fn show(ui: &mut egui::Ui, world: &mut World) {
             .map_or(0, |r| {
                 r.targets.as_ref().map_or(0, |t| t.memory_bytes())
                     + r.spatial_filter.as_ref().map_or(0, |f| f.memory_bytes())
+                    + r.external_image.as_ref().map_or(0, wgpu::Buffer::size)
             });
         ui.label("GPU memory");
         ui.add(
