@@ -241,13 +241,18 @@ fn frame_oidn_status(d: &crate::render::frame_denoiser::FrameDenoiser) -> String
             "last moving frame denoised on {} in {:.1} ms{}",
             r.device,
             r.ms,
-            if r.shared_memory {
-                " (GPU memory shared with wgpu)"
-            } else {
-                " (through host copies)"
-            }
+            data_path(r.shared_memory)
         ),
         (None, None) => "moving frames use the spatial filter (OIDN per frame not run here)".into(),
+    }
+}
+
+/// How OIDN's images travelled, for the status lines.
+fn data_path(shared_memory: bool) -> &'static str {
+    if shared_memory {
+        " (GPU memory shared with wgpu)"
+    } else {
+        " (through host copies)"
     }
 }
 
@@ -269,11 +274,7 @@ fn oidn_status(status: &crate::oidn::OidnStatus) -> String {
         } => format!(
             "{samples} spp denoised on {device} in {:.0} ms{}",
             timings.total_ms() + readback_ms,
-            if *shared_memory {
-                " (GPU memory shared with wgpu)"
-            } else {
-                " (through host copies)"
-            }
+            data_path(*shared_memory)
         ),
         OidnStatus::Unavailable(why) => format!("unavailable, showing svgf: {why}"),
     }

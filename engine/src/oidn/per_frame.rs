@@ -9,10 +9,10 @@
 use super::device::{AdapterIdentity, DeviceRequest};
 use super::{AuxMode, DenoiseOptions, Oidn, OidnError};
 use crate::gpu::GpuContext;
+use crate::render::RenderSettings;
 use crate::render::frame_denoiser::{ExternalDenoise, FrameDenoiseReport};
 use crate::render::settings::FrameOidn;
 use crate::render::view::DenoiserSources;
-use crate::render::{HostDenoised, RenderSettings};
 use std::time::Instant;
 
 /// The real-time path's OIDN: its own device (the viewer's still-image worker keeps another), opened at the
@@ -35,21 +35,25 @@ impl OidnPerFrame {
         }
     }
 
-    fn open(&mut self, ctx: &GpuContext) -> Result<&mut Oidn, OidnError> {
-        let request = DeviceRequest::MatchAdapter(AdapterIdentity::from_wgpu(&ctx.info));
-        match self.oidn.get_or_insert_with(|| Oidn::new(&request)) {
-            Ok(o) => Ok(o),
-            Err(e) => Err(e.clone()),
-        }
-    }
-
     /// OIDN's GPU device reads wgpu's memory here (opens the device the first time on a GPU adapter it has a
     /// backend for; never on CPU adapters).
     fn shares_memory(&mut self, ctx: &GpuContext) -> bool {
         if self.shared_failed || AdapterIdentity::from_wgpu(&ctx.info).gpu_kind().is_none() {
             return false;
         }
-        self.open(ctx).is_ok_and(|o| o.shares_memory_with(ctx))
+        open(&mut self.oidn, ctx).is_ok_and(|o| o.shares_memory_with(ctx))
+    }
+}
+
+/// The device matching `ctx`'s adapter, opened into `oidn` the first time.
+fn open<'o>(
+    oidn: &'o mut Option<Result<Oidn, OidnError>>,
+    ctx: &GpuContext,
+) -> Result<&'o mut Oidn, OidnError> {
+    let request = DeviceRequest::MatchAdapter(AdapterIdentity::from_wgpu(&ctx.info));
+    match oidn.get_or_insert_with(|| Oidn::new(&request)) {
+        Ok(o) => Ok(o),
+        Err(e) => Err(e.clone()),
     }
 }
 
@@ -73,28 +77,21 @@ impl ExternalDenoise for OidnPerFrame {
         // The frame so far first, so that the time below is the denoise's alone.
         ctx.wait_idle();
         let start = Instant::now();
-        let mut shared_failed = self.shared_failed;
-        let oidn = self.open(ctx).map_err(|e| e.to_string())?;
-        let shared = super::shared::attempt(oidn, ctx, &mut shared_failed, |o| {
-            super::shared::denoise_into(o, ctx, sources, &options, shown)
-        });
-        let shared_memory = shared.is_some();
-        if !shared_memory {
-            if settings.realtime.oidn == FrameOidn::Shared {
-                self.shared_failed = shared_failed;
-                return Err("Open Image Denoise cannot read the GPU's memory here".into());
-            }
-            let (inputs, _) = super::inputs::read_sources(ctx, sources);
-            let denoised = oidn
-                .denoise(&inputs.images(), &options)
-                .map_err(|e| e.to_string())?;
-            HostDenoised::write_image(ctx, shown, &denoised.color);
-        }
-        let device = oidn.device_description();
-        self.shared_failed = shared_failed;
+        let oidn = open(&mut self.oidn, ctx).map_err(|e| e.to_string())?;
+        let through_host = settings.realtime.oidn == FrameOidn::Always;
+        let into = super::shared::denoise_sources_into(
+            oidn,
+            ctx,
+            &mut self.shared_failed,
+            (sources, shown),
+            &options,
+            through_host,
+        )
+        .ok_or("Open Image Denoise cannot read the GPU's memory here")?;
+        into.result.map_err(|e| e.to_string())?;
         Ok(FrameDenoiseReport {
-            device,
-            shared_memory,
+            device: oidn.device_description(),
+            shared_memory: into.shared_memory,
             ms: start.elapsed().as_secs_f64() * 1e3,
         })
     }

@@ -79,6 +79,56 @@ fn filter_in_place(
     Ok((images, timings))
 }
 
+/// How [`denoise_sources_into`] went.
+pub struct DenoisedInto {
+    /// The denoise, its `color` empty: the image is in the buffer it was given.
+    pub result: Result<Denoised, OidnError>,
+    /// It ran in GPU memory shared with OIDN (nothing went through the host).
+    pub shared_memory: bool,
+    /// Milliseconds copying the accumulation to the host (0 when shared).
+    pub readback_ms: f64,
+}
+
+/// The accumulation in `sources` denoised into `shown` (the display's layout,
+/// `render::HostDenoised::image_buffer`): in GPU memory shared with OIDN unless that is not possible here or
+/// failed once (`failed`, as [`attempt`] keeps it), else through host copies where `through_host` allows;
+/// `None` when neither may run.
+pub fn denoise_sources_into(
+    oidn: &mut Oidn,
+    ctx: &GpuContext,
+    failed: &mut bool,
+    (sources, shown): (&DenoiserSources, &wgpu::Buffer),
+    options: &DenoiseOptions,
+    through_host: bool,
+) -> Option<DenoisedInto> {
+    if let Some(timings) = attempt(oidn, ctx, failed, |o| {
+        denoise_into(o, ctx, sources, options, shown)
+    }) {
+        return Some(DenoisedInto {
+            result: Ok(Denoised {
+                color: Vec::new(),
+                timings,
+                repaired: 0,
+            }),
+            shared_memory: true,
+            readback_ms: 0.0,
+        });
+    }
+    if !through_host {
+        return None;
+    }
+    let (inputs, readback_s) = super::inputs::read_sources(ctx, sources);
+    Some(DenoisedInto {
+        result: oidn.denoise(&inputs.images(), options).map(|mut d| {
+            crate::render::HostDenoised::write_image(ctx, shown, &d.color);
+            d.color = Vec::new();
+            d
+        }),
+        shared_memory: false,
+        readback_ms: readback_s * 1e3,
+    })
+}
+
 /// Runs `denoise` in shared GPU memory where `oidn` and `ctx` allow it and it has not failed before; `None`
 /// means "use the host path": not possible here, or it just failed (then `failed` is set, a warning says why,
 /// and later calls go straight to the host path).

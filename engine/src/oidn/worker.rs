@@ -88,13 +88,18 @@ impl<T: Send + 'static> OidnWorker<T> {
                                 sources,
                                 shown,
                             } = *gpu;
-                            run_on_gpu_buffers(
+                            let into = super::shared::denoise_sources_into(
                                 o,
+                                &ctx,
                                 &mut shared_failed,
-                                (&ctx, &sources, &shown),
+                                (&sources, &shown),
                                 &job.options,
-                                &mut done,
-                            );
+                                true,
+                            )
+                            .expect("through the host where memory is not shared");
+                            done.result = into.result;
+                            done.shared_memory = into.shared_memory;
+                            done.readback_ms = into.readback_ms;
                             done.shown = Some(shown);
                         }
                     }
@@ -153,35 +158,6 @@ impl<T: Send + 'static> OidnWorker<T> {
         self.in_flight -= 1;
         Some(done)
     }
-}
-
-/// A [`Source::Gpu`] job: in shared GPU memory unless that failed once (a warning says why), else through
-/// host copies; the result ends up in `shown`.
-fn run_on_gpu_buffers<T>(
-    oidn: &mut Oidn,
-    shared_failed: &mut bool,
-    (ctx, sources, shown): (&GpuContext, &DenoiserSources, &wgpu::Buffer),
-    options: &DenoiseOptions,
-    done: &mut Done<T>,
-) {
-    if let Some(timings) = super::shared::attempt(oidn, ctx, shared_failed, |o| {
-        super::shared::denoise_into(o, ctx, sources, options, shown)
-    }) {
-        done.shared_memory = true;
-        done.result = Ok(Denoised {
-            color: Vec::new(),
-            timings,
-            repaired: 0,
-        });
-        return;
-    }
-    let (inputs, readback_s) = super::inputs::read_sources(ctx, sources);
-    done.readback_ms = readback_s * 1e3;
-    done.result = oidn.denoise(&inputs.images(), options).map(|mut d| {
-        crate::render::HostDenoised::write_image(ctx, shown, &d.color);
-        d.color = Vec::new();
-        d
-    });
 }
 
 impl<T> Drop for OidnWorker<T> {
