@@ -1,6 +1,10 @@
 // Bottom-level traversal of a child-pair BVH2 (deformable meshes, and static ones with `--static-bvh binary`):
 // each node holds two child boxes (engine/src/bvh/mod.rs). Stack-based and iterative: no recursion on the GPU.
 
+// The BVH2 traversal stack, private for the reason of tlas.wgsl's `tlas_stack` (one zero-fill per invocation,
+// not per instance visited).
+var<private> blas_stack: array<u32, BLAS_STACK_SIZE>;
+
 // Intersects the triangles of one leaf; returns true if the closest hit moved.
 fn hit_leaf(mesh: Mesh, instance: u32, first: u32, count: u32, o: vec3<f32>, d: vec3<f32>, hit: ptr<function, Hit>) -> bool {
     var found = false;
@@ -12,7 +16,6 @@ fn hit_leaf(mesh: Mesh, instance: u32, first: u32, count: u32, o: vec3<f32>, d: 
 
 fn trace_blas_binary(mesh: Mesh, instance: u32, o: vec3<f32>, d: vec3<f32>, hit: ptr<function, Hit>, any_hit: bool) -> bool {
     let inv_d = safe_inverse(d);
-    var stack: array<u32, BLAS_STACK_SIZE>;
     var sp = 0u;
     var node = mesh.blas_root;
     var found = false;
@@ -34,7 +37,7 @@ fn trace_blas_binary(mesh: Mesh, instance: u32, o: vec3<f32>, d: vec3<f32>, hit:
         if go_a && go_b {
             let a_first = ta <= tb;
             if sp < BLAS_STACK_SIZE {
-                stack[sp] = mesh.blas_root + select(n.a.index, n.b.index, a_first);
+                blas_stack[sp] = mesh.blas_root + select(n.a.index, n.b.index, a_first);
                 sp++;
             }
             node = mesh.blas_root + select(n.b.index, n.a.index, a_first);
@@ -45,7 +48,7 @@ fn trace_blas_binary(mesh: Mesh, instance: u32, o: vec3<f32>, d: vec3<f32>, hit:
         } else {
             if sp == 0u { break; }
             sp--;
-            node = stack[sp];
+            node = blas_stack[sp];
         }
     }
     return found;

@@ -2,6 +2,10 @@
 // for static meshes: node groups and octant-ordered hit masks. WIDE_STACK_SIZE is one entry per tree level (the
 // build refuses deeper trees).
 
+// The wide traversal's node-group stack, private for the reason of tlas.wgsl's `tlas_stack` (one zero-fill per
+// invocation, not per instance visited).
+var<private> wide_stack: array<vec2<u32>, WIDE_STACK_SIZE>;
+
 // The ray against a wide node's 8 quantised child boxes. Returns the node's hit mask: for each inner child hit,
 // bit 24 + (slot ^ ray octant), so that taking the highest bit first visits near children first (the build
 // ordered the slots per octant); for each leaf hit, its triangles' bits (unary count << offset) in bits 0..23.
@@ -43,7 +47,6 @@ fn trace_blas_wide(mesh: Mesh, instance: u32, o: vec3<f32>, d: vec3<f32>, hit: p
     let oct_inv4 = select(0u, 0x04040404u, inv_d.x >= 0.0)
         | select(0u, 0x02020202u, inv_d.y >= 0.0)
         | select(0u, 0x01010101u, inv_d.z >= 0.0);
-    var stack: array<vec2<u32>, WIDE_STACK_SIZE>;
     var sp = 0u;
     // A node group: (first child node, inner-child hit bits 24..31 | the parent's inner-child mask in bits 0..7).
     // The root starts as the one hit child of a group with an empty mask, so its index resolves to the base.
@@ -60,7 +63,7 @@ fn trace_blas_wide(mesh: Mesh, instance: u32, o: vec3<f32>, d: vec3<f32>, hit: p
             // Inner children are stored contiguously in slot order: count the inner slots before this one.
             let child = group.x + countOneBits(group.y & 0xffu & ((1u << slot) - 1u));
             if group.y > 0x00ffffffu && sp < WIDE_STACK_SIZE {
-                stack[sp] = group;
+                wide_stack[sp] = group;
                 sp++;
             }
             let n = read_wide_node(child);
@@ -82,7 +85,7 @@ fn trace_blas_wide(mesh: Mesh, instance: u32, o: vec3<f32>, d: vec3<f32>, hit: p
         if group.y <= 0x00ffffffu {
             if sp == 0u { break; }
             sp--;
-            group = stack[sp];
+            group = wide_stack[sp];
         }
     }
     return found;

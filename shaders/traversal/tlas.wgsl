@@ -2,6 +2,12 @@
 // instance's mesh in its own BLAS layout. TLAS_STACK_SIZE is the deepest tree the CPU build accepts, so no push
 // is ever dropped.
 
+// The top level's traversal stack. Module-scope (private) rather than a local of `trace`: WGSL zero-fills a
+// local array at every call, which lavapipe pays per ray (64 entries: 17% of the Cornell box's trace time on this
+// 2-core machine, docs/BENCHMARKS.md "Traversal stacks zero-filled once per invocation"); a private array is
+// filled once per invocation. Entries are always written before they are read.
+var<private> tlas_stack: array<u32, TLAS_STACK_SIZE>;
+
 // Closest hit within the instance's mesh (or any hit, for shadow rays), in whichever layout the mesh's BLAS
 // has. Object-space ray: t stays comparable with world space because the direction is transformed, not
 // renormalised.
@@ -33,7 +39,6 @@ fn member_hit(hit: Hit) -> Hit {
 fn trace(ray: Ray, t_max: f32, any_hit: bool) -> Hit {
     var hit = Hit(t_max, NONE, 0u, vec2<f32>(0.0));
     let inv_d = safe_inverse(ray.dir);
-    var stack: array<u32, TLAS_STACK_SIZE>;
     var sp = 0u;
     var node = 0u;
     loop {
@@ -60,7 +65,7 @@ fn trace(ray: Ray, t_max: f32, any_hit: bool) -> Hit {
         if go_a && go_b {
             let a_first = ta <= tb;
             if sp < TLAS_STACK_SIZE {
-                stack[sp] = select(n.a.index, n.b.index, a_first);
+                tlas_stack[sp] = select(n.a.index, n.b.index, a_first);
                 sp++;
             }
             node = select(n.b.index, n.a.index, a_first);
@@ -71,7 +76,7 @@ fn trace(ray: Ray, t_max: f32, any_hit: bool) -> Hit {
         } else {
             if sp == 0u { break; }
             sp--;
-            node = stack[sp];
+            node = tlas_stack[sp];
         }
     }
     return member_hit(hit);
