@@ -12,6 +12,56 @@ var<private> rays_traced: u32;
 // (docs/BENCHMARKS.md). The real-time kernels keep the default.
 override PATH_AOVS: bool = true;
 
+// Path regeneration (Novak et al. 2010), on CPU adapters: the trace pass runs all of a pixel's samples in one path
+// loop and starts the next sample's camera ray as soon as a path ends, instead of each SIMD lane waiting at the end
+// of the sample loop for the longest path of its eight (lavapipe runs invocations as masked 8-lane vector code).
+// The trace pass sets `regeneration` before its one call; the sums of the samples are left there. Off, the code
+// below folds away and the loop is the one-path loop GPUs run (there the carried state cost occupancy:
+// docs/BENCHMARKS.md, "Clocks after idle, and path regeneration").
+override PATH_REGENERATION: bool = false;
+
+// What the trace pass adds to a pixel over its samples.
+struct PixelSums {
+    radiance: vec3<f32>,
+    // rgb: first-hit albedo, w: camera-space depth (samples that hit a surface).
+    albedo_depth: vec4<f32>,
+    // xyz: first-hit shading normal, w: samples that hit a surface.
+    normal_hits: vec4<f32>,
+    // rgb: unscattered radiance, w: luminance(scattered radiance)^2.
+    unscattered_m2: vec4<f32>,
+}
+
+// `sums` with the path's sample added.
+fn add_sample(sums: PixelSums, r: PathResult) -> PixelSums {
+    var out = sums;
+    // A non-finite sample would poison the pixel forever; it is dropped (it should never happen).
+    if finite3(r.radiance) {
+        out.radiance += r.radiance;
+        if PATH_AOVS {
+            // Capped so that a firefly's square cannot overflow the sum.
+            let l = min(max(luminance(r.radiance - r.unscattered), 0.0), 1e15);
+            out.unscattered_m2 += vec4<f32>(r.unscattered, l * l);
+        }
+    }
+    if PATH_AOVS && r.hit {
+        out.albedo_depth += vec4<f32>(r.albedo, r.depth);
+        out.normal_hits += vec4<f32>(r.normal, 1.0);
+    }
+    return out;
+}
+
+// The pixel whose samples a regenerating path loop runs: samples sample_base + next .. sample_base + end - 1 are
+// still to start; `sums` holds the finished ones.
+struct Regeneration {
+    pixel_xy: vec2<u32>,
+    pixel: u32,
+    next: u32,
+    end: u32,
+    sums: PixelSums,
+}
+
+var<private> regeneration: Regeneration;
+
 // Sample dimensions (sampler.wgsl): the camera's, then a fixed block per bounce, so every decision of a path
 // has its own dimension whatever the path did before.
 const DIM_FILM: u32 = 0u; // 2D
@@ -149,7 +199,8 @@ fn trace_path(camera_ray: Ray, forward: vec3<f32>, sampler: Sampler) -> PathResu
     return trace_path_from(PathStart(camera_ray, Hit(MISS, NONE, 0u, vec2<f32>(0.0)), false, false), forward, sampler);
 }
 
-fn trace_path_from(start: PathStart, forward: vec3<f32>, sampler: Sampler) -> PathResult {
+fn trace_path_from(start: PathStart, forward: vec3<f32>, first_sampler: Sampler) -> PathResult {
+    var sampler = first_sampler;
     var result = PathResult(vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0), 0.0, false);
     var ray = start.ray;
     var first_pending = start.has_first_hit;
@@ -167,7 +218,26 @@ fn trace_path_from(start: PathStart, forward: vec3<f32>, sampler: Sampler) -> Pa
     var aov = 0u;
     // The volume the path ray travels in (KHR_materials_volume), named by its material; NONE in the open.
     var medium = NONE;
+    // PATH_REGENERATION: the path has ended and the pixel's next sample starts here.
+    var path_done = false;
     loop {
+        if PATH_REGENERATION && path_done {
+            regeneration.sums = add_sample(regeneration.sums, result);
+            if regeneration.next >= regeneration.end { break; }
+            sampler = sampler_start(regeneration.pixel, frame.sample_base + regeneration.next, frame.seed);
+            regeneration.next++;
+            ray = generate_ray(regeneration.pixel_xy, get_2d(sampler, DIM_FILM), get_2d(sampler, DIM_LENS));
+            result = PathResult(vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0), 0.0, false);
+            throughput = vec3<f32>(1.0);
+            depth = 0u;
+            pass_throughs = 0u;
+            last_bsdf_pdf = 0.0;
+            last_vertex = LightSampleContext(ray.origin, vec3<f32>(0.0));
+            path_alive = true;
+            aov = 0u;
+            medium = NONE;
+            path_done = false;
+        }
         var next = ray;
         var t_max = MISS;
         if shadow_pending {
@@ -185,6 +255,7 @@ fn trace_path_from(start: PathStart, forward: vec3<f32>, sampler: Sampler) -> Pa
             if hit.instance == NONE { result.radiance += shadow.contribution; }
             shadow_pending = false;
             if path_alive { continue; }
+            if PATH_REGENERATION { path_done = true; continue; }
             break;
         }
         if medium != NONE { throughput *= transmittance(medium, hit.t); }
@@ -198,6 +269,7 @@ fn trace_path_from(start: PathStart, forward: vec3<f32>, sampler: Sampler) -> Pa
             let escaped = throughput * escaped_radiance(ray.dir, last_vertex, last_bsdf_pdf, nee);
             result.radiance += escaped;
             if PATH_AOVS && depth == 0u { result.unscattered += escaped; }
+            if PATH_REGENERATION { path_done = true; continue; }
             break;
         }
         let s = resolve_hit(hit, ray);
@@ -230,8 +302,14 @@ fn trace_path_from(start: PathStart, forward: vec3<f32>, sampler: Sampler) -> Pa
             if PATH_AOVS && depth == 0u { result.unscattered += throughput * s.emission * weight; }
         }
         // An unlit surface scatters nothing.
-        if MATERIAL_LOBES != 0u && (s.flags & MATERIAL_UNLIT) != 0u { break; }
-        if depth >= frame.max_depth { break; }
+        if MATERIAL_LOBES != 0u && (s.flags & MATERIAL_UNLIT) != 0u {
+            if PATH_REGENERATION { path_done = true; continue; }
+            break;
+        }
+        if depth >= frame.max_depth {
+            if PATH_REGENERATION { path_done = true; continue; }
+            break;
+        }
 
         let dims = bounce_dimensions(depth);
         let tbn = basis(s.n);
@@ -272,7 +350,10 @@ fn trace_path_from(start: PathStart, forward: vec3<f32>, sampler: Sampler) -> Pa
             if transmitted { medium = medium_after_transmission(s, medium); }
             last_vertex = LightSampleContext(s.p, s.ng);
         }
-        if !path_alive && !shadow_pending { break; }
+        if !path_alive && !shadow_pending {
+            if PATH_REGENERATION { path_done = true; continue; }
+            break;
+        }
     }
     return result;
 }

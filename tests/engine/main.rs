@@ -24,6 +24,7 @@ mod light_sampling;
 mod lights_reference;
 mod near_emitter;
 mod oidn;
+mod path_regeneration;
 mod punctual_lights;
 mod realtime;
 mod record;

@@ -70,6 +70,11 @@ pub struct GpuContext {
     /// into a loop over its SIMD lanes and a texel load into straight-line code. `RAYKIN_SCENE_READS=buffers|
     /// textures` overrides the choice (kernel development and A/B runs).
     pub scene_in_textures: bool,
+    /// The trace pass runs a pixel's samples in one path loop, starting the next sample as soon as a path ends
+    /// (`PATH_REGENERATION` in `shaders/integrator/path.wgsl`): set on CPU adapters, where lavapipe runs eight
+    /// invocations as one masked vector and each lane otherwise waits for the longest path of the eight.
+    /// `RAYKIN_PATH_REGENERATION=on|off` overrides (A/B runs).
+    pub path_regeneration: bool,
     /// The staging buffer of the last readback, kept for the next: allocating (and on discrete GPUs pinning)
     /// host memory for every readback cost more than the copy.
     readback_staging: Arc<std::sync::Mutex<Option<wgpu::Buffer>>>,
@@ -123,6 +128,7 @@ impl GpuContext {
             pipelines: PipelineCache::new(device.clone()),
             params_in_storage: info.device_type == wgpu::DeviceType::Cpu,
             scene_in_textures: scene_in_textures_on(&info, &limits),
+            path_regeneration: path_regeneration_on(&info),
             readback_staging: Arc::default(),
             device,
             queue,
@@ -305,6 +311,20 @@ fn scene_in_textures_on(info: &wgpu::AdapterInfo, limits: &wgpu::Limits) -> bool
             fits && cpu
         }
         Err(_) => fits && cpu,
+    }
+}
+
+/// Whether the trace pass regenerates paths on this adapter ([`GpuContext::path_regeneration`]).
+fn path_regeneration_on(info: &wgpu::AdapterInfo) -> bool {
+    let cpu = info.device_type == wgpu::DeviceType::Cpu;
+    match std::env::var("RAYKIN_PATH_REGENERATION").as_deref() {
+        Ok("on") => true,
+        Ok("off") => false,
+        Ok(other) => {
+            tracing::warn!("RAYKIN_PATH_REGENERATION={other} is neither `on` nor `off`; ignored");
+            cpu
+        }
+        Err(_) => cpu,
     }
 }
 

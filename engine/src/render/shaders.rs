@@ -80,6 +80,8 @@ pub const LIBRARY: &[ShaderModule] = library! {
         "lights/light_sampler",
         "lights/dispatch",
         "sampler",
+        "camera",
+        "color",
         "math",
         "view",
     ],

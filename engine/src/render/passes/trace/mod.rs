@@ -52,11 +52,17 @@ impl TracePass {
             )
             .with_constants(aovs)
         };
+        let [without_aovs, with_aovs]: [&'static [(&'static str, f64)]; 2] =
+            if ctx.path_regeneration {
+                [
+                    &[("PATH_AOVS", 0.0), ("PATH_REGENERATION", 1.0)],
+                    &[("PATH_AOVS", 1.0), ("PATH_REGENERATION", 1.0)],
+                ]
+            } else {
+                [&[("PATH_AOVS", 0.0)], &[("PATH_AOVS", 1.0)]]
+            };
         Self {
-            kernels: [
-                kernels(&[("PATH_AOVS", 0.0)]),
-                kernels(&[("PATH_AOVS", 1.0)]),
-            ],
+            kernels: [kernels(without_aovs), kernels(with_aovs)],
             lobes: MaterialLobes::Core,
             aovs: true,
             view_layout,

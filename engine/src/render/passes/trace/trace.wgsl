@@ -41,32 +41,26 @@ fn trace_pixel(gid: vec2<u32>) {
         let hit = trace(Ray(origin, camera_ray_dir(gid, vec2<f32>(0.5))), MISS, false);
         aov_hit[pixel] = vec4<u32>(hit.instance, hit.triangle, bitcast<u32>(hit.bary.x), bitcast<u32>(hit.bary.y));
     }
-    var radiance = vec3<f32>(0.0);
-    var albedo_depth = vec4<f32>(0.0);
-    var normal_hits = vec4<f32>(0.0);
-    var unscattered_m2 = vec4<f32>(0.0);
-    for (var s = 0u; s < frame.spp; s++) {
-        let sampler = sampler_start(pixel, frame.sample_base + s, frame.seed);
-        // Box filter: a uniform point in the pixel.
-        let ray = generate_ray(gid, get_2d(sampler, DIM_FILM), get_2d(sampler, DIM_LENS));
-        let r = trace_path(ray, forward, sampler);
-        // A non-finite sample would poison the pixel forever; it is dropped (it should never happen).
-        if finite3(r.radiance) {
-            radiance += r.radiance;
-            if PATH_AOVS {
-                // Capped so that a firefly's square cannot overflow the sum.
-                let l = min(max(luminance(r.radiance - r.unscattered), 0.0), 1e15);
-                unscattered_m2 += vec4<f32>(r.unscattered, l * l);
-            }
+    var sums = PixelSums(vec3<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0));
+    if PATH_REGENERATION {
+        // One path loop over all the samples (integrator/path.wgsl): a lane whose path ends starts its next one.
+        if frame.spp > 0u {
+            regeneration = Regeneration(gid, pixel, 1u, frame.spp, sums);
+            let sampler = sampler_start(pixel, frame.sample_base, frame.seed);
+            trace_path(generate_ray(gid, get_2d(sampler, DIM_FILM), get_2d(sampler, DIM_LENS)), forward, sampler);
+            sums = regeneration.sums;
         }
-        if PATH_AOVS && r.hit {
-            albedo_depth += vec4<f32>(r.albedo, r.depth);
-            normal_hits += vec4<f32>(r.normal, 1.0);
+    } else {
+        for (var s = 0u; s < frame.spp; s++) {
+            let sampler = sampler_start(pixel, frame.sample_base + s, frame.seed);
+            // Box filter: a uniform point in the pixel.
+            let ray = generate_ray(gid, get_2d(sampler, DIM_FILM), get_2d(sampler, DIM_LENS));
+            sums = add_sample(sums, trace_path(ray, forward, sampler));
         }
     }
-    accum[pixel] += vec4<f32>(radiance, f32(frame.spp));
+    accum[pixel] += vec4<f32>(sums.radiance, f32(frame.spp));
     if !PATH_AOVS { return; }
-    aov_albedo_depth[pixel] += albedo_depth;
-    aov_normal[pixel] += normal_hits;
-    moments[pixel] += unscattered_m2;
+    aov_albedo_depth[pixel] += sums.albedo_depth;
+    aov_normal[pixel] += sums.normal_hits;
+    moments[pixel] += sums.unscattered_m2;
 }
