@@ -1,17 +1,21 @@
 // Textures: every image as RGBA8 texels in one storage buffer, filtered here (no binding arrays, so it runs on
 // lavapipe): bilinear or nearest, with glTF's wrap modes.
 
+// i wrapped into 0 .. size - 1 by the sampler's mode (0 repeat, 1 mirrored repeat, 2 clamp). The remainders are
+// taken in f32 (exact for |i| < 2^24, with the quotient's rounding corrected): an integer remainder by a
+// non-constant is a scalar division per SIMD lane on lavapipe, which runs this code for every hit whether or not
+// a texture is read (its `if`s only mask lanes): 15% of the Cornell box's time, which has no texture
+// (docs/BENCHMARKS.md, "Texture wraps in floats").
 fn wrap_coord(i: i32, size: i32, mode: u32) -> i32 {
     if mode == 2u { return clamp(i, 0, size - 1); }
-    if mode == 1u {
-        let period = 2 * size;
-        var m = i % period;
-        if m < 0 { m += period; }
-        return select(m, period - 1 - m, m >= size);
-    }
-    var m = i % size;
-    if m < 0 { m += size; }
-    return m;
+    let x = f32(i);
+    let n = f32(size);
+    let period = select(n, 2.0 * n, mode == 1u);
+    var m = x - period * floor(x / period);
+    m = select(m, m + period, m < 0.0);
+    m = select(m, m - period, m >= period);
+    m = select(m, period - 1.0 - m, m >= n);
+    return clamp(i32(m), 0, size - 1);
 }
 
 fn texel(info: TextureInfo, x: i32, y: i32) -> vec4<f32> {
