@@ -16,7 +16,7 @@ const MAX_SPHERICAL_SAMPLE_AREA: f32 = 6.22;
 fn area_light_emission(instance: u32, slot: u32, b: vec2<f32>) -> vec3<f32> {
     let m = read_material(read_triangle(slot).w);
     var emission = m.emissive;
-    if m.emissive_texture != NONE {
+    if scene_uses_texture(CORE_TEXTURE_EMISSIVE) && m.emissive_texture != NONE {
         let mesh = read_mesh(read_instance(instance).mesh);
         let w = vec3<f32>(1.0 - b.x - b.y, b.x, b.y);
         emission *= srgb_to_linear(sample_texture(m.emissive_texture, texture_uv(m.emissive_texture, mesh, read_triangle(slot), w)).rgb);

@@ -47,7 +47,7 @@ fn resolve_hit(hit: Hit, ray: Ray) -> SurfaceInteraction {
     }
 
     var base = m.base_color;
-    if m.base_color_texture != NONE {
+    if scene_uses_texture(CORE_TEXTURE_BASE_COLOR) && m.base_color_texture != NONE {
         let t = sample_texture(m.base_color_texture, texture_uv(m.base_color_texture, mesh, tri, w));
         base *= vec4<f32>(srgb_to_linear(t.rgb), t.a);
     }
@@ -56,14 +56,14 @@ fn resolve_hit(hit: Hit, ray: Ray) -> SurfaceInteraction {
     }
     var metallic = m.metallic;
     var roughness = m.roughness;
-    if m.metallic_roughness_texture != NONE {
+    if scene_uses_texture(CORE_TEXTURE_METALLIC_ROUGHNESS) && m.metallic_roughness_texture != NONE {
         let t = sample_texture(m.metallic_roughness_texture, texture_uv(m.metallic_roughness_texture, mesh, tri, w));
         roughness *= t.g;
         metallic *= t.b;
     }
     // The clear coat has its own normal map; without one it follows the interpolated normal, not the base's map.
     let n_interpolated = n;
-    if m.normal_texture != NONE && mesh.tangent_offset != NONE {
+    if scene_uses_texture(CORE_TEXTURE_NORMAL) && m.normal_texture != NONE && mesh.tangent_offset != NONE {
         n = normal_mapped(n, m.normal_texture, m.normal_scale, inst, mesh, tri, w, s.front);
     }
     let v = -ray.dir;
@@ -71,7 +71,7 @@ fn resolve_hit(hit: Hit, ray: Ray) -> SurfaceInteraction {
     s.n = n;
 
     var emission = m.emissive;
-    if m.emissive_texture != NONE && any(emission > vec3<f32>(0.0)) {
+    if scene_uses_texture(CORE_TEXTURE_EMISSIVE) && m.emissive_texture != NONE && any(emission > vec3<f32>(0.0)) {
         emission *= srgb_to_linear(sample_texture(m.emissive_texture, texture_uv(m.emissive_texture, mesh, tri, w)).rgb);
     }
     s.emission = emission;

@@ -1,6 +1,17 @@
 // Textures: every image as RGBA8 texels in one storage buffer, filtered here (no binding arrays, so it runs on
 // lavapipe): bilinear or nearest, with glTF's wrap modes.
 
+// The core texture slots (CORE_TEXTURE_*) some material of the scene uses (engine/src/render/material_lobes.rs
+// `MaterialNeeds`): lookups of the other slots compile away. On lavapipe a lookup behind a material's `if` runs at
+// every hit whether or not the material has that texture (its `if`s mask SIMD lanes, they never skip code): the
+// Cornell box, which has no texture, took 0.57x the time without them (docs/BENCHMARKS.md, "Kernels without the
+// texture slots no material uses"). Kernels that do not set it look up every slot.
+override CORE_TEXTURES: u32 = 15u;
+
+fn scene_uses_texture(slot: u32) -> bool {
+    return (CORE_TEXTURES & slot) != 0u;
+}
+
 // i wrapped into 0 .. size - 1 by the sampler's mode (0 repeat, 1 mirrored repeat, 2 clamp). The remainders are
 // taken in f32 (exact for |i| < 2^24, with the quotient's rounding corrected): an integer remainder by a
 // non-constant is a scalar division per SIMD lane on lavapipe, which runs this code for every hit whether or not

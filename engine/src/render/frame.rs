@@ -30,7 +30,7 @@ use super::frame_denoiser::FrameDenoiser;
 use super::gpu_scene::{GpuScene, SceneWrites};
 use super::host_denoised::HostDenoised;
 use super::layout::{LIGHT_DIRECTIONAL, LIGHT_ENVIRONMENT, LIGHT_SUN};
-use super::material_lobes::MaterialLobes;
+use super::material_lobes::MaterialNeeds;
 use super::passes::denoise::{DenoiseInputs, Denoiser};
 use super::passes::gradient::FILTERED;
 use super::passes::tonemap::{TonemapInput, TonemapPass};
@@ -134,7 +134,7 @@ pub fn render_frame(
         trace.prepare(
             &ctx,
             &view,
-            MaterialLobes::of(&scene.material_data),
+            MaterialNeeds::of(&scene.material_data),
             accumulation.records_denoiser_inputs(&settings),
         );
         let group = bindings.group(&ctx, &mut scene, &mut encoder, deformed_on_gpu(&deform));
@@ -301,7 +301,7 @@ pub fn encode_realtime_frame(
     }
     passes.trace.encode(
         ctx,
-        MaterialLobes::of(&scene.material_data),
+        MaterialNeeds::of(&scene.material_data),
         &mut encoder,
         &groups,
         view,

@@ -24,6 +24,14 @@ pub const LOBES_LEVEL: u32 = 3;
 pub const LOBES_TEXTURED: u32 = 2;
 pub const LOBES_LAYERS: u32 = 4;
 
+/// `CORE_TEXTURES` (the trace kernels' pipeline constant, `render::material_lobes::MaterialNeeds`): the core
+/// texture slots some material of the scene uses, one bit each.
+pub const CORE_TEXTURE_BASE_COLOR: u32 = 1;
+pub const CORE_TEXTURE_METALLIC_ROUGHNESS: u32 = 2;
+pub const CORE_TEXTURE_NORMAL: u32 = 4;
+pub const CORE_TEXTURE_EMISSIVE: u32 = 8;
+pub const CORE_TEXTURES_ALL: u32 = 15;
+
 pub const TEXTURE_NEAREST: u32 = 1 << 4;
 /// The texture-info entry carries a KHR_texture_transform (its `uv_u`/`uv_v` rows apply to the UVs).
 pub const TEXTURE_TRANSFORMED: u32 = 1 << 5;
@@ -228,6 +236,13 @@ pub const WGSL_CONSTANTS: &[(&str, u32)] = &[
     ("LOBES_LEVEL", LOBES_LEVEL),
     ("LOBES_TEXTURED", LOBES_TEXTURED),
     ("LOBES_LAYERS", LOBES_LAYERS),
+    ("CORE_TEXTURE_BASE_COLOR", CORE_TEXTURE_BASE_COLOR),
+    (
+        "CORE_TEXTURE_METALLIC_ROUGHNESS",
+        CORE_TEXTURE_METALLIC_ROUGHNESS,
+    ),
+    ("CORE_TEXTURE_NORMAL", CORE_TEXTURE_NORMAL),
+    ("CORE_TEXTURE_EMISSIVE", CORE_TEXTURE_EMISSIVE),
     ("TEXTURE_NEAREST", TEXTURE_NEAREST),
     ("TEXTURE_TRANSFORMED", TEXTURE_TRANSFORMED),
     ("WIDE_BLAS", WIDE_BLAS),

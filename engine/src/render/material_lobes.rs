@@ -6,11 +6,16 @@
 //! bit of their own, so scenes without sheen or clearcoat compile the kernels they compiled before the layers.
 
 use super::gpu_scene::{TextureSlots, gpu_material};
-use super::layout::{GpuMaterial, LOBES_LAYERS, LOBES_LEVEL, MATERIAL_UNLIT, NONE};
+use super::layout::{
+    CORE_TEXTURE_BASE_COLOR, CORE_TEXTURE_EMISSIVE, CORE_TEXTURE_METALLIC_ROUGHNESS,
+    CORE_TEXTURE_NORMAL, GpuMaterial, LOBES_LAYERS, LOBES_LEVEL, MATERIAL_ALPHA_MASK,
+    MATERIAL_UNLIT, NONE,
+};
 use crate::gpu::ComputeModule;
+use std::collections::HashMap;
 
 /// What the materials need; the WGSL constant's values.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum MaterialLobes {
     /// The core metallic-roughness BSDF only.
     #[default]
@@ -60,10 +65,6 @@ impl MaterialLobes {
             .unwrap_or(Self::LayeredTextured)
     }
 
-    fn index(self) -> usize {
-        Self::ALL.iter().position(|k| *k == self).unwrap_or(0)
-    }
-
     /// The least the materials need.
     pub fn of(materials: &[GpuMaterial]) -> Self {
         let core = gpu_material(&crate::scene::Material::default(), &TextureSlots::default());
@@ -102,7 +103,57 @@ impl MaterialLobes {
     }
 }
 
-/// One compute kernel of the path tracer compiled per [`MaterialLobes`] value on first use (the module is parsed
+/// What the path-tracing kernels are compiled for: the lobes, the core texture slots (base colour,
+/// metallic-roughness, normal, emissive) some material uses, the pipeline constant `CORE_TEXTURES`
+/// (`shaders/scene/texture.wgsl`): lookups of the other slots compile away; and whether any material is
+/// alpha-masked (`ALPHA_MASKS`). On GPUs that shortens the kernel;
+/// on lavapipe, whose `if`s mask lanes and skip nothing, a texture-less scene's lookups cost 43% of its time
+/// (docs/BENCHMARKS.md, "Kernels without the texture slots no material uses").
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub struct MaterialNeeds {
+    pub lobes: MaterialLobes,
+    pub core_textures: u32,
+    /// Some material is alpha-masked: traversal tests the cut-outs (`ALPHA_MASKS`, `shaders/scene/alpha.wgsl`).
+    pub alpha_masks: bool,
+}
+
+impl MaterialNeeds {
+    /// The least the materials need.
+    pub fn of(materials: &[GpuMaterial]) -> Self {
+        Self {
+            lobes: MaterialLobes::of(materials),
+            core_textures: core_textures(materials),
+            alpha_masks: materials.iter().any(|m| m.flags & MATERIAL_ALPHA_MASK != 0),
+        }
+    }
+
+    /// The pipeline constants that compile a kernel of the WGSL library for this choice.
+    pub fn constants(self) -> [(&'static str, f64); 3] {
+        let [lobes] = self.lobes.constants();
+        [
+            lobes,
+            ("CORE_TEXTURES", f64::from(self.core_textures)),
+            ("ALPHA_MASKS", if self.alpha_masks { 1.0 } else { 0.0 }),
+        ]
+    }
+}
+
+/// The core texture slots some material uses (`CORE_TEXTURE_*` bits).
+pub fn core_textures(materials: &[GpuMaterial]) -> u32 {
+    materials.iter().fold(0, |slots, m| {
+        let slot = |texture: u32, bit: u32| if texture != NONE { bit } else { 0 };
+        slots
+            | slot(m.base_color_texture, CORE_TEXTURE_BASE_COLOR)
+            | slot(
+                m.metallic_roughness_texture,
+                CORE_TEXTURE_METALLIC_ROUGHNESS,
+            )
+            | slot(m.normal_texture, CORE_TEXTURE_NORMAL)
+            | slot(m.emissive_texture, CORE_TEXTURE_EMISSIVE)
+    })
+}
+
+/// One compute kernel of the path tracer compiled per [`MaterialNeeds`] value on first use (the module is parsed
 /// once; a scene that never needs the extension lobes never compiles them).
 pub struct LobeKernels {
     label: &'static str,
@@ -110,7 +161,7 @@ pub struct LobeKernels {
     module: ComputeModule,
     /// Pipeline constants of the module's own, the same for every lobe choice.
     constants: &'static [(&'static str, f64)],
-    pipelines: [Option<wgpu::ComputePipeline>; 5],
+    pipelines: HashMap<MaterialNeeds, wgpu::ComputePipeline>,
 }
 
 impl LobeKernels {
@@ -126,7 +177,7 @@ impl LobeKernels {
             entry,
             module: ComputeModule::new(ctx, source, layouts),
             constants: &[],
-            pipelines: Default::default(),
+            pipelines: HashMap::new(),
         }
     }
 
@@ -135,10 +186,10 @@ impl LobeKernels {
         Self { constants, ..self }
     }
 
-    /// The kernel for `lobes`, compiled now if it has not been.
-    pub fn get(&mut self, lobes: MaterialLobes) -> &wgpu::ComputePipeline {
-        self.pipelines[lobes.index()].get_or_insert_with(|| {
-            let constants: Vec<_> = lobes
+    /// The kernel for `needs`, compiled now if it has not been.
+    pub fn get(&mut self, needs: MaterialNeeds) -> &wgpu::ComputePipeline {
+        self.pipelines.entry(needs).or_insert_with(|| {
+            let constants: Vec<_> = needs
                 .constants()
                 .into_iter()
                 .chain(self.constants.iter().copied())
@@ -147,9 +198,9 @@ impl LobeKernels {
         })
     }
 
-    /// The kernel for `lobes` if [`Self::get`] compiled it.
-    pub fn compiled(&self, lobes: MaterialLobes) -> Option<&wgpu::ComputePipeline> {
-        self.pipelines[lobes.index()].as_ref()
+    /// The kernel for `needs` if [`Self::get`] compiled it.
+    pub fn compiled(&self, needs: MaterialNeeds) -> Option<&wgpu::ComputePipeline> {
+        self.pipelines.get(&needs)
     }
 }
 
@@ -209,6 +260,49 @@ mod tests {
         assert_eq!(need(&m), MaterialLobes::Core);
         m.extensions.sheen.as_mut().unwrap().color = glam::Vec3::splat(0.5);
         assert_eq!(need(&m), MaterialLobes::LayeredTextured);
+    }
+
+    /// The texture slots and alpha test the kernels keep are exactly those some material uses.
+    #[test]
+    fn kernels_keep_the_texture_slots_and_alpha_test_materials_use() {
+        let plain = Material::default();
+        let needs = |materials: &[&Material]| {
+            let gpu: Vec<_> = materials
+                .iter()
+                .map(|m| gpu_material(m, &TextureSlots::default()))
+                .collect();
+            MaterialNeeds::of(&gpu)
+        };
+        let none = needs(&[&plain]);
+        assert_eq!((none.core_textures, none.alpha_masks), (0, false));
+        let mut base = plain.clone();
+        base.base_color_texture = Some(TextureRef::new(0, 0));
+        let mut lit = plain.clone();
+        lit.emissive = glam::Vec3::ONE;
+        lit.emissive_texture = Some(TextureRef::new(1, 0));
+        lit.normal_texture = Some(TextureRef::new(2, 0));
+        let mut cut = plain.clone();
+        cut.metallic_roughness_texture = Some(TextureRef::new(3, 0));
+        cut.alpha_mode = crate::scene::AlphaMode::Mask(0.5);
+        assert_eq!(
+            needs(&[&plain, &base]).core_textures,
+            CORE_TEXTURE_BASE_COLOR
+        );
+        assert_eq!(
+            needs(&[&lit, &plain]).core_textures,
+            CORE_TEXTURE_EMISSIVE | CORE_TEXTURE_NORMAL
+        );
+        let all = needs(&[&base, &lit, &cut]);
+        assert_eq!(all.core_textures, crate::render::layout::CORE_TEXTURES_ALL);
+        assert!(all.alpha_masks && !needs(&[&base, &lit]).alpha_masks);
+        // Blending is not a cut-out: it needs no test in traversal.
+        let mut blend = plain.clone();
+        blend.alpha_mode = crate::scene::AlphaMode::Blend;
+        assert!(!needs(&[&blend]).alpha_masks);
+        assert_eq!(
+            all.constants().map(|(name, _)| name),
+            ["MATERIAL_LOBES", "CORE_TEXTURES", "ALPHA_MASKS"]
+        );
     }
 
     #[test]

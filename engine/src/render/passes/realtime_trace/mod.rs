@@ -4,7 +4,7 @@
 
 use crate::gpu::GpuContext;
 use crate::gpu::bind::{Binding, CachedGroup, bind_group, compute_layout};
-use crate::render::material_lobes::{LobeKernels, MaterialLobes};
+use crate::render::material_lobes::{LobeKernels, MaterialNeeds};
 use crate::render::realtime_targets::{RealtimeTargets, SceneGroups, SceneLayouts};
 use crate::render::shaders::{ShaderModule, compose};
 use crate::render::view::ViewTargets;
@@ -56,7 +56,7 @@ impl RealtimeTracePass {
     pub fn encode(
         &mut self,
         ctx: &GpuContext,
-        lobes: MaterialLobes,
+        needs: MaterialNeeds,
         encoder: &mut wgpu::CommandEncoder,
         groups: &SceneGroups,
         view: &ViewTargets,
@@ -87,7 +87,7 @@ impl RealtimeTracePass {
                 )
             });
         let mut pass = groups.begin_pass(encoder, "realtime trace", group, timestamp_writes);
-        pass.set_pipeline(self.kernels.get(lobes));
+        pass.set_pipeline(self.kernels.get(needs));
         let (x, y) = view.workgroups();
         pass.dispatch_workgroups(x, y, 1);
     }

@@ -3,7 +3,7 @@
 
 use crate::gpu::GpuContext;
 use crate::gpu::bind::{Binding, CachedGroup, bind_group, compute_layout};
-use crate::render::material_lobes::{LobeKernels, MaterialLobes};
+use crate::render::material_lobes::{LobeKernels, MaterialNeeds};
 use crate::render::shaders::{ShaderModule, compose};
 use crate::render::view::ViewTargets;
 use bevy_ecs::prelude::Resource;
@@ -25,7 +25,7 @@ pub const KERNEL: ShaderModule = ShaderModule {
 pub struct TracePass {
     /// Per lobe choice: the kernels without the denoisers' inputs (`PATH_AOVS` off), then with them.
     kernels: [LobeKernels; 2],
-    lobes: MaterialLobes,
+    needs: MaterialNeeds,
     aovs: bool,
     view_layout: wgpu::BindGroupLayout,
     view_group: CachedGroup<u64>,
@@ -63,7 +63,7 @@ impl TracePass {
             };
         Self {
             kernels: [kernels(without_aovs), kernels(with_aovs)],
-            lobes: MaterialLobes::Core,
+            needs: MaterialNeeds::default(),
             aovs: true,
             view_layout,
             view_group: CachedGroup::default(),
@@ -77,11 +77,11 @@ impl TracePass {
         &mut self,
         ctx: &GpuContext,
         view: &ViewTargets,
-        lobes: MaterialLobes,
+        needs: MaterialNeeds,
         aovs: bool,
     ) {
-        self.kernels[aovs as usize].get(lobes);
-        self.lobes = lobes;
+        self.kernels[aovs as usize].get(needs);
+        self.needs = needs;
         self.aovs = aovs;
         let layout = &self.view_layout;
         self.view_group.get_or_make(view.generation, || {
@@ -122,7 +122,7 @@ impl TracePass {
         });
         pass.set_pipeline(
             self.kernels[self.aovs as usize]
-                .compiled(self.lobes)
+                .compiled(self.needs)
                 .expect("TracePass::prepare compiled this kernel"),
         );
         pass.set_bind_group(0, scene, &[]);
