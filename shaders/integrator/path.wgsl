@@ -62,6 +62,18 @@ struct Regeneration {
 
 var<private> regeneration: Regeneration;
 
+// Sample `index` of the pixel at `pixel_xy` (flat index `pixel`): its sampler and camera ray through a uniform
+// point in the pixel (box filter).
+struct CameraSample {
+    sampler: Sampler,
+    ray: Ray,
+}
+
+fn camera_sample(pixel_xy: vec2<u32>, pixel: u32, index: u32) -> CameraSample {
+    let sampler = sampler_start(pixel, index, frame.seed);
+    return CameraSample(sampler, generate_ray(pixel_xy, get_2d(sampler, DIM_FILM), get_2d(sampler, DIM_LENS)));
+}
+
 // Sample dimensions (sampler.wgsl): the camera's, then a fixed block per bounce, so every decision of a path
 // has its own dimension whatever the path did before.
 const DIM_FILM: u32 = 0u; // 2D
@@ -224,9 +236,10 @@ fn trace_path_from(start: PathStart, forward: vec3<f32>, first_sampler: Sampler)
         if PATH_REGENERATION && path_done {
             regeneration.sums = add_sample(regeneration.sums, result);
             if regeneration.next >= regeneration.end { break; }
-            sampler = sampler_start(regeneration.pixel, frame.sample_base + regeneration.next, frame.seed);
+            let started = camera_sample(regeneration.pixel_xy, regeneration.pixel, frame.sample_base + regeneration.next);
             regeneration.next++;
-            ray = generate_ray(regeneration.pixel_xy, get_2d(sampler, DIM_FILM), get_2d(sampler, DIM_LENS));
+            sampler = started.sampler;
+            ray = started.ray;
             result = PathResult(vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0), 0.0, false);
             throughput = vec3<f32>(1.0);
             depth = 0u;

@@ -110,6 +110,20 @@ pub fn assert_all_finite(img: &[[f32; 3]], what: &str) {
     assert_eq!(bad, 0, "{what}: {bad} non-finite pixel values");
 }
 
+/// Two forms of one kernel rendered the same image: `a` finite, `b` not black, and every pixel equal bit for bit.
+pub fn assert_forms_render_the_same_image(a: &[[f32; 3]], b: &[[f32; 3]], what: &str) {
+    assert_all_finite(a, what);
+    assert!(
+        mean_rgb(b).iter().all(|&m| m > 1e-3),
+        "{what}: a black image"
+    );
+    let differ = a.iter().zip(b).filter(|(a, b)| a != b).count();
+    assert_eq!(
+        differ, 0,
+        "{what}: {differ} pixels differ between the two forms"
+    );
+}
+
 pub fn mean_rgb(img: &[[f32; 3]]) -> [f64; 3] {
     let mut m = [0.0; 3];
     for p in img {

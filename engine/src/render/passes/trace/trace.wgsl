@@ -46,16 +46,14 @@ fn trace_pixel(gid: vec2<u32>) {
         // One path loop over all the samples (integrator/path.wgsl): a lane whose path ends starts its next one.
         if frame.spp > 0u {
             regeneration = Regeneration(gid, pixel, 1u, frame.spp, sums);
-            let sampler = sampler_start(pixel, frame.sample_base, frame.seed);
-            trace_path(generate_ray(gid, get_2d(sampler, DIM_FILM), get_2d(sampler, DIM_LENS)), forward, sampler);
+            let first = camera_sample(gid, pixel, frame.sample_base);
+            trace_path(first.ray, forward, first.sampler);
             sums = regeneration.sums;
         }
     } else {
         for (var s = 0u; s < frame.spp; s++) {
-            let sampler = sampler_start(pixel, frame.sample_base + s, frame.seed);
-            // Box filter: a uniform point in the pixel.
-            let ray = generate_ray(gid, get_2d(sampler, DIM_FILM), get_2d(sampler, DIM_LENS));
-            sums = add_sample(sums, trace_path(ray, forward, sampler));
+            let sample = camera_sample(gid, pixel, frame.sample_base + s);
+            sums = add_sample(sums, trace_path(sample.ray, forward, sample.sampler));
         }
     }
     accum[pixel] += vec4<f32>(sums.radiance, f32(frame.spp));
