@@ -6,7 +6,7 @@
 // every hit whether or not the material has that texture (its `if`s mask SIMD lanes, they never skip code): the
 // Cornell box, which has no texture, took 0.57x the time without them (docs/BENCHMARKS.md, "Kernels without the
 // texture slots no material uses"). Kernels that do not set it look up every slot.
-override CORE_TEXTURES: u32 = 15u;
+override CORE_TEXTURES: u32 = CORE_TEXTURES_ALL;
 
 fn scene_uses_texture(slot: u32) -> bool {
     return (CORE_TEXTURES & slot) != 0u;
