@@ -137,23 +137,23 @@ fn sample_direct(s: SurfaceInteraction, wo: vec3<f32>, tbn: mat3x3<f32>, sampler
 fn direct_pdf_of_hit(hit: Hit, p: vec3<f32>, last_vertex: LightSampleContext, dir: vec3<f32>) -> f32 {
     let light = triangle_light_index(hit.instance, hit.triangle);
     if light == NONE { return 0.0; }
-    return light_sampler_pmf_at(last_vertex, light) * light_pdf_li(light, last_vertex, dir, distance(p, last_vertex.p), true);
+    return light_sampler_pmf_at(last_vertex, light) * emitter_pdf_li(light, last_vertex, dir, distance(p, last_vertex.p));
 }
 
 // What a ray leaving the scene along `dir` sees of the lights at infinity, each weighed against next-event
-// estimation from `last_vertex` when the ray was BSDF-sampled with density `bsdf_pdf` (0: a camera ray, counted in
-// full).
-fn escaped_radiance(dir: vec3<f32>, last_vertex: LightSampleContext, bsdf_pdf: f32, nee: bool) -> vec3<f32> {
+// estimation (whose choice of them does not depend on where it samples from) when the ray was BSDF-sampled with
+// density `bsdf_pdf` (0: a camera ray, counted in full).
+fn escaped_radiance(dir: vec3<f32>, bsdf_pdf: f32, nee: bool) -> vec3<f32> {
     var sum = vec3<f32>(0.0);
     let end = frame.infinite_light_first + frame.infinite_light_count;
     for (var light = frame.infinite_light_first; light < end; light++) {
-        let le = infinite_light_le(light, dir);
-        if all(le == vec3<f32>(0.0)) { continue; }
+        let li = infinite_light_li(light, dir, true);
+        if all(li.le == vec3<f32>(0.0)) { continue; }
         var weight = 1.0;
         if nee && bsdf_pdf > 0.0 {
-            weight = power_heuristic(bsdf_pdf, light_sampler_pmf_at(last_vertex, light) * light_pdf_li(light, last_vertex, dir, MISS, true));
+            weight = power_heuristic(bsdf_pdf, infinite_light_pmf_at(light) * li.pdf);
         }
-        sum += le * weight;
+        sum += li.le * weight;
     }
     return sum;
 }
@@ -279,7 +279,7 @@ fn trace_path_from(start: PathStart, forward: vec3<f32>, first_sampler: Sampler)
                 result.albedo = vec3<f32>(0.0);
                 result.normal = vec3<f32>(0.0);
             }
-            let escaped = throughput * escaped_radiance(ray.dir, last_vertex, last_bsdf_pdf, nee);
+            let escaped = throughput * escaped_radiance(ray.dir, last_bsdf_pdf, nee);
             result.radiance += escaped;
             if PATH_AOVS && depth == 0u { result.unscattered += escaped; }
             if PATH_REGENERATION { path_done = true; continue; }

@@ -12,9 +12,8 @@
 const MIN_SPHERICAL_SAMPLE_AREA: f32 = 3e-4;
 const MAX_SPHERICAL_SAMPLE_AREA: f32 = 6.22;
 
-// Emission of the light's material at barycentrics (b1, b2) of its triangle.
-fn area_light_emission(instance: u32, slot: u32, b: vec2<f32>) -> vec3<f32> {
-    let m = read_material(read_triangle(slot).w);
+// Emission of material `m` of the light's triangle at barycentrics (b1, b2).
+fn area_light_emission(m: Material, instance: u32, slot: u32, b: vec2<f32>) -> vec3<f32> {
     var emission = m.emissive;
     if scene_uses_texture(CORE_TEXTURE_EMISSIVE) && m.emissive_texture != NONE {
         let mesh = read_mesh(read_instance(instance).mesh);
@@ -34,11 +33,15 @@ fn triangle_spherical_area(p: array<vec3<f32>, 3>, origin: vec3<f32>) -> f32 {
     return select(0.0, omega, omega >= MIN_SPHERICAL_SAMPLE_AREA && omega <= MAX_SPHERICAL_SAMPLE_AREA);
 }
 
-// Whether the side of the triangle that `origin` sees emits.
-fn triangle_emits_towards(light: Light, p: array<vec3<f32>, 3>, origin: vec3<f32>) -> bool {
+// Whether the side of the triangle that `origin` sees emits (`m`: the triangle's material).
+fn triangle_emits_towards(m: Material, p: array<vec3<f32>, 3>, origin: vec3<f32>) -> bool {
     let side = dot(cross(p[1] - p[0], p[2] - p[0]), origin - p[0]);
-    let double_sided = (read_material(read_triangle(light.index_b).w).flags & MATERIAL_DOUBLE_SIDED) != 0u;
+    let double_sided = (m.flags & MATERIAL_DOUBLE_SIDED) != 0u;
     return side > 0.0 || (side < 0.0 && double_sided);
+}
+
+fn area_light_material(light: Light) -> Material {
+    return read_material(read_triangle(light.index_b).w);
 }
 
 // Where a direction sampled inside the triangle's solid angle meets its plane: (distance, b1, b2), with the
@@ -65,25 +68,35 @@ fn triangle_plane_hit(p: array<vec3<f32>, 3>, origin: vec3<f32>, dir: vec3<f32>)
 fn triangle_light_sample_li(light: Light, ctx: LightSampleContext, u: vec2<f32>) -> LightLiSample {
     let p = world_triangle(light.index_a, light.index_b);
     let area = triangle_area(p);
-    if area <= 0.0 || !triangle_emits_towards(light, p, ctx.p) { return no_light_sample(); }
+    let m = area_light_material(light);
+    if area <= 0.0 || !triangle_emits_towards(m, p, ctx.p) { return no_light_sample(); }
+    // The direction, distance, barycentrics and density of either way of sampling; the emission there once.
+    var dir: vec3<f32>;
+    var distance: f32;
+    var b: vec2<f32>;
+    var pdf: f32;
     let omega = triangle_spherical_area(p, ctx.p);
     if omega > 0.0 {
-        let dir = sample_spherical_triangle(normalize(p[0] - ctx.p), normalize(p[1] - ctx.p), normalize(p[2] - ctx.p), u);
+        dir = sample_spherical_triangle(normalize(p[0] - ctx.p), normalize(p[1] - ctx.p), normalize(p[2] - ctx.p), u);
         let h = triangle_plane_hit(p, ctx.p, dir);
         if h.x <= 0.0 || !is_finite(h.x) { return no_light_sample(); }
-        return LightLiSample(dir, h.x, area_light_emission(light.index_a, light.index_b, h.yz), 1.0 / omega, false);
+        distance = h.x;
+        b = h.yz;
+        pdf = 1.0 / omega;
+    } else {
+        b = sample_triangle_uniform(u);
+        let point = p[0] * (1.0 - b.x - b.y) + p[1] * b.x + p[2] * b.y;
+        let to_light = point - ctx.p;
+        let distance2 = dot(to_light, to_light);
+        if distance2 <= 0.0 { return no_light_sample(); }
+        distance = sqrt(distance2);
+        dir = to_light / distance;
+        let n = cross(p[1] - p[0], p[2] - p[0]) / (2.0 * area);
+        let cos_l = abs(dot(n, dir));
+        if cos_l <= 1e-7 { return no_light_sample(); }
+        pdf = distance2 / (cos_l * area);
     }
-    let b = sample_triangle_uniform(u);
-    let point = p[0] * (1.0 - b.x - b.y) + p[1] * b.x + p[2] * b.y;
-    let to_light = point - ctx.p;
-    let distance2 = dot(to_light, to_light);
-    if distance2 <= 0.0 { return no_light_sample(); }
-    let distance = sqrt(distance2);
-    let dir = to_light / distance;
-    let n = cross(p[1] - p[0], p[2] - p[0]) / (2.0 * area);
-    let cos_l = abs(dot(n, dir));
-    if cos_l <= 1e-7 { return no_light_sample(); }
-    return LightLiSample(dir, distance, area_light_emission(light.index_a, light.index_b, b), distance2 / (cos_l * area), false);
+    return LightLiSample(dir, distance, area_light_emission(m, light.index_a, light.index_b, b), pdf, false);
 }
 
 // Solid-angle density with which `triangle_light_sample_li` from ctx gives direction `wi`, which meets the
@@ -91,7 +104,7 @@ fn triangle_light_sample_li(light: Light, ctx: LightSampleContext, u: vec2<f32>)
 fn triangle_light_pdf(light: Light, ctx: LightSampleContext, wi: vec3<f32>, distance: f32) -> f32 {
     let p = world_triangle(light.index_a, light.index_b);
     let area = triangle_area(p);
-    if area <= 0.0 || !triangle_emits_towards(light, p, ctx.p) { return 0.0; }
+    if area <= 0.0 || !triangle_emits_towards(area_light_material(light), p, ctx.p) { return 0.0; }
     let omega = triangle_spherical_area(p, ctx.p);
     if omega > 0.0 { return 1.0 / omega; }
     let n = cross(p[1] - p[0], p[2] - p[0]) / (2.0 * area);

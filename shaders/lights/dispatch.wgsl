@@ -2,13 +2,15 @@
 // the light's kind (pbrt-v4's `Light` TaggedPointer dispatch).
 //
 // - light_sample_li(light, ctx, u, allow_incomplete_pdf): a sample towards the light from ctx (LightLiSample);
-// - light_pdf_li(light, ctx, wi, distance, allow_incomplete_pdf): the density `light_sample_li` gives `wi` (met
-//   at `distance`; MISS for lights at infinity); 0 for delta lights, which BSDF sampling cannot hit;
+// - the density `light_sample_li` gives a direction that BSDF sampling met the light along, by where it was met
+//   (delta lights, which BSDF sampling cannot hit, need none): `emitter_pdf_li(light, ctx, wi, distance)` for an
+//   emissive triangle, `infinite_light_li(light, dir, allow_incomplete_pdf)` for a light at infinity, with what
+//   the ray sees of it. Two functions, not one over every kind: a kernel pays for each kind's code at a call
+//   site whether a ray can meet that kind there or not (drivers inline; CPU adapters run both sides of an `if`);
 // - allow_incomplete_pdf (pbrt-v4's name): the caller combines the sample with BSDF sampling by MIS, so the
 //   light may leave directions to it (an environment map samples only its light above its mean); ReSTIR's
-//   candidates, which nothing completes, pass false;
-// - infinite_light_le(light, dir): what a ray leaving the scene along `dir` sees of a light at infinity
-//   (lights[frame.infinite_light_first ..]); emissive triangles are seen through `resolve_hit`.
+//   candidates, which nothing completes, pass false.
+// Lights at infinity are lights[frame.infinite_light_first ..]; emissive triangles are seen through `resolve_hit`.
 
 fn light_sample_li(index: u32, ctx: LightSampleContext, u: vec2<f32>, allow_incomplete_pdf: bool) -> LightLiSample {
     let light = read_light(index);
@@ -20,17 +22,16 @@ fn light_sample_li(index: u32, ctx: LightSampleContext, u: vec2<f32>, allow_inco
     return no_light_sample();
 }
 
-fn light_pdf_li(index: u32, ctx: LightSampleContext, wi: vec3<f32>, distance: f32, allow_incomplete_pdf: bool) -> f32 {
-    let light = read_light(index);
-    if light.kind == LIGHT_TRIANGLE { return triangle_light_pdf(light, ctx, wi, distance); }
-    if light.kind == LIGHT_ENVIRONMENT { return environment_pdf(light, wi, allow_incomplete_pdf); }
-    if light.kind == LIGHT_SUN { return sun_pdf(light, wi); }
-    return 0.0;
+// Density of `wi` for emissive triangle `index`, met at `distance` from ctx.
+fn emitter_pdf_li(index: u32, ctx: LightSampleContext, wi: vec3<f32>, distance: f32) -> f32 {
+    return triangle_light_pdf(read_light(index), ctx, wi, distance);
 }
 
-fn infinite_light_le(index: u32, dir: vec3<f32>) -> vec3<f32> {
+// What a ray leaving the scene along `dir` sees of light `index` at infinity, and the density with which
+// `light_sample_li` gives `dir`.
+fn infinite_light_li(index: u32, dir: vec3<f32>, allow_incomplete_pdf: bool) -> InfiniteLightLi {
     let light = read_light(index);
-    if light.kind == LIGHT_ENVIRONMENT { return environment_le(light, dir); }
-    if light.kind == LIGHT_SUN { return sun_le(light, dir); }
-    return vec3<f32>(0.0);
+    if light.kind == LIGHT_ENVIRONMENT { return environment_li(light, dir, allow_incomplete_pdf); }
+    if light.kind == LIGHT_SUN { return InfiniteLightLi(sun_le(light, dir), sun_pdf(light, dir)); }
+    return InfiniteLightLi(vec3<f32>(0.0), 0.0);
 }

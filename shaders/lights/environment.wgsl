@@ -48,12 +48,19 @@ fn environment_wrap_column(i: i32, w: u32) -> u32 {
     return u32(select(select(i, i + n, i < 0), i - n, i >= n));
 }
 
-// Radiance arriving from world direction `dir`: texel column i sits at u = (i + 1/2) / W (wrapping), row j
-// at v = j / (H - 1).
-fn environment_le(light: Light, dir: vec3<f32>) -> vec3<f32> {
+// Radiance and next-event estimation's density of world direction `dir` (a BSDF-sampled ray that left the
+// scene), the direction's map coordinates computed once for both.
+fn environment_li(light: Light, dir: vec3<f32>, compensated: bool) -> InfiniteLightLi {
+    let d = environment_to_map(light, dir);
+    let uv = environment_uv(d);
+    return InfiniteLightLi(environment_le_at(light, uv), environment_pdf_at(light, d, uv, compensated));
+}
+
+// Radiance arriving from the direction at map coordinates `uv` (environment_uv): texel column i sits at
+// u = (i + 1/2) / W (wrapping), row j at v = j / (H - 1).
+fn environment_le_at(light: Light, uv: vec2<f32>) -> vec3<f32> {
     let w = light.index_a;
     let h = light.index_b;
-    let uv = environment_uv(environment_to_map(light, dir));
     let x = uv.x * f32(w) - 0.5;
     let y = clamp(uv.y * f32(h - 1u), 0.0, f32(h - 1u));
     let x0 = floor(x);
@@ -144,13 +151,17 @@ fn environment_sample_linear(r: f32, a: f32, b: f32) -> f32 {
 
 // Solid-angle density with which `environment_sample_li` gives world direction `dir`.
 fn environment_pdf(light: Light, dir: vec3<f32>, compensated: bool) -> f32 {
+    let d = environment_to_map(light, dir);
+    return environment_pdf_at(light, d, environment_uv(d), compensated);
+}
+
+// The same for map-frame direction `d` at map coordinates `uv` (environment_uv(d)).
+fn environment_pdf_at(light: Light, d: vec3<f32>, uv: vec2<f32>, compensated: bool) -> f32 {
     let w = light.index_a;
     let rows = light.index_b - 1u;
     let dist = environment_distribution(light, compensated);
-    let d = environment_to_map(light, dir);
     let sin_theta = sqrt(max(0.0, 1.0 - d.y * d.y));
     if sin_theta <= 0.0 { return 0.0; }
-    let uv = environment_uv(d);
     let x = uv.x * f32(w) - 0.5;
     let i = environment_wrap_column(i32(floor(x)), w);
     let y = uv.y * f32(rows);
@@ -185,17 +196,20 @@ fn environment_sample_li(light: Light, u: vec2<f32>, compensated: bool) -> Light
     let su = (f32(i) + 0.5 + f.x) / f32(w);
     let d = environment_direction(vec2<f32>(su - floor(su), (f32(j) + f.y) / f32(rows)));
     let dir = environment_to_world(light, d);
+    // The radiance (and the bilinear density) from the direction's own map coordinates, computed once.
+    let back = environment_to_map(light, dir);
+    let uv = environment_uv(back);
     var pdf: f32;
     if bilinear {
         // The density from the direction, as BSDF-sampled rays that reach the map get it: where the bilinear
         // density is steep (a sun texel beside dark ones) the point's round trip through the direction moves it
         // by enough to change its density by more than 0.2%, and both must agree for MIS.
-        pdf = environment_pdf(light, dir, compensated);
+        pdf = environment_pdf_at(light, back, uv, compensated);
     } else {
         let sin_theta = sqrt(max(0.0, 1.0 - d.y * d.y));
         if sin_theta <= 0.0 { return no_light_sample(); }
         pdf = environment_cell_density(dist, w, rows, i, j) / (2.0 * PI * PI * sin_theta);
     }
     if pdf <= 0.0 { return no_light_sample(); }
-    return LightLiSample(dir, MISS, environment_le(light, dir), pdf, false);
+    return LightLiSample(dir, MISS, environment_le_at(light, uv), pdf, false);
 }

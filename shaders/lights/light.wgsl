@@ -16,6 +16,13 @@ struct LightLiSample {
     delta: bool,
 }
 
+// What a ray leaving the scene sees of a light at infinity, and the density with which next-event estimation
+// samples its direction (lights/dispatch.wgsl `infinite_light_li`).
+struct InfiniteLightLi {
+    le: vec3<f32>,
+    pdf: f32,
+}
+
 // The point a light is sampled from.
 struct LightSampleContext {
     p: vec3<f32>,

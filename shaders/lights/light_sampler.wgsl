@@ -77,3 +77,9 @@ fn light_sampler_pmf_at(ctx: LightSampleContext, light: u32) -> f32 {
     if tree == 0u || light >= tree { return cdf_pmf(base, light); }
     return read_light_cdf(base + tree - 1u) * light_tree_pmf(ctx, light);
 }
+
+// `light_sampler_pmf_at` of a light at infinity: its power share, wherever ctx is (the tree holds only lights
+// at finite distance), without the tree's code in the kernel.
+fn infinite_light_pmf_at(light: u32) -> f32 {
+    return cdf_pmf(next_event_cdf(), light);
+}

@@ -1,6 +1,6 @@
 //! The light library's sampling on the GPU, through a probe kernel composed from the same WGSL modules the
 //! path tracer uses (`lights/dispatch`, `lights/light_sampler`): every sample's density equals what
-//! `light_pdf_li` gives its direction (the MIS weights depend on it), the densities integrate to 1, and sample
+//! `emitter_pdf_li` or `infinite_light_li` gives its direction (the MIS weights depend on it), the densities integrate to 1, and sample
 //! means of known integrands converge to the integrals computed independently (quadrature, Lambert's polygon
 //! formula), which checks that each sampler draws from the density it claims.
 
@@ -19,6 +19,13 @@ struct Probe { p: vec3<f32>, light: u32, n: vec3<f32>, count: u32, grid_w: u32, 
 @group(1) @binding(1) var<uniform> probe: Probe;
 @group(1) @binding(2) var<storage, read_write> out: array<vec4<f32>>;
 
+// The density of `wi` as the path tracer's MIS weights get it where a BSDF-sampled ray meets the light: an
+// emissive triangle's at `distance`, a light at infinity's along `wi` (0 for delta lights).
+fn met_light_pdf(light: u32, ctx: LightSampleContext, wi: vec3<f32>, distance: f32, incomplete: bool) -> f32 {
+    if read_light(light).kind == LIGHT_TRIANGLE { return emitter_pdf_li(light, ctx, wi, distance); }
+    return infinite_light_li(light, wi, incomplete).pdf;
+}
+
 // Sample i: (wi, pdf), (luminance of li, pdf of wi again, distance, 0).
 @compute @workgroup_size(64)
 fn sample_light(@builtin(global_invocation_id) gid: vec3<u32>) {
@@ -28,7 +35,7 @@ fn sample_light(@builtin(global_invocation_id) gid: vec3<u32>) {
     let ctx = LightSampleContext(probe.p, probe.n);
     let s = light_sample_li(probe.light, ctx, u, probe.incomplete != 0u);
     out[2u * i] = vec4<f32>(s.wi, s.pdf);
-    out[2u * i + 1u] = vec4<f32>(luminance(s.li), light_pdf_li(probe.light, ctx, s.wi, s.distance, probe.incomplete != 0u), s.distance, 0.0);
+    out[2u * i + 1u] = vec4<f32>(luminance(s.li), met_light_pdf(probe.light, ctx, s.wi, s.distance, probe.incomplete != 0u), s.distance, 0.0);
 }
 
 // Grid cell i (theta rows, phi columns, midpoints): (pdf, luminance of what a ray leaving along it sees, 0, 0).
@@ -39,17 +46,19 @@ fn pdf_grid(@builtin(global_invocation_id) gid: vec3<u32>) {
     let theta = (f32(i / probe.grid_w) + 0.5) / f32(probe.grid_h) * PI;
     let phi = (f32(i % probe.grid_w) + 0.5) / f32(probe.grid_w) * 2.0 * PI;
     let dir = vec3<f32>(sin(theta) * cos(phi), cos(theta), sin(theta) * sin(phi));
-    let ctx = LightSampleContext(probe.p, probe.n);
-    out[i] = vec4<f32>(light_pdf_li(probe.light, ctx, dir, MISS, probe.incomplete != 0u), luminance(infinite_light_le(probe.light, dir)), 0.0, 0.0);
+    let li = infinite_light_li(probe.light, dir, probe.incomplete != 0u);
+    out[i] = vec4<f32>(li.pdf, luminance(li.le), 0.0, 0.0);
 }
 
-// Light i's probability from (probe.p, probe.n): the light sampler NEE uses, and by power alone.
+// Light i's probability from (probe.p, probe.n): the light sampler NEE uses, by power alone, and for a light
+// at infinity the shortcut escaped rays' MIS weights take (-1 for the others).
 @compute @workgroup_size(64)
 fn pmf_all(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = gid.x;
     if i >= frame.light_count { return; }
     let ctx = LightSampleContext(probe.p, probe.n);
-    out[i] = vec4<f32>(light_sampler_pmf_at(ctx, i), light_sampler_pmf(i), 0.0, 0.0);
+    let at_infinity = select(-1.0, infinite_light_pmf_at(i), i >= frame.infinite_light_first);
+    out[i] = vec4<f32>(light_sampler_pmf_at(ctx, i), light_sampler_pmf(i), at_infinity, 0.0);
 }
 
 // Choice i of the light sampler NEE uses: (light index as f32 bits, pmf).
@@ -535,9 +544,16 @@ fn light_tree_probabilities_sum_to_one_and_match_its_choices() {
         });
         asset.roots.push(asset.nodes.len() - 1);
     }
-    let app = app_with(&ctx, Arc::new(asset), Environment::Constant([0.05; 3]));
+    // The sky: a light at infinity that next-event estimation samples (a constant one it leaves to BSDF
+    // sampling), so that escaped rays' shortcut to its probability is checked against a non-zero one.
+    let app = app_with(&ctx, Arc::new(asset), Environment::Sky);
     let lights = &app.gpu_scene().lights;
     assert_eq!(lights.triangle_count, 288);
+    assert_eq!(
+        lights.count,
+        lights.infinite_first + 1,
+        "the sky after the lamps"
+    );
     assert_eq!(
         lights.tree_count, 290,
         "triangles, point and spot in the tree"
@@ -559,6 +575,13 @@ fn light_tree_probabilities_sum_to_one_and_match_its_choices() {
             incomplete: 0,
         };
         let pmfs = run_probe(&app, probe, "pmf_all", count, count as usize);
+        for (light, p) in pmfs.iter().enumerate().skip(lights.infinite_first as usize) {
+            assert!(p[0] > 0.0, "{label}: the sky has no probability");
+            assert_eq!(
+                p[2], p[0],
+                "{label}: light {light} at infinity: infinite_light_pmf_at differs from light_sampler_pmf_at"
+            );
+        }
         let total: f64 = pmfs.iter().map(|p| p[0] as f64).sum();
         assert!(
             (total - 1.0).abs() < 1e-4,
