@@ -20,13 +20,6 @@ override PATH_AOVS: bool = true;
 // docs/BENCHMARKS.md, "Clocks after idle, and path regeneration").
 override PATH_REGENERATION: bool = false;
 
-// On CPU adapters, a loop iteration traces the shadow ray of the last bounce and then the path ray, so that the
-// shading code after them runs once per bounce: lavapipe runs the whole loop body for all eight lanes of a vector
-// whatever each lane does (an `if` masks, it does not branch), so an iteration for a shadow ray alone cost a
-// bounce's shading too (docs/BENCHMARKS.md, "Shadow ray and path ray in one iteration"). Off, an iteration
-// traces one ray, the form the GPUs' figures were measured with.
-override SHADOW_RAY_WITH_PATH_RAY: bool = false;
-
 // What the trace pass adds to a pixel over its samples.
 struct PixelSums {
     radiance: vec3<f32>,
@@ -258,32 +251,22 @@ fn trace_path_from(start: PathStart, forward: vec3<f32>, first_sampler: Sampler)
             medium = NONE;
             path_done = false;
         }
-        // The shadow ray first, if one waits, then (SHADOW_RAY_WITH_PATH_RAY, or next time round) the path ray:
-        // one call site of `trace`.
-        var hit = start.first_hit;
-        var shadow_traced = false;
-        loop {
-            shadow_traced = shadow_pending;
-            var next = ray;
-            var t_max = MISS;
-            if shadow_pending {
-                next = shadow.ray;
-                t_max = shadow.t_max;
-            }
-            if first_pending {
-                first_pending = false;
-            } else {
-                rays_traced++;
-                hit = trace(next, t_max, shadow_pending);
-            }
-            if shadow_pending {
-                if hit.instance == NONE { result.radiance += shadow.contribution; }
-                shadow_pending = false;
-                if SHADOW_RAY_WITH_PATH_RAY && path_alive { continue; }
-            }
-            break;
+        var next = ray;
+        var t_max = MISS;
+        if shadow_pending {
+            next = shadow.ray;
+            t_max = shadow.t_max;
         }
-        if shadow_traced {
+        var hit = start.first_hit;
+        if first_pending {
+            first_pending = false;
+        } else {
+            rays_traced++;
+            hit = trace(next, t_max, shadow_pending);
+        }
+        if shadow_pending {
+            if hit.instance == NONE { result.radiance += shadow.contribution; }
+            shadow_pending = false;
             if path_alive { continue; }
             if PATH_REGENERATION { path_done = true; continue; }
             break;

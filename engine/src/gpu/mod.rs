@@ -72,10 +72,8 @@ pub struct GpuContext {
     pub scene_in_textures: bool,
     /// The trace pass runs a pixel's samples in one path loop, starting the next sample as soon as a path ends
     /// (`PATH_REGENERATION` in `shaders/integrator/path.wgsl`): set on CPU adapters, where lavapipe runs eight
-    /// invocations as one masked vector and each lane otherwise waits for the longest path of the eight; and
-    /// traces a bounce's shadow ray and next path ray in one iteration (`SHADOW_RAY_WITH_PATH_RAY`), so that the
-    /// loop's shading code, which lavapipe runs for every lane, runs once per bounce.
-    /// `RAYKIN_PATH_REGENERATION=on|off` overrides both (A/B runs).
+    /// invocations as one masked vector and each lane otherwise waits for the longest path of the eight.
+    /// `RAYKIN_PATH_REGENERATION=on|off` overrides (A/B runs).
     pub path_regeneration: bool,
     /// The staging buffer of the last readback, kept for the next: allocating (and on discrete GPUs pinning)
     /// host memory for every readback cost more than the copy.

@@ -52,21 +52,11 @@ impl TracePass {
             )
             .with_constants(aovs)
         };
-        // CPU adapters' path loop: regenerated paths, and a bounce's shadow ray and next path ray traced in one
-        // iteration (shaders/integrator/path.wgsl).
         let [without_aovs, with_aovs]: [&'static [(&'static str, f64)]; 2] =
             if ctx.path_regeneration {
                 [
-                    &[
-                        ("PATH_AOVS", 0.0),
-                        ("PATH_REGENERATION", 1.0),
-                        ("SHADOW_RAY_WITH_PATH_RAY", 1.0),
-                    ],
-                    &[
-                        ("PATH_AOVS", 1.0),
-                        ("PATH_REGENERATION", 1.0),
-                        ("SHADOW_RAY_WITH_PATH_RAY", 1.0),
-                    ],
+                    &[("PATH_AOVS", 0.0), ("PATH_REGENERATION", 1.0)],
+                    &[("PATH_AOVS", 1.0), ("PATH_REGENERATION", 1.0)],
                 ]
             } else {
                 [&[("PATH_AOVS", 0.0)], &[("PATH_AOVS", 1.0)]]
