@@ -36,8 +36,17 @@ fn member_hit(hit: Hit) -> Hit {
     return member;
 }
 
+// The instance the top level's one leaf holds, where it holds one (a static scene merged into one tree): the
+// trace kernels set it (engine/src/render/material_lobes.rs `KernelNeeds`) and traversal starts there, the
+// top-level loop compiled away; NONE keeps the loop.
+override SOLE_INSTANCE: u32 = NONE;
+
 fn trace(ray: Ray, t_max: f32, any_hit: bool) -> Hit {
     var hit = Hit(t_max, NONE, 0u, vec2<f32>(0.0));
+    if SOLE_INSTANCE != NONE {
+        trace_blas(SOLE_INSTANCE, ray, &hit, any_hit);
+        return member_hit(hit);
+    }
     let inv_d = safe_inverse(ray.dir);
     var sp = 0u;
     var node = 0u;

@@ -445,3 +445,50 @@ fn the_scene_read_through_textures_renders_the_buffers_image() {
         assert_forms_render_the_same_image(&image(true), &image(false), file);
     }
 }
+
+#[test]
+fn the_top_levels_one_leaf_is_traced_without_the_top_level_loop() {
+    let (ctx, _gpu) = gpu();
+    let form = |shortcut: bool| {
+        let mut form = ctx.clone();
+        form.sole_instance_shortcut = shortcut;
+        form
+    };
+    // The Cornell box merged into one tree (one leaf); CesiumMan, one skinned instance (its BVH2) walking.
+    for file in [
+        "CornellBox/CornellBox.glb",
+        "CesiumMan/glTF-Binary/CesiumMan.glb",
+    ] {
+        let scene = load(file);
+        let image = |shortcut: bool| {
+            let mut app = raykin::headless::HeadlessApp::new(
+                form(shortcut),
+                scene.clone(),
+                settings(24, StaticLayout::Wide, true),
+                &CameraChoice::Auto,
+            )
+            .expect("scene uploads");
+            if !scene.animations.is_empty() {
+                app.step();
+                app.set_time(0, 0.7).expect("the walk clip");
+            }
+            app.accumulate(4, 4, |_| {});
+            assert!(
+                app.gpu_scene().sole_instance.is_some(),
+                "{file}: the top level holds one leaf"
+            );
+            app.radiance()
+        };
+        assert_forms_render_the_same_image(&image(true), &image(false), file);
+    }
+    // Not merged, the box's four meshes are four leaves: no shortcut.
+    let mut app = raykin::headless::HeadlessApp::new(
+        form(true),
+        load("CornellBox/CornellBox.glb"),
+        settings(8, StaticLayout::Wide, false),
+        &CameraChoice::Auto,
+    )
+    .expect("scene uploads");
+    app.accumulate(1, 1, |_| {});
+    assert_eq!(app.gpu_scene().sole_instance, None, "four leaves");
+}

@@ -75,6 +75,10 @@ pub struct GpuContext {
     /// invocations as one masked vector and each lane otherwise waits for the longest path of the eight.
     /// `RAYKIN_PATH_REGENERATION=on|off` overrides (A/B runs).
     pub path_regeneration: bool,
+    /// The trace kernels start in the top level's one leaf where it has one (`SOLE_INSTANCE`,
+    /// `shaders/traversal/tlas.wgsl`; [`crate::render::material_lobes::KernelNeeds`]), compiling a kernel for
+    /// that instance. On by default; `RAYKIN_SOLE_INSTANCE=off` keeps the top-level loop (A/B runs).
+    pub sole_instance_shortcut: bool,
     /// The staging buffer of the last readback, kept for the next: allocating (and on discrete GPUs pinning)
     /// host memory for every readback cost more than the copy.
     readback_staging: Arc<std::sync::Mutex<Option<wgpu::Buffer>>>,
@@ -129,6 +133,7 @@ impl GpuContext {
             params_in_storage: info.device_type == wgpu::DeviceType::Cpu,
             scene_in_textures: scene_in_textures_on(&info, &limits),
             path_regeneration: path_regeneration_on(&info),
+            sole_instance_shortcut: switch_on("RAYKIN_SOLE_INSTANCE", true),
             readback_staging: Arc::default(),
             device,
             queue,
@@ -316,15 +321,22 @@ fn scene_in_textures_on(info: &wgpu::AdapterInfo, limits: &wgpu::Limits) -> bool
 
 /// Whether the trace pass regenerates paths on this adapter ([`GpuContext::path_regeneration`]).
 fn path_regeneration_on(info: &wgpu::AdapterInfo) -> bool {
-    let cpu = info.device_type == wgpu::DeviceType::Cpu;
-    match std::env::var("RAYKIN_PATH_REGENERATION").as_deref() {
+    switch_on(
+        "RAYKIN_PATH_REGENERATION",
+        info.device_type == wgpu::DeviceType::Cpu,
+    )
+}
+
+/// An `on|off` environment switch of a kernel form (A/B runs), else `default`.
+fn switch_on(name: &str, default: bool) -> bool {
+    match std::env::var(name).as_deref() {
         Ok("on") => true,
         Ok("off") => false,
         Ok(other) => {
-            tracing::warn!("RAYKIN_PATH_REGENERATION={other} is neither `on` nor `off`; ignored");
-            cpu
+            tracing::warn!("{name}={other} is neither `on` nor `off`; ignored");
+            default
         }
-        Err(_) => cpu,
+        Err(_) => default,
     }
 }
 

@@ -30,7 +30,7 @@ use super::frame_denoiser::FrameDenoiser;
 use super::gpu_scene::{GpuScene, SceneWrites};
 use super::host_denoised::HostDenoised;
 use super::layout::{LIGHT_DIRECTIONAL, LIGHT_ENVIRONMENT, LIGHT_SUN};
-use super::material_lobes::MaterialNeeds;
+use super::material_lobes::{KernelNeeds, MaterialNeeds};
 use super::passes::denoise::{DenoiseInputs, Denoiser};
 use super::passes::gradient::FILTERED;
 use super::passes::tonemap::{TonemapInput, TonemapPass};
@@ -134,7 +134,7 @@ pub fn render_frame(
         trace.prepare(
             &ctx,
             &view,
-            MaterialNeeds::of(&scene.material_data),
+            kernel_needs(&ctx, &scene),
             accumulation.records_denoiser_inputs(&settings),
         );
         let group = bindings.group(&ctx, &mut scene, &mut encoder, deformed_on_gpu(&deform));
@@ -183,6 +183,15 @@ fn deformed_on_gpu(deform: &[wgpu::CommandBuffer]) -> SceneWrites {
         SceneWrites::NONE
     } else {
         SceneWrites::VERTEX_POOL | SceneWrites::BLAS_NODES
+    }
+}
+
+/// What the path-tracing kernels are compiled for this frame: the materials' needs and the top level's one
+/// leaf, where it has one and the adapter takes the shortcut ([`GpuContext::sole_instance_shortcut`]).
+fn kernel_needs(ctx: &GpuContext, scene: &GpuScene) -> KernelNeeds {
+    KernelNeeds {
+        materials: MaterialNeeds::of(&scene.material_data),
+        sole_instance: scene.sole_instance.filter(|_| ctx.sole_instance_shortcut),
     }
 }
 
@@ -301,7 +310,7 @@ pub fn encode_realtime_frame(
     }
     passes.trace.encode(
         ctx,
-        MaterialNeeds::of(&scene.material_data),
+        kernel_needs(ctx, scene),
         &mut encoder,
         &groups,
         view,

@@ -153,7 +153,29 @@ pub fn core_textures(materials: &[GpuMaterial]) -> u32 {
     })
 }
 
-/// One compute kernel of the path tracer compiled per [`MaterialNeeds`] value on first use (the module is parsed
+/// What a path-tracing kernel is compiled for: the materials' needs, and the instance the top level's one leaf
+/// holds where it holds one (`GpuScene::sole_instance`, the pipeline constant `SOLE_INSTANCE` of
+/// `shaders/traversal/tlas.wgsl`): traversal starts in that instance and the top-level loop compiles away. A
+/// static scene merged into one tree has one leaf; on lavapipe the loop, which it runs for every ray whatever
+/// the leaf count, cost that scene 9% (docs/BENCHMARKS.md, "The top level's one leaf").
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub struct KernelNeeds {
+    pub materials: MaterialNeeds,
+    pub sole_instance: Option<u32>,
+}
+
+impl KernelNeeds {
+    /// The pipeline constants that compile a kernel of the WGSL library for this choice.
+    pub fn constants(self) -> Vec<(&'static str, f64)> {
+        let mut constants = self.materials.constants().to_vec();
+        if let Some(instance) = self.sole_instance {
+            constants.push(("SOLE_INSTANCE", f64::from(instance)));
+        }
+        constants
+    }
+}
+
+/// One compute kernel of the path tracer compiled per [`KernelNeeds`] value on first use (the module is parsed
 /// once; a scene that never needs the extension lobes never compiles them).
 pub struct LobeKernels {
     label: &'static str,
@@ -161,7 +183,7 @@ pub struct LobeKernels {
     module: ComputeModule,
     /// Pipeline constants of the module's own, the same for every lobe choice.
     constants: &'static [(&'static str, f64)],
-    pipelines: HashMap<MaterialNeeds, wgpu::ComputePipeline>,
+    pipelines: HashMap<KernelNeeds, wgpu::ComputePipeline>,
 }
 
 impl LobeKernels {
@@ -187,7 +209,7 @@ impl LobeKernels {
     }
 
     /// The kernel for `needs`, compiled now if it has not been.
-    pub fn get(&mut self, needs: MaterialNeeds) -> &wgpu::ComputePipeline {
+    pub fn get(&mut self, needs: KernelNeeds) -> &wgpu::ComputePipeline {
         self.pipelines.entry(needs).or_insert_with(|| {
             let constants: Vec<_> = needs
                 .constants()
@@ -199,7 +221,7 @@ impl LobeKernels {
     }
 
     /// The kernel for `needs` if [`Self::get`] compiled it.
-    pub fn compiled(&self, needs: MaterialNeeds) -> Option<&wgpu::ComputePipeline> {
+    pub fn compiled(&self, needs: KernelNeeds) -> Option<&wgpu::ComputePipeline> {
         self.pipelines.get(&needs)
     }
 }

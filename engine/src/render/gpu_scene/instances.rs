@@ -235,6 +235,8 @@ impl GpuScene {
             self.generation += 1;
         }
         self.instance_order = order;
+        // The leaves follow the members in the instance buffer.
+        self.sole_instance = (tlas.order.len() == 1).then_some(shift);
         self.memory.instances_and_tlas = (instance_bytes.len() + tlas_bytes.len()) as u64;
         self.uploaded_instances = ordered;
     }

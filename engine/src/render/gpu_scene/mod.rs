@@ -204,6 +204,9 @@ pub struct GpuScene {
     pub lights: LightList,
     /// For each GPU instance (TLAS leaf order), its index in the last [`Self::update_instances`] input.
     pub instance_order: Vec<u32>,
+    /// The instance the top level's one leaf holds, when it holds one (a static scene merged into one tree, or
+    /// a scene of one instance): the trace kernels start there (`SOLE_INSTANCE`, `shaders/traversal/tlas.wgsl`).
+    pub sole_instance: Option<u32>,
     /// The KHR_materials_variants variant whose materials the triangles hold (`None`: the file's).
     pub variant: Option<usize>,
     /// Emissive triangles per mesh (triangle slot, material), for building the light list.
@@ -420,6 +423,7 @@ impl GpuScene {
             memory,
             lights: LightList::default(),
             instance_order: Vec::new(),
+            sole_instance: None,
             variant: scene.active_variant,
             emissive_triangles,
             uploaded_instances: Vec::new(),

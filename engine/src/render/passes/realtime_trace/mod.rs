@@ -4,7 +4,7 @@
 
 use crate::gpu::GpuContext;
 use crate::gpu::bind::{Binding, CachedGroup, bind_group, compute_layout};
-use crate::render::material_lobes::{LobeKernels, MaterialNeeds};
+use crate::render::material_lobes::{KernelNeeds, LobeKernels};
 use crate::render::realtime_targets::{RealtimeTargets, SceneGroups, SceneLayouts};
 use crate::render::shaders::{ShaderModule, compose};
 use crate::render::view::ViewTargets;
@@ -56,7 +56,7 @@ impl RealtimeTracePass {
     pub fn encode(
         &mut self,
         ctx: &GpuContext,
-        needs: MaterialNeeds,
+        needs: KernelNeeds,
         encoder: &mut wgpu::CommandEncoder,
         groups: &SceneGroups,
         view: &ViewTargets,

@@ -3,7 +3,7 @@
 
 use crate::gpu::GpuContext;
 use crate::gpu::bind::{Binding, CachedGroup, bind_group, compute_layout};
-use crate::render::material_lobes::{LobeKernels, MaterialNeeds};
+use crate::render::material_lobes::{KernelNeeds, LobeKernels};
 use crate::render::shaders::{ShaderModule, compose};
 use crate::render::view::ViewTargets;
 use bevy_ecs::prelude::Resource;
@@ -25,7 +25,7 @@ pub const KERNEL: ShaderModule = ShaderModule {
 pub struct TracePass {
     /// Per lobe choice: the kernels without the denoisers' inputs (`PATH_AOVS` off), then with them.
     kernels: [LobeKernels; 2],
-    needs: MaterialNeeds,
+    needs: KernelNeeds,
     aovs: bool,
     view_layout: wgpu::BindGroupLayout,
     view_group: CachedGroup<u64>,
@@ -63,7 +63,7 @@ impl TracePass {
             };
         Self {
             kernels: [kernels(without_aovs), kernels(with_aovs)],
-            needs: MaterialNeeds::default(),
+            needs: KernelNeeds::default(),
             aovs: true,
             view_layout,
             view_group: CachedGroup::default(),
@@ -77,7 +77,7 @@ impl TracePass {
         &mut self,
         ctx: &GpuContext,
         view: &ViewTargets,
-        needs: MaterialNeeds,
+        needs: KernelNeeds,
         aovs: bool,
     ) {
         self.kernels[aovs as usize].get(needs);
