@@ -391,6 +391,25 @@ fn traversal_work_counts_what_the_rays_must_do() {
 /// the Cornell box (emissive triangles: the light list, its CDF and tree), and CesiumMan posed mid-walk (the
 /// skinned positions and the refit BVH2, rewritten after a first frame by either deformer: copied again before
 /// the trace).
+/// Four samples per pixel of `scene` in the kernel form `ctx` (an animated scene 0.7 s into its first clip, the
+/// walk of CesiumMan).
+fn four_samples(
+    ctx: raykin::gpu::GpuContext,
+    scene: &Arc<raykin::scene::SceneAsset>,
+    settings: RenderSettings,
+) -> raykin::headless::HeadlessApp {
+    let mut app =
+        raykin::headless::HeadlessApp::new(ctx, scene.clone(), settings, &CameraChoice::Auto)
+            .expect("scene uploads");
+    if !scene.animations.is_empty() {
+        // A frame in the rest pose first: the pose's writes then reach textures made before them.
+        app.step();
+        app.set_time(0, 0.7).expect("the walk clip");
+    }
+    app.accumulate(4, 4, |_| {});
+    app
+}
+
 #[test]
 fn the_scene_read_through_textures_renders_the_buffers_image() {
     let (ctx, _gpu) = gpu();
@@ -427,20 +446,7 @@ fn the_scene_read_through_textures_renders_the_buffers_image() {
                 deform,
                 ..settings(24, StaticLayout::Wide, true)
             };
-            let mut app = raykin::headless::HeadlessApp::new(
-                form(textures),
-                scene.clone(),
-                settings,
-                &CameraChoice::Auto,
-            )
-            .expect("scene uploads");
-            if !scene.animations.is_empty() {
-                // A frame in the rest pose first: the pose's writes then reach textures made before them.
-                app.step();
-                app.set_time(0, 0.7).expect("the walk clip");
-            }
-            app.accumulate(4, 4, |_| {});
-            app.radiance()
+            four_samples(form(textures), &scene, settings).radiance()
         };
         assert_forms_render_the_same_image(&image(true), &image(false), file);
     }
@@ -461,18 +467,11 @@ fn the_top_levels_one_leaf_is_traced_without_the_top_level_loop() {
     ] {
         let scene = load(file);
         let image = |shortcut: bool| {
-            let mut app = raykin::headless::HeadlessApp::new(
+            let app = four_samples(
                 form(shortcut),
-                scene.clone(),
+                &scene,
                 settings(24, StaticLayout::Wide, true),
-                &CameraChoice::Auto,
-            )
-            .expect("scene uploads");
-            if !scene.animations.is_empty() {
-                app.step();
-                app.set_time(0, 0.7).expect("the walk clip");
-            }
-            app.accumulate(4, 4, |_| {});
+            );
             assert!(
                 app.gpu_scene().sole_instance.is_some(),
                 "{file}: the top level holds one leaf"
