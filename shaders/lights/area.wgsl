@@ -40,6 +40,7 @@ fn triangle_emits_towards(m: Material, p: array<vec3<f32>, 3>, origin: vec3<f32>
     return side > 0.0 || (side < 0.0 && double_sided);
 }
 
+// The material of the light's triangle.
 fn area_light_material(light: Light) -> Material {
     return read_material(read_triangle(light.index_b).w);
 }

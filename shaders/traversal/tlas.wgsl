@@ -11,12 +11,18 @@ var<private> tlas_stack: array<u32, TLAS_STACK_SIZE>;
 // Closest hit within the instance's mesh (or any hit, for shadow rays), in whichever layout the mesh's BLAS
 // has. Object-space ray: t stays comparable with world space because the direction is transformed, not
 // renormalised.
+// The BLAS layouts the top level's leaves use (BLAS_LAYOUT_* bits): the trace kernels set them
+// (engine/src/render/material_lobes.rs `KernelNeeds`) and the other layout's traversal compiles away; CPU adapters
+// would run its loop for every instance visited otherwise.
+override BLAS_LAYOUTS: u32 = BLAS_LAYOUTS_ALL;
+
 fn trace_blas(instance: u32, ray_world: Ray, hit: ptr<function, Hit>, any_hit: bool) -> bool {
     let inst = read_instance(instance);
     let mesh = read_mesh(inst.mesh);
     let o = transform_point(inst.object_from_world, ray_world.origin);
     let d = transform_vector(inst.object_from_world, ray_world.dir);
-    if (mesh.blas_root & WIDE_BLAS) != 0u {
+    let wide_only = (BLAS_LAYOUTS & BLAS_LAYOUT_BINARY) == 0u;
+    if wide_only || ((BLAS_LAYOUTS & BLAS_LAYOUT_WIDE) != 0u && (mesh.blas_root & WIDE_BLAS) != 0u) {
         return trace_blas_wide(mesh, instance, o, d, hit, any_hit);
     }
     return trace_blas_binary(mesh, instance, o, d, hit, any_hit);

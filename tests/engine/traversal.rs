@@ -453,41 +453,46 @@ fn the_scene_read_through_textures_renders_the_buffers_image() {
 }
 
 #[test]
-fn the_top_levels_one_leaf_is_traced_without_the_top_level_loop() {
+fn kernels_compiled_for_the_scene_shape_render_the_general_kernels_image() {
+    use raykin::render::layout::{BLAS_LAYOUT_BINARY, BLAS_LAYOUT_WIDE};
     let (ctx, _gpu) = gpu();
-    let form = |shortcut: bool| {
+    let form = |shaped: bool| {
         let mut form = ctx.clone();
-        form.sole_instance_shortcut = shortcut;
+        form.scene_shape_kernels = shaped;
         form
     };
-    // The Cornell box merged into one tree (one leaf); CesiumMan, one skinned instance (its BVH2) walking.
-    for file in [
-        "CornellBox/CornellBox.glb",
-        "CesiumMan/glTF-Binary/CesiumMan.glb",
+    // The Cornell box merged into one wide tree (one leaf); CesiumMan, one skinned instance (its BVH2) walking.
+    for (file, layouts) in [
+        ("CornellBox/CornellBox.glb", BLAS_LAYOUT_WIDE),
+        ("CesiumMan/glTF-Binary/CesiumMan.glb", BLAS_LAYOUT_BINARY),
     ] {
         let scene = load(file);
-        let image = |shortcut: bool| {
-            let app = four_samples(
-                form(shortcut),
-                &scene,
-                settings(24, StaticLayout::Wide, true),
-            );
+        let image = |shaped: bool| {
+            let app = four_samples(form(shaped), &scene, settings(24, StaticLayout::Wide, true));
+            let shape = app.gpu_scene();
             assert!(
-                app.gpu_scene().sole_instance.is_some(),
+                shape.sole_instance.is_some(),
                 "{file}: the top level holds one leaf"
             );
+            assert_eq!(shape.blas_layouts, layouts, "{file}: BLAS layouts");
             app.radiance()
         };
         assert_forms_render_the_same_image(&image(true), &image(false), file);
     }
-    // Not merged, the box's four meshes are four leaves: no shortcut.
-    let mut app = raykin::headless::HeadlessApp::new(
-        form(true),
-        load("CornellBox/CornellBox.glb"),
-        settings(8, StaticLayout::Wide, false),
-        &CameraChoice::Auto,
-    )
-    .expect("scene uploads");
-    app.accumulate(1, 1, |_| {});
-    assert_eq!(app.gpu_scene().sole_instance, None, "four leaves");
+    // Not merged, the box's four meshes are four leaves: no shortcut; as BVH2s, the other layout.
+    for (layout, layouts) in [
+        (StaticLayout::Wide, BLAS_LAYOUT_WIDE),
+        (StaticLayout::Binary, BLAS_LAYOUT_BINARY),
+    ] {
+        let mut app = raykin::headless::HeadlessApp::new(
+            form(true),
+            load("CornellBox/CornellBox.glb"),
+            settings(8, layout, false),
+            &CameraChoice::Auto,
+        )
+        .expect("scene uploads");
+        app.accumulate(1, 1, |_| {});
+        assert_eq!(app.gpu_scene().sole_instance, None, "four leaves");
+        assert_eq!(app.gpu_scene().blas_layouts, layouts, "{layout:?}");
+    }
 }

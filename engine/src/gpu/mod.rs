@@ -75,10 +75,11 @@ pub struct GpuContext {
     /// invocations as one masked vector and each lane otherwise waits for the longest path of the eight.
     /// `RAYKIN_PATH_REGENERATION=on|off` overrides (A/B runs).
     pub path_regeneration: bool,
-    /// The trace kernels start in the top level's one leaf where it has one (`SOLE_INSTANCE`,
-    /// `shaders/traversal/tlas.wgsl`; [`crate::render::material_lobes::KernelNeeds`]), compiling a kernel for
-    /// that instance. On by default; `RAYKIN_SOLE_INSTANCE=off` keeps the top-level loop (A/B runs).
-    pub sole_instance_shortcut: bool,
+    /// The trace kernels are compiled for the scene's shape ([`crate::render::material_lobes::KernelNeeds`]):
+    /// traversal starts in the top level's one leaf where it has one (`SOLE_INSTANCE`) and holds only the BLAS
+    /// layouts the leaves use (`BLAS_LAYOUTS`, both in `shaders/traversal/tlas.wgsl`). On by default;
+    /// `RAYKIN_SCENE_SHAPE_KERNELS=off` keeps the general kernel (A/B runs).
+    pub scene_shape_kernels: bool,
     /// The staging buffer of the last readback, kept for the next: allocating (and on discrete GPUs pinning)
     /// host memory for every readback cost more than the copy.
     readback_staging: Arc<std::sync::Mutex<Option<wgpu::Buffer>>>,
@@ -133,7 +134,7 @@ impl GpuContext {
             params_in_storage: info.device_type == wgpu::DeviceType::Cpu,
             scene_in_textures: scene_in_textures_on(&info, &limits),
             path_regeneration: path_regeneration_on(&info),
-            sole_instance_shortcut: switch_on("RAYKIN_SOLE_INSTANCE", true),
+            scene_shape_kernels: switch_on("RAYKIN_SCENE_SHAPE_KERNELS", true),
             readback_staging: Arc::default(),
             device,
             queue,

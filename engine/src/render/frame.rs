@@ -186,12 +186,21 @@ fn deformed_on_gpu(deform: &[wgpu::CommandBuffer]) -> SceneWrites {
     }
 }
 
-/// What the path-tracing kernels are compiled for this frame: the materials' needs and the top level's one
-/// leaf, where it has one and the adapter takes the shortcut ([`GpuContext::sole_instance_shortcut`]).
+/// What the path-tracing kernels are compiled for this frame: the materials' needs and, where the adapter
+/// compiles for the scene's shape ([`GpuContext::scene_shape_kernels`]), the top level's one leaf and the BLAS
+/// layouts of its leaves.
 fn kernel_needs(ctx: &GpuContext, scene: &GpuScene) -> KernelNeeds {
+    let materials = MaterialNeeds::of(&scene.material_data);
+    if !ctx.scene_shape_kernels {
+        return KernelNeeds {
+            materials,
+            ..Default::default()
+        };
+    }
     KernelNeeds {
-        materials: MaterialNeeds::of(&scene.material_data),
-        sole_instance: scene.sole_instance.filter(|_| ctx.sole_instance_shortcut),
+        materials,
+        sole_instance: scene.sole_instance,
+        blas_layouts: scene.blas_layouts,
     }
 }
 

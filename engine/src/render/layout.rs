@@ -39,6 +39,12 @@ pub const TEXTURE_TRANSFORMED: u32 = 1 << 5;
 /// Set in `GpuMesh::blas_root` when the root indexes the compressed wide node buffer.
 pub const WIDE_BLAS: u32 = 1 << 31;
 
+/// `BLAS_LAYOUTS` (the trace kernels' pipeline constant, `render::material_lobes::KernelNeeds`): the BLAS layouts
+/// the top level's leaves use, one bit each.
+pub const BLAS_LAYOUT_WIDE: u32 = 1;
+pub const BLAS_LAYOUT_BINARY: u32 = 2;
+pub const BLAS_LAYOUTS_ALL: u32 = 3;
+
 /// CPU adapters read the scene's buffers from textures (`render::scene_texels`): rows of `1 << SCENE_TEXEL_ROW_LOG2`
 /// 16-byte texels (64 KiB), so a 128 MiB buffer needs 2048 rows.
 pub const SCENE_TEXEL_ROW_LOG2: u32 = 12;
@@ -247,6 +253,9 @@ pub const WGSL_CONSTANTS: &[(&str, u32)] = &[
     ("TEXTURE_NEAREST", TEXTURE_NEAREST),
     ("TEXTURE_TRANSFORMED", TEXTURE_TRANSFORMED),
     ("WIDE_BLAS", WIDE_BLAS),
+    ("BLAS_LAYOUT_WIDE", BLAS_LAYOUT_WIDE),
+    ("BLAS_LAYOUT_BINARY", BLAS_LAYOUT_BINARY),
+    ("BLAS_LAYOUTS_ALL", BLAS_LAYOUTS_ALL),
     ("SCENE_TEXEL_ROW_LOG2", SCENE_TEXEL_ROW_LOG2),
     ("FRAME_NEE", FRAME_NEE),
     ("FRAME_HIT_AOV", FRAME_HIT_AOV),

@@ -157,11 +157,16 @@ pub fn core_textures(materials: &[GpuMaterial]) -> u32 {
 /// holds where it holds one (`GpuScene::sole_instance`, the pipeline constant `SOLE_INSTANCE` of
 /// `shaders/traversal/tlas.wgsl`): traversal starts in that instance and the top-level loop compiles away. A
 /// static scene merged into one tree has one leaf; on lavapipe the loop, which it runs for every ray whatever
-/// the leaf count, cost that scene 9% (docs/BENCHMARKS.md, "The top level's one leaf").
+/// the leaf count, cost that scene 9% (docs/BENCHMARKS.md, "kernels compiled for the scene's shape").
+/// The BLAS layouts the leaves use (`GpuScene::blas_layouts`, `BLAS_LAYOUTS`) compile only their traversals: on
+/// lavapipe the child-pair BVH2's loop ran for every instance visited of a scene that has none (8% of the Cornell
+/// box's render).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub struct KernelNeeds {
     pub materials: MaterialNeeds,
     pub sole_instance: Option<u32>,
+    /// `BLAS_LAYOUT_*` bits; 0: not known, every layout.
+    pub blas_layouts: u32,
 }
 
 impl KernelNeeds {
@@ -170,6 +175,9 @@ impl KernelNeeds {
         let mut constants = self.materials.constants().to_vec();
         if let Some(instance) = self.sole_instance {
             constants.push(("SOLE_INSTANCE", f64::from(instance)));
+        }
+        if self.blas_layouts != 0 {
+            constants.push(("BLAS_LAYOUTS", f64::from(self.blas_layouts)));
         }
         constants
     }

@@ -237,8 +237,26 @@ impl GpuScene {
         self.instance_order = order;
         // The leaves follow the members in the instance buffer.
         self.sole_instance = (tlas.order.len() == 1).then_some(shift);
+        self.blas_layouts = self.blas_layouts_of(&ordered[members.len()..]);
         self.memory.instances_and_tlas = (instance_bytes.len() + tlas_bytes.len()) as u64;
         self.uploaded_instances = ordered;
+    }
+
+    /// The BLAS layouts (`BLAS_LAYOUT_*` bits) of the meshes `leaves` place; the merged tree, past the meshes'
+    /// slots, is wide.
+    fn blas_layouts_of(&self, leaves: &[GpuInstance]) -> u32 {
+        leaves.iter().fold(0, |layouts, leaf| {
+            let wide = self
+                .mesh_slots
+                .get(leaf.mesh as usize)
+                .is_none_or(|slot| slot.gpu.blas_root & WIDE_BLAS != 0);
+            layouts
+                | if wide {
+                    BLAS_LAYOUT_WIDE
+                } else {
+                    BLAS_LAYOUT_BINARY
+                }
+        })
     }
 
     /// Uploads the materials that differ from what the GPU holds; returns how many changed. When the set of

@@ -207,6 +207,9 @@ pub struct GpuScene {
     /// The instance the top level's one leaf holds, when it holds one (a static scene merged into one tree, or
     /// a scene of one instance): the trace kernels start there (`SOLE_INSTANCE`, `shaders/traversal/tlas.wgsl`).
     pub sole_instance: Option<u32>,
+    /// The BLAS layouts the top level's leaves use (`BLAS_LAYOUT_*` bits): the trace kernels compile only their
+    /// traversals (`BLAS_LAYOUTS`, `shaders/traversal/tlas.wgsl`).
+    pub blas_layouts: u32,
     /// The KHR_materials_variants variant whose materials the triangles hold (`None`: the file's).
     pub variant: Option<usize>,
     /// Emissive triangles per mesh (triangle slot, material), for building the light list.
@@ -424,6 +427,7 @@ impl GpuScene {
             lights: LightList::default(),
             instance_order: Vec::new(),
             sole_instance: None,
+            blas_layouts: BLAS_LAYOUTS_ALL,
             variant: scene.active_variant,
             emissive_triangles,
             uploaded_instances: Vec::new(),
