@@ -149,13 +149,8 @@ fn environment_sample_linear(r: f32, a: f32, b: f32) -> f32 {
     return clamp(r * (a + b) / denominator, 0.0, 0.99999994);
 }
 
-// Solid-angle density with which `environment_sample_li` gives world direction `dir`.
-fn environment_pdf(light: Light, dir: vec3<f32>, compensated: bool) -> f32 {
-    let d = environment_to_map(light, dir);
-    return environment_pdf_at(light, d, environment_uv(d), compensated);
-}
-
-// The same for map-frame direction `d` at map coordinates `uv` (environment_uv(d)).
+// Solid-angle density with which `environment_sample_li` gives the world direction whose map-frame direction is
+// `d`, at map coordinates `uv` (environment_uv(d)).
 fn environment_pdf_at(light: Light, d: vec3<f32>, uv: vec2<f32>, compensated: bool) -> f32 {
     let w = light.index_a;
     let rows = light.index_b - 1u;

@@ -8,14 +8,14 @@
 // filled once per invocation. Entries are always written before they are read.
 var<private> tlas_stack: array<u32, TLAS_STACK_SIZE>;
 
-// Closest hit within the instance's mesh (or any hit, for shadow rays), in whichever layout the mesh's BLAS
-// has. Object-space ray: t stays comparable with world space because the direction is transformed, not
-// renormalised.
 // The BLAS layouts the top level's leaves use (BLAS_LAYOUT_* bits): the trace kernels set them
 // (engine/src/render/material_lobes.rs `KernelNeeds`) and the other layout's traversal compiles away; CPU adapters
 // would run its loop for every instance visited otherwise.
 override BLAS_LAYOUTS: u32 = BLAS_LAYOUTS_ALL;
 
+// Closest hit within the instance's mesh (or any hit, for shadow rays), in whichever layout the mesh's BLAS
+// has. Object-space ray: t stays comparable with world space because the direction is transformed, not
+// renormalised.
 fn trace_blas(instance: u32, ray_world: Ray, hit: ptr<function, Hit>, any_hit: bool) -> bool {
     let inst = read_instance(instance);
     let mesh = read_mesh(inst.mesh);

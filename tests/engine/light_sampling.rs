@@ -1,8 +1,8 @@
 //! The light library's sampling on the GPU, through a probe kernel composed from the same WGSL modules the
 //! path tracer uses (`lights/dispatch`, `lights/light_sampler`): every sample's density equals what
-//! `emitter_pdf_li` or `infinite_light_li` gives its direction (the MIS weights depend on it), the densities integrate to 1, and sample
-//! means of known integrands converge to the integrals computed independently (quadrature, Lambert's polygon
-//! formula), which checks that each sampler draws from the density it claims.
+//! `emitter_pdf_li` or `infinite_light_li` gives its direction (the MIS weights depend on it), the densities
+//! integrate to 1, and sample means of known integrands converge to the integrals computed independently
+//! (quadrature, Lambert's polygon formula), which checks that each sampler draws from the density it claims.
 
 use crate::common::*;
 use glam::Vec3;

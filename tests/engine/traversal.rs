@@ -384,13 +384,6 @@ fn traversal_work_counts_what_the_rays_must_do() {
     }
 }
 
-/// CPU adapters read the scene from textures (`gpu::scene_in_textures`), GPUs from storage buffers; CI has
-/// only a CPU adapter, so both forms run here. Same kernels over the same bytes: the same image, bit for bit.
-/// Between them the renders read every buffer of the scene: FlightHelmet under an environment map (textures,
-/// the merged tree, the per-mesh wide trees of its alpha-masked lenses, the map's texels and distributions),
-/// the Cornell box (emissive triangles: the light list, its CDF and tree), and CesiumMan posed mid-walk (the
-/// skinned positions and the refit BVH2, rewritten after a first frame by either deformer: copied again before
-/// the trace).
 /// Four samples per pixel of `scene` in the kernel form `ctx` (an animated scene 0.7 s into its first clip, the
 /// walk of CesiumMan).
 fn four_samples(
@@ -410,6 +403,13 @@ fn four_samples(
     app
 }
 
+/// CPU adapters read the scene from textures (`gpu::scene_in_textures`), GPUs from storage buffers; CI has
+/// only a CPU adapter, so both forms run here. Same kernels over the same bytes: the same image, bit for bit.
+/// Between them the renders read every buffer of the scene: FlightHelmet under an environment map (textures,
+/// the merged tree, the per-mesh wide trees of its alpha-masked lenses, the map's texels and distributions),
+/// the Cornell box (emissive triangles: the light list, its CDF and tree), and CesiumMan posed mid-walk (the
+/// skinned positions and the refit BVH2, rewritten after a first frame by either deformer: copied again before
+/// the trace).
 #[test]
 fn the_scene_read_through_textures_renders_the_buffers_image() {
     let (ctx, _gpu) = gpu();
