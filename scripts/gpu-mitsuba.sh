@@ -3,7 +3,8 @@
 # Mitsuba's cuda_ad_rgb variant (scripts/mitsuba-side-by-side.py), then raykin's error curves with Mitsuba's
 # beside them (`raykin bench --parts errors --mitsuba`). Needs Dr.Jit's and a stripped Mitsuba's cp312 wheels
 # unpacked on PYTHONPATH (docs/BENCHMARKS.md says how they were carried). Environment: MITSUBA_SCENES (default
-# the static bench scenes), MITSUBA_REPEATS (timed renders per sample count, default 2), MITSUBA_VARIANT.
+# the static bench scenes), MITSUBA_REPEATS (timed renders per sample count, default 2), MITSUBA_VARIANT, MITSUBA_SAMPLER
+# (default independent, Mitsuba's default; ldsampler is its low-discrepancy one).
 set -u
 here="$(cd "$(dirname "$0")" && pwd)"
 source "$here/gpu-common.sh"
@@ -19,7 +20,7 @@ for s in $scenes; do scene_args+=(--scene "$s"); done
 "$bin" bench --suite full "${scene_args[@]}" --assets "$assets" --export-mitsuba "$export_dir" \
   2>&1 | tee "$work/export.log"
 python3 "$here/mitsuba-side-by-side.py" "$export_dir" --variant "${MITSUBA_VARIANT:-cuda_ad_rgb}" \
-  --repeats "${MITSUBA_REPEATS:-2}" 2>&1 | grep -v DeprecationWarning | tee "$work/mitsuba.log"
+  --repeats "${MITSUBA_REPEATS:-2}" --sampler "${MITSUBA_SAMPLER:-independent}" 2>&1 | grep -v DeprecationWarning | tee "$work/mitsuba.log"
 for s in $scenes; do
   cp "$export_dir/$s/mitsuba.json" "$work/mitsuba-$s.json" 2>/dev/null
 done

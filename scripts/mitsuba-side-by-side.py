@@ -4,12 +4,14 @@
 Usage:
     python3 scripts/mitsuba-side-by-side.py DIR [--variant cuda_ad_rgb|llvm_ad_rgb|scalar_rgb] [--scene NAME]...
                                             [--reference-spp N] [--max-spp N] [--repeats R]
+                                            [--sampler independent|ldsampler|multijitter|orthogonal|stratified]
     (llvm_ad_rgb here: export DRJIT_LIBLLVM_PATH=libLLVM.so.19.1, see ../shared/TOOLCHAIN.md)
 
 For each DIR/SCENE/scene.json it builds the scene from the export (world-space triangle groups, textures,
 environment map, camera), with the exact glTF 2.0 BRDF of tests/reference/cornell/gltf_brdf.py (extended here by a
 metallic-roughness texture), Mitsuba's `path` integrator at max_depth = raykin's depth + 1 (Mitsuba counts path
-segments) with its default Russian roulette, an `independent` sampler and a box pixel filter (scene and camera
+segments) with its default Russian roulette, an `independent` sampler (Mitsuba's default; `--sampler` picks another of
+Mitsuba's, e.g. `ldsampler`, its low-discrepancy one, the class of raykin's) and a box pixel filter (scene and camera
 centred at the origin, which only changes Mitsuba's ray offsets), and writes into
 DIR/SCENE/mitsuba/:
     ref_a.exr, ref_b.exr     two independent halves of the reference (scene.json's reference_spp in all)
@@ -21,6 +23,7 @@ Mitsuba is given the same scene, not the same algorithm: its emitter sampling, B
 Russian roulette are its own. What the export could not express is listed in scene.json's `unsupported`.
 """
 import argparse
+import math
 import json
 import os
 import sys
@@ -125,7 +128,7 @@ def material_bsdf(mi, scene_dir, mat):
     return bsdf
 
 
-def build_scene(mi, dr, scene_dir, desc, spp):
+def build_scene(mi, dr, scene_dir, desc, spp, sampler='independent'):
     scene = {'type': 'scene'}
     bsdfs = {}
     arrays = [load_arrays(scene_dir, shape) for shape in desc['shapes']]
@@ -182,15 +185,18 @@ def build_scene(mi, dr, scene_dir, desc, spp):
                                                    target=(np.array(cam['target']) + shift).tolist(), up=cam['up']),
         'film': {'type': 'hdrfilm', 'width': desc['width'], 'height': desc['height'], 'rfilter': {'type': 'box'},
                  'pixel_format': 'rgb', 'component_format': 'float32'},
-        'sampler': {'type': 'independent', 'sample_count': spp},
+        'sampler': {'type': sampler, 'sample_count': spp},
     }
     scene['integrator'] = {'type': 'path', 'max_depth': desc['raykin_max_depth'] + 1, 'hide_emitters': False}
     return mi.load_dict(scene)
 
 
-def render(mi, dr, scene, spp, seed, pixels):
-    """One image of `spp` samples per pixel, in launches of at most MAX_SAMPLES_PER_LAUNCH samples, synchronised."""
+def render(mi, dr, scene, spp, seed, pixels, square=False):
+    """One image of `spp` samples per pixel, in launches of at most MAX_SAMPLES_PER_LAUNCH samples, synchronised.
+    `square`: every launch's count a power of 4 (the samplers that round other counts up)."""
     per_launch = max(1, min(spp, MAX_SAMPLES_PER_LAUNCH // max(pixels, 1)))
+    if square:
+        per_launch = 4 ** int(math.log(per_launch, 4) + 1e-9)
     launches = (spp + per_launch - 1) // per_launch
     acc = None
     done = 0
@@ -229,8 +235,11 @@ def run_scene(mi, dr, scene_dir, args):
         print('%s: not given to Mitsuba: %s' % (desc['scene'], item), file=sys.stderr)
     out_dir = os.path.join(scene_dir, 'mitsuba')
     os.makedirs(out_dir, exist_ok=True)
+    # Mitsuba's ldsampler and stratified take square powers of two from 4 only (they round 1 and the others up,
+    # which would mislabel a point): launches and curve points in powers of 4.
+    square = args.sampler in ('ldsampler', 'stratified')
     t0 = time.perf_counter()
-    scene = build_scene(mi, dr, scene_dir, desc, 1)
+    scene = build_scene(mi, dr, scene_dir, desc, 4 if square else 1, args.sampler)
     load_s = time.perf_counter() - t0
     pixels = desc['width'] * desc['height']
     reference_spp = args.reference_spp or desc['reference_spp']
@@ -238,18 +247,20 @@ def run_scene(mi, dr, scene_dir, args):
     reference_files = []
     t0 = time.perf_counter()
     for k, name in enumerate(('ref_a.exr', 'ref_b.exr')):
-        img = render(mi, dr, scene, half, 7_000_000 + k, pixels)
+        img = render(mi, dr, scene, half, 7_000_000 + k, pixels, square)
         write_exr(mi, os.path.join(out_dir, name), img)
         reference_files.append('mitsuba/' + name)
     reference_s = time.perf_counter() - t0
     checkpoints = [c for c in desc['checkpoints'] if c <= (args.max_spp or c)]
+    if square:
+        checkpoints = [c for c in checkpoints if c >= 4 and 4 ** int(math.log(c, 4) + 1e-9) == c]
     points = []
     for spp in checkpoints:
-        render(mi, dr, scene, spp, 1, pixels)  # warm-up: compiles this launch size's kernels
+        render(mi, dr, scene, spp, 1, pixels, square)  # warm-up: compiles this launch size's kernels
         times = []
         for r in range(args.repeats):
             t0 = time.perf_counter()
-            img = render(mi, dr, scene, spp, 1000 + 17 * r + spp, pixels)
+            img = render(mi, dr, scene, spp, 1000 + 17 * r + spp, pixels, square)
             times.append(time.perf_counter() - t0)
         write_exr(mi, os.path.join(out_dir, 'spp_%d.exr' % spp), img)
         seconds = float(np.median(times))
@@ -261,6 +272,7 @@ def run_scene(mi, dr, scene_dir, args):
         'device': device_name(args.variant), 'scene_load_s': load_s,
         'reference': {'spp': 2 * half, 'files': reference_files, 'seconds': reference_s},
         'points': points, 'integrator': 'path, max_depth = raykin depth + 1, default rr_depth 5',
+        'sampler': args.sampler,
         'unsupported': desc['unsupported'],
     }
     with open(os.path.join(scene_dir, 'mitsuba.json'), 'w') as f:
@@ -275,6 +287,7 @@ def main():
     ap.add_argument('--reference-spp', type=int, default=0, help='default: scene.json\'s (the bench suite\'s)')
     ap.add_argument('--max-spp', type=int, default=0, help='largest curve sample count (default: scene.json\'s)')
     ap.add_argument('--repeats', type=int, default=3, help='timed renders per sample count (median)')
+    ap.add_argument('--sampler', default='independent', help='Mitsuba sampler plugin (default: its default)')
     args = ap.parse_args()
 
     import mitsuba as mi

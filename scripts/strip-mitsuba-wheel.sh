@@ -20,7 +20,8 @@
 #     closure at the end and fails if a library is missing. Dropped: libIlmImfUtil (nothing links it).
 #   * Plugins (mitsuba/plugins/*.so), what scripts/mitsuba-side-by-side.py and gltf_brdf.py load, Mitsuba's
 #     own defaults (the plugin names libmitsuba instantiates itself) and a few small related ones:
-#       integrator path; sampler independent; rfilter box, gaussian (hdrfilm's default), lanczos;
+#       integrator path; samplers independent and ldsampler (the side by side's --sampler); rfilter box,
+#       gaussian (hdrfilm's default), lanczos;
 #       film hdrfilm; sensor perspective; emitters area, envmap, constant; texture bitmap;
 #       BSDFs diffuse (the default BSDF), twosided, normalmap, mask; shapes merge (the scene merges meshes),
 #       obj, ply (small mesh loaders); spectra srgb, uniform, d65, irregular, regular; phase isotropic.
@@ -44,7 +45,7 @@ WHEEL=$(realpath "$1")
 OUT=$(realpath -m "$2")
 
 KEEP_VARIANTS="cuda_ad_rgb scalar_rgb"
-KEEP_PLUGINS="path independent box gaussian lanczos hdrfilm perspective area envmap constant bitmap
+KEEP_PLUGINS="path independent ldsampler box gaussian lanczos hdrfilm perspective area envmap constant bitmap
               diffuse twosided normalmap mask merge obj ply srgb uniform d65 irregular regular isotropic"
 KEEP_DATA=${KEEP_DATA-srgb.coeff}   # KEEP_DATA= (empty) keeps no data file
 # Libraries that may be NEEDED without being in the package: drjit's (in ../drjit) and the system's.

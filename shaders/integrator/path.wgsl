@@ -71,7 +71,16 @@ struct CameraSample {
 
 fn camera_sample(pixel_xy: vec2<u32>, pixel: u32, index: u32) -> CameraSample {
     let sampler = sampler_start(pixel, index, frame.seed);
-    return CameraSample(sampler, generate_ray(pixel_xy, get_2d(sampler, DIM_FILM), get_2d(sampler, DIM_LENS)));
+    // The film position is stratified over the pixel's samples (anti-aliasing converges faster), except where
+    // the denoisers read the first-hit AOVs: their guides and variance estimates are tuned for independent
+    // positions (sampler.wgsl, get_2d_independent).
+    var u_film: vec2<f32>;
+    if PATH_AOVS {
+        u_film = get_2d_independent(sampler, DIM_FILM);
+    } else {
+        u_film = get_2d(sampler, DIM_FILM);
+    }
+    return CameraSample(sampler, generate_ray(pixel_xy, u_film, get_2d(sampler, DIM_LENS)));
 }
 
 // Sample dimensions (sampler.wgsl): the camera's, then a fixed block per bounce, so every decision of a path

@@ -30,6 +30,7 @@ mod realtime;
 mod record;
 mod refit_stability;
 mod reliability;
+mod sampler;
 mod shaders;
 mod skinned_image;
 mod thin_lens;

@@ -27,7 +27,7 @@ fn write_gbuffer(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_i
 
 fn primary_surface(gid: vec2<u32>, pixel: u32) -> GSurface {
     let sampler = sampler_start(pixel, frame.sample_base, frame.seed);
-    let u_film = get_2d(sampler, DIM_FILM);
+    let u_film = get_2d_independent(sampler, DIM_FILM);
     let ray = generate_ray(gid, u_film, get_2d(sampler, DIM_LENS));
     let here = vec2<f32>(gid) + u_film;
     rays_traced++;

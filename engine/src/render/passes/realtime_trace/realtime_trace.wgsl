@@ -30,7 +30,7 @@ fn trace_realtime_pixel(gid: vec2<u32>) {
     let g = gbuffer[pixel];
     let sampler = sampler_start(pixel, frame.sample_base, frame.seed);
     // The G-buffer pass's ray, from the same dimensions.
-    let ray = generate_ray(gid, get_2d(sampler, DIM_FILM), get_2d(sampler, DIM_LENS));
+    let ray = generate_ray(gid, get_2d_independent(sampler, DIM_FILM), get_2d(sampler, DIM_LENS));
     let first = gsurface_first_hit(g, ray.origin);
     let restir = realtime_flag(RT_RESTIR);
     let r = trace_path_from(PathStart(ray, first, true, restir), camera_forward(), sampler);
