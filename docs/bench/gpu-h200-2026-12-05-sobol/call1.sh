@@ -4,11 +4,7 @@
 # the same Mitsuba renders.
 set -u
 start=$(date +%s)
-python3 -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --upgrade --target /tmp/site .whl/drjit-*.whl || exit 1
-tar -C /tmp -xJf .whl/mitsuba-strip.tar.xz
-export PYTHONPATH=/tmp/site
-for f in .gl/*.deb; do dpkg -x "$f" / ; done; ldconfig
-(cd rel && xz -dkf head.xz && chmod +x head)
+source scripts/gpu-unpack.sh head
 nvidia-smi --query-gpu=name,driver_version,clocks.sm,clocks.max.sm --format=csv > "$OUT/gpu.txt"
 export RAYKIN_COMMIT=68fb315 ASSETS=rel/assets RAYKIN_BIN=rel/head
 timeout 400 bash scripts/gpu-mitsuba.sh "$OUT/a" > /tmp/run.log 2>&1

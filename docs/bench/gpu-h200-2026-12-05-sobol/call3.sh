@@ -5,11 +5,7 @@
 # RAYKIN_SHADER_DIR) against the same Mitsuba renders.
 set -u
 start=$(date +%s)
-python3 -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --upgrade --target /tmp/site .whl/drjit-*.whl || exit 1
-tar -C /tmp -xJf .whl/mitsuba-strip.tar.xz
-export PYTHONPATH=/tmp/site
-for f in .gl/*.deb; do dpkg -x "$f" / ; done; ldconfig
-(cd rel && xz -dkf final.xz && chmod +x final)
+source scripts/gpu-unpack.sh final
 export RAYKIN_COMMIT=d12e333 ASSETS=rel/assets RAYKIN_BIN=rel/final
 scenes="--scene cornell --scene spheres --scene flight-helmet --scene env-lit"
 MITSUBA_SAMPLER=ldsampler MITSUBA_SCENES="cornell spheres flight-helmet env-lit" timeout 380 bash scripts/gpu-mitsuba.sh "$OUT/ld" > /tmp/run.log 2>&1
