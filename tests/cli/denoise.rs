@@ -4,7 +4,8 @@ use crate::common::cornell::{self, EPS};
 use crate::common::{gpu, rel_mse, shared_assets};
 
 /// `raykin render --denoise svgf` writes the svgf-denoised image: the EXR equals `HeadlessApp::denoised_radiance` for the
-/// same settings, and differs from the render without `--denoise`.
+/// same settings, and differs from the render without `--denoise`, which equals the radiance of an app that keeps no
+/// denoiser inputs (its kernel stratifies the film position; the denoisers' does not).
 #[test]
 fn render_command_writes_the_denoised_image() {
     let dir = std::env::temp_dir().join(format!("raykin-denoise-cli-{}", std::process::id()));
@@ -44,7 +45,13 @@ fn render_command_writes_the_denoised_image() {
         rel_mse(&from_cli, &expected, EPS) < 1e-10,
         "`--denoise` EXR differs from HeadlessApp::denoised_radiance"
     );
-    assert!(rel_mse(&plain, &app.radiance(), EPS) < 1e-10);
+    let mut plain_app = cornell::app(app.ctx.clone(), true, 16, 61);
+    plain_app.set_keep_denoiser_inputs(false);
+    plain_app.accumulate(4, 16, |_| {});
+    assert!(
+        rel_mse(&plain, &plain_app.radiance(), EPS) < 1e-10,
+        "the render without --denoise differs from HeadlessApp::radiance without the denoisers' inputs"
+    );
     assert!(
         rel_mse(&from_cli, &plain, EPS) > 1e-4,
         "--denoise changed nothing"
