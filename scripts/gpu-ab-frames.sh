@@ -10,9 +10,10 @@ set -u
 rounds=$1; shift
 scenes=()
 for s in ${SCENES:-cornell flight-helmet spheres crowd}; do scenes+=(--scene "$s"); done
-for f in .gl/*.deb; do dpkg -x "$f" / ; done; ldconfig
+binaries=()
+for v in "$@"; do binaries+=("${v%%:*}"); done
+source "$(dirname "$0")/gpu-unpack.sh" "${binaries[@]}"
 export VK_DRIVER_FILES=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
-for v in "$@"; do b=${v%%:*}; (cd rel && xz -dkf "$b.xz" && chmod +x "$b"); done
 for round in $(seq "$rounds"); do
   for v in "$@"; do
     b=${v%%:*}; dir=/nonexistent
