@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Same-call A/B of trace time and ray-casting rates on a device machine: each VARIANT (`binary` or
-# `binary:shader-dir`, the binary under rel/ as rel/NAME.xz, the optional folder given to RAYKIN_SHADER_DIR) runs
+# `binary:shader-dir`, the binary under rel/ as rel/NAME.xz, the optional folder given to RAYKIN_SHADER_DIR;
+# either followed by comma-separated bench options of that variant's own, e.g. `head,--integrator=wavefront`) runs
 # the bench's frame loop on the bench scenes (SCENES, default "cornell flight-helmet spheres crowd"; BENCH_ARGS:
 # more bench options, e.g. "--spp-per-frame 16"), variants alternating ROUNDS times. Writes $OUT/bench.log and
 # $OUT/ab.txt (variant, round, scene, width, height, trace ms median, shading-free camera and diffuse bounce G
@@ -11,15 +12,17 @@ rounds=$1; shift
 scenes=()
 for s in ${SCENES:-cornell flight-helmet spheres crowd}; do scenes+=(--scene "$s"); done
 binaries=()
-for v in "$@"; do binaries+=("${v%%:*}"); done
+for v in "$@"; do spec=${v%%,*}; binaries+=("${spec%%:*}"); done
 source "$(dirname "$0")/gpu-unpack.sh" "${binaries[@]}"
 export VK_DRIVER_FILES=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
 for round in $(seq "$rounds"); do
   for v in "$@"; do
-    b=${v%%:*}; dir=/nonexistent
-    [[ $v == *:* ]] && dir=${v#*:}
+    spec=${v%%,*}; own=()
+    [[ $v == *,* ]] && IFS=, read -r -a own <<< "${v#*,}"
+    b=${spec%%:*}; dir=/nonexistent
+    [[ $spec == *:* ]] && dir=${spec#*:}
     w=$(mktemp -d)
-    RAYKIN_SHADER_DIR=$dir rel/$b bench --suite full --parts frames --frames ${FRAMES:-40} ${BENCH_ARGS:-} "${scenes[@]}" \
+    RAYKIN_SHADER_DIR=$dir rel/$b bench --suite full --parts frames --frames ${FRAMES:-40} ${BENCH_ARGS:-} "${own[@]}" "${scenes[@]}" \
       --assets "${ASSETS:-shared/assets}" --out "$w" --cache "$w/c" >> "$OUT/bench.log" 2>&1
     python3 -c "
 import json; r=json.load(open('$w/results.json'))

@@ -257,6 +257,9 @@ pub struct BenchArgs {
     /// BVH layout of static meshes (see `render --help`).
     #[arg(long, value_enum, default_value_t = StaticBvh::Merged)]
     pub static_bvh: StaticBvh,
+    /// How paths are traced (see `render --help`).
+    #[arg(long, value_enum, default_value_t = IntegratorArg::Megakernel)]
+    pub integrator: IntegratorArg,
     /// Override the suite's frame-loop sizes with one size.
     #[arg(long, value_parser = at_least_one(), allow_negative_numbers = true)]
     pub width: Option<u32>,
@@ -409,6 +412,27 @@ pub struct SceneArgs {
     /// refittable BVH2 deformable meshes use. The image is the same up to float rounding.
     #[arg(long, value_enum, default_value_t = StaticBvh::Merged)]
     pub static_bvh: StaticBvh,
+    /// How paths are traced: one kernel per pixel's paths, or kernels per stage over a queue of the paths
+    /// still alive (only where nothing but radiance is recorded: not with --denoise or --aovs). The image is
+    /// the same.
+    #[arg(long, value_enum, default_value_t = IntegratorArg::Megakernel)]
+    pub integrator: IntegratorArg,
+}
+
+/// `--integrator`.
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum IntegratorArg {
+    Megakernel,
+    Wavefront,
+}
+
+impl From<IntegratorArg> for raykin::render::Integrator {
+    fn from(a: IntegratorArg) -> Self {
+        match a {
+            IntegratorArg::Megakernel => Self::Megakernel,
+            IntegratorArg::Wavefront => Self::Wavefront,
+        }
+    }
 }
 
 /// `--denoise [DENOISER]`.

@@ -55,6 +55,7 @@ pub fn settings_from(args: &SceneArgs, scene: &SceneAsset) -> Result<RenderSetti
         deform: args.deform.into(),
         static_bvh: args.static_bvh.layout(),
         merge_static: args.static_bvh.merged(),
+        integrator: args.integrator.into(),
         ..Default::default()
     })
 }
@@ -497,6 +498,7 @@ pub fn run_default() -> Result<()> {
         denoise_aovs: crate::cli::DenoiseAovs::Prefilter,
         deform: crate::cli::DeformArg::Auto,
         static_bvh: crate::cli::StaticBvh::Merged,
+        integrator: crate::cli::IntegratorArg::Megakernel,
     };
     let camera = embedded_camera();
     let out = Path::new("out/default.png");

@@ -37,3 +37,4 @@ mod thin_lens;
 mod transmission;
 mod traversal;
 mod unlit;
+mod wavefront;

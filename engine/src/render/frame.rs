@@ -29,12 +29,12 @@ use super::frame_constants::{FrameConstants, write_frame_constants};
 use super::frame_denoiser::FrameDenoiser;
 use super::gpu_scene::{GpuScene, SceneWrites};
 use super::host_denoised::HostDenoised;
-use super::layout::{LIGHT_DIRECTIONAL, LIGHT_ENVIRONMENT, LIGHT_SUN};
+use super::layout::{LIGHT_DIRECTIONAL, LIGHT_ENVIRONMENT, LIGHT_SUN, MATERIAL_ALPHA_BLEND};
 use super::material_lobes::{KernelNeeds, MaterialNeeds};
 use super::passes::denoise::{DenoiseInputs, Denoiser};
 use super::passes::gradient::FILTERED;
 use super::passes::tonemap::{TonemapInput, TonemapPass};
-use super::passes::trace::TracePass;
+use super::passes::trace::{TracePass, TraceRequest};
 use super::realtime::{
     Realtime, RealtimeImage, RealtimePasses, SceneGroups, Shown, runs as realtime_runs,
 };
@@ -134,8 +134,17 @@ pub fn render_frame(
         trace.prepare(
             &ctx,
             &view,
-            kernel_needs(&ctx, &scene),
-            accumulation.records_denoiser_inputs(&settings),
+            TraceRequest {
+                needs: kernel_needs(&ctx, &scene),
+                aovs: accumulation.records_denoiser_inputs(&settings),
+                integrator: settings.integrator,
+                spp,
+                max_depth: settings.max_depth,
+                alpha_blend: scene
+                    .material_data
+                    .iter()
+                    .any(|m| m.flags & MATERIAL_ALPHA_BLEND != 0),
+            },
         );
         let group = bindings.group(&ctx, &mut scene, &mut encoder, deformed_on_gpu(&deform));
         trace.encode(&mut encoder, group, &view, stats.pass_writes(TRACE_PAIR));

@@ -40,8 +40,8 @@ pub use gpu_scene::{GpuMemory, GpuScene, InstanceInput, UploadError};
 pub use host_denoised::HostDenoised;
 pub use passes::denoise::{DenoiseParams, Denoiser};
 pub use settings::{
-    AovView, DenoiserKind, Environment, FrameOidn, LightSampler, RealtimeSettings, RenderMode,
-    RenderSettings, RestirSettings, ThinLens, Tonemapper,
+    AovView, DenoiserKind, Environment, FrameOidn, Integrator, LightSampler, RealtimeSettings,
+    RenderMode, RenderSettings, RestirSettings, ThinLens, Tonemapper,
 };
 pub use stats::{FrameStats, GpuFrameStats, PassTimes, RayCastTiming};
 pub use view::{Aovs, PrimaryHit, ViewTargets};

@@ -212,6 +212,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         static_bvh: args.static_bvh.layout(),
         merge_static: args.static_bvh.merged(),
         deform: args.deform.into(),
+        integrator: args.integrator.into(),
         ..Default::default()
     };
     let commit = provenance::commit();

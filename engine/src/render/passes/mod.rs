@@ -17,6 +17,7 @@ pub mod restir_di;
 pub mod temporal;
 pub mod tonemap;
 pub mod trace;
+pub mod wavefront;
 
 use crate::render::shaders::{ShaderModule, compose};
 
@@ -24,6 +25,7 @@ use crate::render::shaders::{ShaderModule, compose};
 pub fn all_kernels() -> Vec<(&'static str, String)> {
     [
         &trace::KERNEL,
+        &wavefront::KERNEL,
         &tonemap::KERNEL,
         &denoise::KERNEL,
         &pick::KERNEL,

@@ -34,6 +34,19 @@ pub enum LightSampler {
     Tree,
 }
 
+/// How the trace pass runs the path integrator (`shaders/integrator/path.wgsl`). Both trace the same paths with
+/// the same random numbers: the choice changes the speed, never the image.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize, Default)]
+pub enum Integrator {
+    /// One kernel runs each pixel's paths from the camera to their end.
+    #[default]
+    Megakernel,
+    /// Kernels per stage over a queue of the paths still alive (`render::passes::wavefront`): a bounce costs
+    /// what its live paths cost. Renders that record the denoisers' inputs or the primary-hit AOV use the
+    /// megakernel.
+    Wavefront,
+}
+
 /// A thin lens (pbrt-v4's perspective camera): depth of field around the plane at `focus_distance`.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ThinLens {
@@ -146,6 +159,9 @@ pub struct RenderSettings {
     pub mode: RenderMode,
     #[serde(default)]
     pub realtime: RealtimeSettings,
+    /// How the accumulation's paths are traced (the same image either way).
+    #[serde(default)]
+    pub integrator: Integrator,
 }
 
 fn merge_static_default() -> bool {
@@ -180,6 +196,7 @@ impl Default for RenderSettings {
             deform: DeformBackend::Auto,
             mode: RenderMode::Accumulate,
             realtime: RealtimeSettings::default(),
+            integrator: Integrator::default(),
         }
     }
 }
@@ -204,6 +221,7 @@ impl RenderSettings {
             realtime: RealtimeSettings::default(),
             denoiser: DenoiserKind::default(),
             oidn: Default::default(),
+            integrator: Integrator::default(),
             ..s.clone()
         };
         image_part(self) != image_part(other)

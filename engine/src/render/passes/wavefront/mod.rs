@@ -1,0 +1,239 @@
+//! The wavefront trace pass (`RenderSettings::integrator` = [`Integrator::Wavefront`]): the path integrator cut
+//! at its traversals into kernels over a queue of live paths (`wavefront.wgsl` says which and why). The same
+//! estimator as the trace pass's megakernel, path for path; the megakernel stays where the denoisers' inputs or
+//! the primary-hit AOV are recorded, which this pass does not write.
+//!
+//! [`Integrator::Wavefront`]: crate::render::settings::Integrator::Wavefront
+
+use crate::gpu::GpuContext;
+use crate::gpu::bind::{Binding, bind_group, compute_layout, storage_buffer};
+use crate::render::material_lobes::{KernelNeeds, LobeKernels};
+use crate::render::shaders::{ShaderModule, compose};
+use crate::render::view::ViewTargets;
+use bevy_ecs::prelude::Resource;
+
+pub const KERNEL: ShaderModule = ShaderModule {
+    name: "wavefront",
+    source: include_str!("wavefront.wgsl"),
+    requires: &["constants", "sampler", "integrator/path"],
+};
+
+/// `CONTROL_RAYS` in the WGSL: the rays traced, copied to the view's ray counter.
+const CONTROL_RAYS: u64 = 7;
+const CONTROL_WORDS: u64 = 16;
+const QUEUE_ENTRY: u64 = 4;
+const STATE_ENTRY: u64 = 16;
+
+/// The kernels a wave runs, in order.
+struct Kernels {
+    begin_wave: LobeKernels,
+    generate: LobeKernels,
+    /// Without and with the pass-throughs of alpha-blended surfaces (`WAVE_PASS_THROUGHS`).
+    extend: [LobeKernels; 2],
+    shade: LobeKernels,
+    advance: LobeKernels,
+    finish: LobeKernels,
+}
+
+/// The paths' state for one image size: per pixel, the arrays of `wavefront.wgsl`'s group 1.
+struct PathBuffers {
+    pixels: u64,
+    generation: u64,
+    view_group: wgpu::BindGroup,
+    control: wgpu::Buffer,
+    args_group: wgpu::BindGroup,
+    args: wgpu::Buffer,
+    /// Kept alive for the bind group.
+    _state: Vec<wgpu::Buffer>,
+}
+
+#[derive(Resource)]
+pub struct WavefrontPass {
+    kernels: Kernels,
+    needs: KernelNeeds,
+    alpha_blend: bool,
+    view_layout: wgpu::BindGroupLayout,
+    args_layout: wgpu::BindGroupLayout,
+    buffers: Option<PathBuffers>,
+}
+
+impl WavefrontPass {
+    pub fn new(ctx: &GpuContext, scene_layout: &wgpu::BindGroupLayout) -> Self {
+        use Binding::*;
+        // frame, accum, 6 path arrays, hits, queues, 3 shadow arrays, control
+        let mut bindings = vec![Params];
+        bindings.extend([ReadWrite; 13]);
+        let view_layout = compute_layout(ctx, "wavefront view", &bindings);
+        let args_layout = compute_layout(ctx, "wavefront dispatch sizes", &[ReadWrite]);
+        let source = compose(&KERNEL);
+        let queue = [Some(scene_layout), Some(&view_layout)];
+        let sizing = [Some(scene_layout), Some(&view_layout), Some(&args_layout)];
+        let constants: &'static [(&'static str, f64)] = &[("PATH_AOVS", 0.0)];
+        let kernel_with = |entry: &'static str,
+                           layouts: &[Option<&wgpu::BindGroupLayout>],
+                           constants: &'static [(&'static str, f64)]| {
+            LobeKernels::new(ctx, "wavefront", source.clone(), layouts, entry)
+                .with_constants(constants)
+        };
+        let kernel = |entry, layouts: &[_]| kernel_with(entry, layouts, constants);
+        let passing = |entry| {
+            [
+                kernel_with(
+                    entry,
+                    &queue,
+                    &[("PATH_AOVS", 0.0), ("WAVE_PASS_THROUGHS", 0.0)],
+                ),
+                kernel_with(
+                    entry,
+                    &queue,
+                    &[("PATH_AOVS", 0.0), ("WAVE_PASS_THROUGHS", 1.0)],
+                ),
+            ]
+        };
+        Self {
+            kernels: Kernels {
+                begin_wave: kernel("begin_wave", &sizing),
+                generate: kernel("generate", &queue),
+                extend: passing("extend"),
+                shade: kernel("shade", &queue),
+                advance: kernel("advance", &sizing),
+                finish: kernel("finish", &queue),
+            },
+            needs: KernelNeeds::default(),
+            alpha_blend: false,
+            view_layout,
+            args_layout,
+            buffers: None,
+        }
+    }
+
+    /// Compiles the kernels for `needs` (the first time; with the pass-throughs of alpha-blended surfaces where
+    /// `alpha_blend`) and makes the paths' state for the view's size (again only when the view's targets were
+    /// replaced).
+    pub fn prepare(
+        &mut self,
+        ctx: &GpuContext,
+        view: &ViewTargets,
+        needs: KernelNeeds,
+        alpha_blend: bool,
+    ) {
+        let k = &mut self.kernels;
+        for kernels in [
+            &mut k.begin_wave,
+            &mut k.generate,
+            &mut k.extend[alpha_blend as usize],
+            &mut k.shade,
+            &mut k.advance,
+            &mut k.finish,
+        ] {
+            kernels.get(needs);
+        }
+        self.needs = needs;
+        self.alpha_blend = alpha_blend;
+        if self
+            .buffers
+            .as_ref()
+            .is_some_and(|b| b.generation == view.generation)
+        {
+            return;
+        }
+        // Release the old state before making the new one.
+        self.buffers = None;
+        let pixels = view.pixels();
+        let state: Vec<_> = [
+            ("wavefront path origin", STATE_ENTRY),
+            ("wavefront path direction", STATE_ENTRY),
+            ("wavefront path throughput", STATE_ENTRY),
+            ("wavefront path vertex", STATE_ENTRY),
+            ("wavefront path normal", STATE_ENTRY),
+            ("wavefront path radiance", STATE_ENTRY),
+            ("wavefront hits", STATE_ENTRY),
+            ("wavefront queues", 2 * QUEUE_ENTRY),
+            ("wavefront shadow origin", STATE_ENTRY),
+            ("wavefront shadow direction", STATE_ENTRY),
+            ("wavefront shadow light", STATE_ENTRY),
+        ]
+        .into_iter()
+        .map(|(label, bytes)| storage_buffer(ctx, label, pixels * bytes))
+        .collect();
+        let control = storage_buffer(ctx, "wavefront control", CONTROL_WORDS * 4);
+        let args = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("wavefront dispatch sizes"),
+            size: 32,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::INDIRECT,
+            mapped_at_creation: false,
+        });
+        let mut group: Vec<&wgpu::Buffer> = vec![&view.frame, &view.accum];
+        group.extend(state.iter());
+        group.push(&control);
+        let view_group = bind_group(ctx, "wavefront view", &self.view_layout, &group);
+        let args_group = bind_group(ctx, "wavefront dispatch sizes", &self.args_layout, &[&args]);
+        self.buffers = Some(PathBuffers {
+            pixels,
+            generation: view.generation,
+            view_group,
+            control,
+            args_group,
+            args,
+            _state: state,
+        });
+    }
+
+    /// Records the pass (after [`Self::prepare`] for this view): `spp` waves of one sample per pixel, each
+    /// `max_depth + 1` bounces, in one compute pass. The view's frame uniform must hold this dispatch's
+    /// constants; its ray counter gets the rays traced.
+    pub fn encode(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        scene: &wgpu::BindGroup,
+        view: &ViewTargets,
+        (spp, max_depth): (u32, u32),
+        timestamp_writes: Option<wgpu::ComputePassTimestampWrites>,
+    ) {
+        let buffers = self
+            .buffers
+            .as_ref()
+            .expect("WavefrontPass::prepare ran for this view");
+        debug_assert_eq!(buffers.pixels, view.pixels());
+        let needs = self.needs;
+        fn compiled(k: &LobeKernels, needs: KernelNeeds) -> &wgpu::ComputePipeline {
+            k.compiled(needs)
+                .expect("WavefrontPass::prepare compiled this kernel")
+        }
+        let pipeline = |k| compiled(k, needs);
+        let k = &self.kernels;
+        encoder.clear_buffer(&buffers.control, 0, None);
+        let extend = pipeline(&k.extend[self.alpha_blend as usize]);
+        let (x, y) = view.workgroups();
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("wavefront trace"),
+                timestamp_writes,
+            });
+            pass.set_bind_group(0, scene, &[]);
+            pass.set_bind_group(1, &buffers.view_group, &[]);
+            pass.set_bind_group(2, &buffers.args_group, &[]);
+            for _ in 0..spp {
+                pass.set_pipeline(pipeline(&k.begin_wave));
+                pass.dispatch_workgroups(1, 1, 1);
+                pass.set_pipeline(pipeline(&k.generate));
+                pass.dispatch_workgroups(x, y, 1);
+                for _ in 0..=max_depth {
+                    pass.set_pipeline(extend);
+                    pass.dispatch_workgroups_indirect(&buffers.args, 0);
+                    pass.set_pipeline(pipeline(&k.shade));
+                    pass.dispatch_workgroups_indirect(&buffers.args, 12);
+                    pass.set_pipeline(pipeline(&k.advance));
+                    pass.dispatch_workgroups(1, 1, 1);
+                }
+                // The last bounce's shadow rays.
+                pass.set_pipeline(extend);
+                pass.dispatch_workgroups_indirect(&buffers.args, 0);
+                pass.set_pipeline(pipeline(&k.finish));
+                pass.dispatch_workgroups(x, y, 1);
+            }
+        }
+        encoder.clear_buffer(&view.ray_counter, 0, None);
+        encoder.copy_buffer_to_buffer(&buffers.control, CONTROL_RAYS * 4, &view.ray_counter, 0, 4);
+    }
+}

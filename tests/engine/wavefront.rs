@@ -1,0 +1,88 @@
+//! The wavefront form of the path integrator (`render::passes::wavefront`) traces the megakernel's paths: every
+//! decision draws the same sampler dimension and the radiance is summed in the same order, so with one sample
+//! per dispatch (both add each sample to the accumulation as it ends) the image is the same bit for bit, and
+//! with several it differs only by the order the accumulation adds them. Its image against Mitsuba's is checked
+//! in `cornell_box_in_waves_matches_mitsuba_within_noise`.
+
+use crate::common::cornell::{self, SIZE, camera};
+use crate::common::*;
+use raykin::camera::CameraChoice;
+use raykin::headless::HeadlessApp;
+use raykin::render::{Environment, Integrator, RenderSettings};
+use std::sync::Arc;
+
+#[test]
+fn waves_trace_the_megakernels_paths() {
+    let (ctx, _gpu) = gpu();
+    // The Cornell box: emitters (next-event estimation, MIS on emissive hits), Russian roulette, paths leaving
+    // through its open side. Alpha blending: paths that pass through surfaces without a bounce. Attenuation:
+    // transmission and volumes (the medium carried between bounces).
+    for file in [
+        "CornellBox/CornellBox.glb",
+        "AlphaBlendModeTest/glTF-Binary/AlphaBlendModeTest.glb",
+        "AttenuationTest/glTF/AttenuationTest.gltf",
+    ] {
+        let path = shared_assets().join(file);
+        let scene = Arc::new(
+            raykin::scene::load_gltf(&path, &Default::default())
+                .unwrap_or_else(|e| panic!("{}: {e}", path.display())),
+        );
+        let render = |integrator: Integrator, chunk: u32| {
+            let settings = RenderSettings {
+                width: 24,
+                height: 20,
+                environment: Environment::Sky,
+                integrator,
+                ..Default::default()
+            };
+            let mut app =
+                HeadlessApp::new(ctx.clone(), scene.clone(), settings, &CameraChoice::Auto)
+                    .expect("scene uploads");
+            app.set_keep_denoiser_inputs(false);
+            app.accumulate(6, chunk, |_| {});
+            let rays = app.view().read_ray_count(&app.ctx);
+            (app.radiance(), rays)
+        };
+        let (waves, wave_rays) = render(Integrator::Wavefront, 1);
+        let (mega, mega_rays) = render(Integrator::Megakernel, 1);
+        assert_forms_render_the_same_image(&waves, &mega, file);
+        assert_eq!(
+            wave_rays, mega_rays,
+            "{file}: rays traced by the last dispatch"
+        );
+        // Several samples per dispatch: the megakernel sums a pixel's samples before adding them.
+        let (waves3, _) = render(Integrator::Wavefront, 3);
+        let worst = waves3
+            .iter()
+            .zip(&mega)
+            .flat_map(|(a, b)| (0..3).map(move |c| (a[c] - b[c]).abs() / b[c].abs().max(1e-3)))
+            .fold(0.0f32, f32::max);
+        assert!(
+            worst < 1e-4,
+            "{file}: 3-sample waves differ by {worst} (relative)"
+        );
+    }
+}
+
+/// The Cornell box against Mitsuba 3's reference (tests/reference/cornell), traced in waves of 4 samples.
+#[test]
+fn cornell_box_in_waves_matches_mitsuba_within_noise() {
+    let (ctx, _gpu) = gpu();
+    let scene = cornell::scene();
+    let settings = |seed| RenderSettings {
+        integrator: Integrator::Wavefront,
+        spp_per_frame: 4,
+        ..cornell::settings(SIZE, seed)
+    };
+    let render = |seed| {
+        let mut app = HeadlessApp::new(ctx.clone(), scene.clone(), settings(seed), &camera())
+            .expect("scene uploads");
+        app.set_keep_denoiser_inputs(false);
+        app.accumulate(128, 4, |_| {});
+        app.radiance()
+    };
+    let (a, b) = (render(1), render(2));
+    assert_all_finite(&a, "waves, half a");
+    let (ra, rb) = cornell::reference_halves();
+    cornell::assert_agree_within_noise("Cornell box in waves vs Mitsuba", (&a, &b), (&ra, &rb));
+}
