@@ -27,8 +27,8 @@ const STATE_ENTRY: u64 = 16;
 /// The kernels a wave runs, in order.
 struct Kernels {
     begin_wave: LobeKernels,
-    generate: LobeKernels,
-    /// Without and with the pass-throughs of alpha-blended surfaces (`WAVE_PASS_THROUGHS`).
+    /// These two without and with the pass-throughs of alpha-blended surfaces (`WAVE_PASS_THROUGHS`).
+    first_bounce: [LobeKernels; 2],
     extend: [LobeKernels; 2],
     shade: LobeKernels,
     advance: LobeKernels,
@@ -93,7 +93,7 @@ impl WavefrontPass {
         Self {
             kernels: Kernels {
                 begin_wave: kernel("begin_wave", &sizing),
-                generate: kernel("generate", &queue),
+                first_bounce: passing("first_bounce"),
                 extend: passing("extend"),
                 shade: kernel("shade", &queue),
                 advance: kernel("advance", &sizing),
@@ -120,7 +120,7 @@ impl WavefrontPass {
         let k = &mut self.kernels;
         for kernels in [
             &mut k.begin_wave,
-            &mut k.generate,
+            &mut k.first_bounce[alpha_blend as usize],
             &mut k.extend[alpha_blend as usize],
             &mut k.shade,
             &mut k.advance,
@@ -216,9 +216,11 @@ impl WavefrontPass {
             for _ in 0..spp {
                 pass.set_pipeline(pipeline(&k.begin_wave));
                 pass.dispatch_workgroups(1, 1, 1);
-                pass.set_pipeline(pipeline(&k.generate));
+                pass.set_pipeline(pipeline(&k.first_bounce[self.alpha_blend as usize]));
                 pass.dispatch_workgroups(x, y, 1);
-                for _ in 0..=max_depth {
+                pass.set_pipeline(pipeline(&k.advance));
+                pass.dispatch_workgroups(1, 1, 1);
+                for _ in 1..=max_depth {
                     pass.set_pipeline(extend);
                     pass.dispatch_workgroups_indirect(&buffers.args, 0);
                     pass.set_pipeline(pipeline(&k.shade));
