@@ -43,9 +43,11 @@ fn denoising_cuts_the_error_against_mitsuba_at_low_spp() {
 }
 
 /// A flat region keeps its mean: a grey plane under the sky fills the view, so its radiance is flat over
-/// the filter's whole footprint. Every 8x8 block of the denoised 1-spp image must match a 64-spp reference
-/// within 2.5% (and better than the noisy blocks do), and the image's mean must match the noisy input's
-/// (which is unbiased) within 0.75%.
+/// the filter's whole footprint. Over eight 1-spp images (seeds 1-8, each denoised on its own), every 8x8
+/// block's mean of the denoised images must match a 64-spp reference within 1.5% (and better than the noisy
+/// blocks do), and the denoised images' mean must match the noisy ones' (which is unbiased) within 0.75%. One
+/// image's worst block was too unsteady a statistic: 1.9-3.5% over seeds 1-8 with the same sampler
+/// (docs/BENCHMARKS.md, "Owen-scrambled Sobol' points"); a filter that shifts a flat block's mean by 2% fails.
 #[test]
 fn flat_region_keeps_its_mean() {
     let (ctx, _gpu) = gpu();
@@ -77,9 +79,23 @@ fn flat_region_keeps_its_mean() {
     };
     let reference = render(&ctx, &scene, settings(100), &camera, 64);
     let mut app = HeadlessApp::new(ctx, scene, settings(1), &camera).expect("uploads");
-    app.accumulate(1, 64, |_| {});
-    let (noisy, denoised) = (app.radiance(), app.denoised_radiance());
-    let all: Vec<usize> = (0..noisy.len()).collect();
+    let pixels = (size * size) as usize;
+    let seeds = 1..=8u32;
+    let (mut noisy, mut denoised) = (vec![[0.0f32; 3]; pixels], vec![[0.0f32; 3]; pixels]);
+    for seed in seeds.clone() {
+        app.settings_mut().seed = seed;
+        app.accumulate(1, 64, |_| {});
+        let add = |sum: &mut Vec<[f32; 3]>, img: Vec<[f32; 3]>| {
+            for (s, p) in sum.iter_mut().zip(img) {
+                for c in 0..3 {
+                    s[c] += p[c] / seeds.clone().count() as f32;
+                }
+            }
+        };
+        add(&mut noisy, app.radiance());
+        add(&mut denoised, app.denoised_radiance());
+    }
+    let all: Vec<usize> = (0..pixels).collect();
     let sum = |img: &[[f32; 3]], pixels: &[usize]| -> f64 {
         pixels.iter().map(|&i| luminance(img[i])).sum()
     };
@@ -96,19 +112,18 @@ fn flat_region_keeps_its_mean() {
     }
     let kept = sum(&denoised, &all) / sum(&noisy, &all);
     eprintln!(
-        "flat plane, 8x8 blocks vs reference: worst noisy {:.2}%, worst denoised {:.2}%; image denoised/noisy {kept:.4}",
+        "flat plane, 8x8 blocks of 8 images' mean vs reference: worst noisy {:.2}%, worst denoised {:.2}%; \
+         image denoised/noisy {kept:.4}",
         worst_noisy * 100.0,
         worst_denoised * 100.0
     );
-    // 2.5%: measured 2.16% since the sky is a light that next-event estimation samples (issue 15; under 2% before),
-    // against 7.3% for the noisy image.
     assert!(
-        worst_denoised < 0.025 && worst_denoised < 0.8 * worst_noisy,
+        worst_denoised < 0.015 && worst_denoised < 0.8 * worst_noisy,
         "a flat 8x8 block is {:.2}% off the reference after denoising ({:.2}% before)",
         worst_denoised * 100.0,
         worst_noisy * 100.0
     );
-    // 0.75%: measured -0.55% since the sky is sampled as a light (+0.3% before).
+    // 0.75%: one image measured -0.55% since the sky is sampled as a light (+0.3% before).
     assert!(
         (kept - 1.0).abs() < 0.0075,
         "denoising changed the flat image's mean by {:+.2}%",
