@@ -62,6 +62,10 @@ fn waves_trace_the_megakernels_paths() {
             "{file}: 3-sample waves differ by {worst} (relative)"
         );
     }
+    // The adapter check at start-up asks for the storage buffers the engine's kernels bind: the waves' kernels
+    // bind no more (tests/engine/realtime.rs, `the_adapter_check_asks_for_what_the_kernels_bind`).
+    let most = ctx.pipelines.most_storage_buffers_per_stage();
+    assert!(most <= raykin::gpu::MIN_STORAGE_BUFFERS_PER_STAGE, "{most}");
 }
 
 /// The Cornell box against Mitsuba 3's reference (tests/reference/cornell), traced in waves of 4 samples.

@@ -20,7 +20,8 @@ pub const KERNEL: ShaderModule = ShaderModule {
 
 /// `CONTROL_RAYS` in the WGSL: the rays traced, copied to the view's ray counter.
 const CONTROL_RAYS: u64 = 7;
-const CONTROL_WORDS: u64 = 16;
+/// The counters' bytes at the start of the queues' buffer (`Queues::control` in the WGSL).
+const CONTROL_BYTES: u64 = 16 * 4;
 const QUEUE_ENTRY: u64 = 4;
 const STATE_ENTRY: u64 = 16;
 
@@ -40,7 +41,8 @@ struct PathBuffers {
     pixels: u64,
     generation: u64,
     view_group: wgpu::BindGroup,
-    control: wgpu::Buffer,
+    /// The counters, then the queues.
+    queues: wgpu::Buffer,
     args_group: wgpu::BindGroup,
     args: wgpu::Buffer,
     /// Kept alive for the bind group.
@@ -60,14 +62,15 @@ pub struct WavefrontPass {
 impl WavefrontPass {
     pub fn new(ctx: &GpuContext, scene_layout: &wgpu::BindGroupLayout) -> Self {
         use Binding::*;
-        // frame, accum, 6 path arrays, hits, queues, 3 shadow arrays, control
+        // frame, accum, 6 path arrays, hits, counters and queues, 3 shadow arrays
         let mut bindings = vec![Params];
-        bindings.extend([ReadWrite; 13]);
+        bindings.extend([ReadWrite; 12]);
         let view_layout = compute_layout(ctx, "wavefront view", &bindings);
         let args_layout = compute_layout(ctx, "wavefront dispatch sizes", &[ReadWrite]);
         let source = compose(&KERNEL);
         let queue = [Some(scene_layout), Some(&view_layout)];
-        let sizing = [Some(scene_layout), Some(&view_layout), Some(&args_layout)];
+        // The sizing kernels read no scene: without its group their stage binds no more than the others'.
+        let sizing = [None, Some(&view_layout), Some(&args_layout)];
         let constants: &'static [(&'static str, f64)] = &[("PATH_AOVS", 0.0)];
         let kernel_with = |entry: &'static str,
                            layouts: &[Option<&wgpu::BindGroupLayout>],
@@ -140,23 +143,31 @@ impl WavefrontPass {
         // Release the old state before making the new one.
         self.buffers = None;
         let pixels = view.pixels();
-        let state: Vec<_> = [
-            ("wavefront path origin", STATE_ENTRY),
-            ("wavefront path direction", STATE_ENTRY),
-            ("wavefront path throughput", STATE_ENTRY),
-            ("wavefront path vertex", STATE_ENTRY),
-            ("wavefront path normal", STATE_ENTRY),
-            ("wavefront path radiance", STATE_ENTRY),
-            ("wavefront hits", STATE_ENTRY),
-            ("wavefront queues", 2 * QUEUE_ENTRY),
-            ("wavefront shadow origin", STATE_ENTRY),
-            ("wavefront shadow direction", STATE_ENTRY),
-            ("wavefront shadow light", STATE_ENTRY),
-        ]
-        .into_iter()
-        .map(|(label, bytes)| storage_buffer(ctx, label, pixels * bytes))
-        .collect();
-        let control = storage_buffer(ctx, "wavefront control", CONTROL_WORDS * 4);
+        let arrays = |labels: &[&str]| -> Vec<wgpu::Buffer> {
+            labels
+                .iter()
+                .map(|label| storage_buffer(ctx, label, pixels * STATE_ENTRY))
+                .collect()
+        };
+        let paths = arrays(&[
+            "wavefront path origin",
+            "wavefront path direction",
+            "wavefront path throughput",
+            "wavefront path vertex",
+            "wavefront path normal",
+            "wavefront path radiance",
+            "wavefront hits",
+        ]);
+        let queues = storage_buffer(
+            ctx,
+            "wavefront queues",
+            CONTROL_BYTES + 2 * pixels * QUEUE_ENTRY,
+        );
+        let shadows = arrays(&[
+            "wavefront shadow origin",
+            "wavefront shadow direction",
+            "wavefront shadow light",
+        ]);
         let args = ctx.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("wavefront dispatch sizes"),
             size: 32,
@@ -164,15 +175,17 @@ impl WavefrontPass {
             mapped_at_creation: false,
         });
         let mut group: Vec<&wgpu::Buffer> = vec![&view.frame, &view.accum];
-        group.extend(state.iter());
-        group.push(&control);
+        group.extend(paths.iter());
+        group.push(&queues);
+        group.extend(shadows.iter());
         let view_group = bind_group(ctx, "wavefront view", &self.view_layout, &group);
         let args_group = bind_group(ctx, "wavefront dispatch sizes", &self.args_layout, &[&args]);
+        let state = paths.into_iter().chain(shadows).collect();
         self.buffers = Some(PathBuffers {
             pixels,
             generation: view.generation,
             view_group,
-            control,
+            queues,
             args_group,
             args,
             _state: state,
@@ -202,7 +215,7 @@ impl WavefrontPass {
         }
         let pipeline = |k| compiled(k, needs);
         let k = &self.kernels;
-        encoder.clear_buffer(&buffers.control, 0, None);
+        encoder.clear_buffer(&buffers.queues, 0, Some(CONTROL_BYTES));
         let extend = pipeline(&k.extend[self.alpha_blend as usize]);
         let (x, y) = view.workgroups();
         {
@@ -236,6 +249,6 @@ impl WavefrontPass {
             }
         }
         encoder.clear_buffer(&view.ray_counter, 0, None);
-        encoder.copy_buffer_to_buffer(&buffers.control, CONTROL_RAYS * 4, &view.ray_counter, 0, 4);
+        encoder.copy_buffer_to_buffer(&buffers.queues, CONTROL_RAYS * 4, &view.ray_counter, 0, 4);
     }
 }

@@ -30,15 +30,19 @@
 @group(1) @binding(7) var<storage, read_write> path_radiance: array<vec4<f32>>;
 // What extend found: t (bits), instance (NONE: nothing), triangle slot, first barycentric (bits).
 @group(1) @binding(8) var<storage, read_write> path_hit: array<vec4<u32>>;
-// Two queues of path indices, [0, N) and [N, 2N): one read this bounce, the other filled for the next.
-@group(1) @binding(9) var<storage, read_write> queues: array<u32>;
+// The counters (CONTROL_*, zeroed before the pass), then two queues of path indices, [0, N) and [N, 2N): one read
+// this bounce, the other filled for the next. One binding for both: with the scene's 14 and the frame's, this
+// group's 13 storage buffers are the most a stage may bind (`MIN_STORAGE_BUFFERS_PER_STAGE`).
+struct Queues {
+    control: array<atomic<u32>, 16>,
+    entries: array<u32>,
+}
+@group(1) @binding(9) var<storage, read_write> queues: Queues;
 // Shadow rays in the order they were queued: origin and t_max; direction and the path (bits); what the light
 // adds when nothing blocks it.
 @group(1) @binding(10) var<storage, read_write> shadow_origin: array<vec4<f32>>;
 @group(1) @binding(11) var<storage, read_write> shadow_dir: array<vec4<f32>>;
 @group(1) @binding(12) var<storage, read_write> shadow_light: array<vec4<f32>>;
-// Counters (CONTROL_*), zeroed before the pass.
-@group(1) @binding(13) var<storage, read_write> control: array<atomic<u32>, 16>;
 // Indirect dispatch sizes, written by begin_wave and advance only (a buffer read as dispatch arguments cannot be
 // bound to the kernels it sizes): [0..3) extend (live paths and shadow rays), [3..6) shade (live paths).
 @group(2) @binding(0) var<storage, read_write> dispatch_args: array<u32, 8>;
@@ -83,24 +87,24 @@ fn write_dispatch(first: u32, items: u32) {
 
 @compute @workgroup_size(1)
 fn begin_wave() {
-    let wave = atomicLoad(&control[CONTROL_NEXT_WAVE]);
-    atomicStore(&control[CONTROL_WAVE], wave);
-    atomicStore(&control[CONTROL_NEXT_WAVE], wave + 1u);
-    atomicStore(&control[CONTROL_LIVE], 0u);
-    atomicStore(&control[CONTROL_NEXT], 0u);
-    atomicStore(&control[CONTROL_SHADOWS_QUEUED], 0u);
-    atomicStore(&control[CONTROL_SHADOWS], 0u);
-    atomicStore(&control[CONTROL_PARITY], 0u);
+    let wave = atomicLoad(&queues.control[CONTROL_NEXT_WAVE]);
+    atomicStore(&queues.control[CONTROL_WAVE], wave);
+    atomicStore(&queues.control[CONTROL_NEXT_WAVE], wave + 1u);
+    atomicStore(&queues.control[CONTROL_LIVE], 0u);
+    atomicStore(&queues.control[CONTROL_NEXT], 0u);
+    atomicStore(&queues.control[CONTROL_SHADOWS_QUEUED], 0u);
+    atomicStore(&queues.control[CONTROL_SHADOWS], 0u);
+    atomicStore(&queues.control[CONTROL_PARITY], 0u);
 }
 
 // After a shading kernel: the queue it filled becomes the one read, and its shadow rays the ones to trace.
 @compute @workgroup_size(1)
 fn advance() {
-    let live = atomicExchange(&control[CONTROL_NEXT], 0u);
-    let shadows = atomicExchange(&control[CONTROL_SHADOWS_QUEUED], 0u);
-    atomicStore(&control[CONTROL_LIVE], live);
-    atomicStore(&control[CONTROL_SHADOWS], shadows);
-    atomicStore(&control[CONTROL_PARITY], 1u - atomicLoad(&control[CONTROL_PARITY]));
+    let live = atomicExchange(&queues.control[CONTROL_NEXT], 0u);
+    let shadows = atomicExchange(&queues.control[CONTROL_SHADOWS_QUEUED], 0u);
+    atomicStore(&queues.control[CONTROL_LIVE], live);
+    atomicStore(&queues.control[CONTROL_SHADOWS], shadows);
+    atomicStore(&queues.control[CONTROL_PARITY], 1u - atomicLoad(&queues.control[CONTROL_PARITY]));
     write_dispatch(0u, live + shadows);
     write_dispatch(3u, live);
 }
@@ -135,7 +139,7 @@ fn store_path(path: u32, p: WavePath) {
 }
 
 fn wave_sampler(pixel: u32) -> Sampler {
-    return sampler_start(pixel, frame.sample_base + atomicLoad(&control[CONTROL_WAVE]), frame.seed);
+    return sampler_start(pixel, frame.sample_base + atomicLoad(&queues.control[CONTROL_WAVE]), frame.seed);
 }
 
 // The path's ray to its next surface. One that lets the path through (alpha blending as stochastic coverage,
@@ -245,14 +249,14 @@ fn queue_step(step: BounceStep, pixel: u32, lid: u32) {
     atomicAdd(&workgroup_rays, rays_traced);
     workgroupBarrier();
     if lid == 0u {
-        workgroup_next_base = atomicAdd(&control[CONTROL_NEXT], atomicLoad(&workgroup_next));
-        workgroup_shadows_base = atomicAdd(&control[CONTROL_SHADOWS_QUEUED], atomicLoad(&workgroup_shadows));
-        atomicAdd(&control[CONTROL_RAYS], atomicLoad(&workgroup_rays));
+        workgroup_next_base = atomicAdd(&queues.control[CONTROL_NEXT], atomicLoad(&workgroup_next));
+        workgroup_shadows_base = atomicAdd(&queues.control[CONTROL_SHADOWS_QUEUED], atomicLoad(&workgroup_shadows));
+        atomicAdd(&queues.control[CONTROL_RAYS], atomicLoad(&workgroup_rays));
     }
     workgroupBarrier();
     if step.continues {
-        let out = (1u - atomicLoad(&control[CONTROL_PARITY])) * path_count();
-        queues[out + workgroup_next_base + next_slot] = pixel;
+        let out = (1u - atomicLoad(&queues.control[CONTROL_PARITY])) * path_count();
+        queues.entries[out + workgroup_next_base + next_slot] = pixel;
     }
     if step.shadow {
         let slot = workgroup_shadows_base + shadow_slot;
@@ -275,7 +279,7 @@ fn first_bounce(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_in
     var step = no_step();
     let pixel = gid.y * frame.width + gid.x;
     if gid.x < frame.width && gid.y < frame.height {
-        let sample = camera_sample(gid.xy, pixel, frame.sample_base + atomicLoad(&control[CONTROL_WAVE]));
+        let sample = camera_sample(gid.xy, pixel, frame.sample_base + atomicLoad(&queues.control[CONTROL_WAVE]));
         var p = WavePath(sample.ray, 0u, 0u, 0.0, vec3<f32>(1.0), NONE, LightSampleContext(sample.ray.origin, vec3<f32>(0.0)));
         let hit = trace_path_ray(pixel, &p);
         path_radiance[pixel] = vec4<f32>(0.0);
@@ -285,7 +289,7 @@ fn first_bounce(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_in
 }
 
 fn live_path(i: u32) -> u32 {
-    return queues[atomicLoad(&control[CONTROL_PARITY]) * path_count() + i];
+    return queues.entries[atomicLoad(&queues.control[CONTROL_PARITY]) * path_count() + i];
 }
 
 // The queue's rays (invocations [0, live)), then the shadow rays queued the bounce before ([live, live +
@@ -296,7 +300,7 @@ fn extend(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgroups) grou
     clear_workgroup_counts(lid);
     rays_traced = 0u;
     let i = queue_index(group, groups, lid);
-    let live = atomicLoad(&control[CONTROL_LIVE]);
+    let live = atomicLoad(&queues.control[CONTROL_LIVE]);
     if i < live {
         let pixel = live_path(i);
         var p = load_path(pixel);
@@ -308,7 +312,7 @@ fn extend(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgroups) grou
         }
         path_hit[pixel] = vec4<u32>(bitcast<u32>(hit.t), hit.instance, hit.triangle, bitcast<u32>(hit.bary.x));
         path_vertex[pixel].w = hit.bary.y;
-    } else if i - live < atomicLoad(&control[CONTROL_SHADOWS]) {
+    } else if i - live < atomicLoad(&queues.control[CONTROL_SHADOWS]) {
         let slot = i - live;
         rays_traced++;
         let origin = shadow_origin[slot];
@@ -320,7 +324,7 @@ fn extend(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgroups) grou
     atomicAdd(&workgroup_rays, rays_traced);
     workgroupBarrier();
     if lid == 0u {
-        atomicAdd(&control[CONTROL_RAYS], atomicLoad(&workgroup_rays));
+        atomicAdd(&queues.control[CONTROL_RAYS], atomicLoad(&workgroup_rays));
     }
 }
 
@@ -333,7 +337,7 @@ fn shade(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgroups) group
     let i = queue_index(group, groups, lid);
     var step = no_step();
     var pixel = 0u;
-    if i < atomicLoad(&control[CONTROL_LIVE]) {
+    if i < atomicLoad(&queues.control[CONTROL_LIVE]) {
         pixel = live_path(i);
         let h = path_hit[pixel];
         let hit = Hit(bitcast<f32>(h.x), h.y, h.z, vec2<f32>(bitcast<f32>(h.w), path_vertex[pixel].w));
