@@ -142,25 +142,20 @@ fn wave_sampler(pixel: u32) -> Sampler {
     return sampler_start(pixel, frame.sample_base + atomicLoad(&queues.control[CONTROL_WAVE]), frame.seed);
 }
 
-// The path's ray to its next surface. One that lets the path through (alpha blending as stochastic coverage,
-// with probability 1 - alpha, as trace_path_from decides it: the same sampler dimension, the same offset origin,
-// the medium's attenuation over each segment) is passed and the ray traced on from behind it. Returns the hit;
-// `p` has the origin, pass-through count and throughput after the surfaces passed.
-fn trace_path_ray(pixel: u32, p: ptr<function, WavePath>) -> Hit {
-    var hit: Hit;
-    loop {
-        rays_traced++;
-        hit = trace((*p).ray, MISS, false);
-        if !WAVE_PASS_THROUGHS || hit.instance == NONE || (*p).pass_throughs >= MAX_PASS_THROUGHS { break; }
-        if (read_material(read_triangle(hit.triangle).w).flags & MATERIAL_ALPHA_BLEND) == 0u { break; }
-        let s = resolve_hit(hit, (*p).ray);
-        let u = get_1d(wave_sampler(pixel), DIM_PASS_THROUGH + (*p).depth * MAX_PASS_THROUGHS + (*p).pass_throughs);
-        if u < s.alpha { break; }
-        if (*p).medium != NONE { (*p).throughput *= transmittance((*p).medium, hit.t); }
-        (*p).ray.origin = offset_ray_origin(s.p, -s.ng);
-        (*p).pass_throughs++;
-    }
-    return hit;
+// Whether the path's ray, which met `hit`, passes through it: alpha blending as stochastic coverage, with
+// probability 1 - alpha, as trace_path_from decides it (the same sampler dimension, the same offset origin, the
+// medium's attenuation over the segment). If so, `p` has the ray from behind the surface, the pass-through
+// counted and the throughput attenuated.
+fn pass_through(pixel: u32, p: ptr<function, WavePath>, hit: Hit) -> bool {
+    if !WAVE_PASS_THROUGHS || hit.instance == NONE || (*p).pass_throughs >= MAX_PASS_THROUGHS { return false; }
+    if (read_material(read_triangle(hit.triangle).w).flags & MATERIAL_ALPHA_BLEND) == 0u { return false; }
+    let s = resolve_hit(hit, (*p).ray);
+    let u = get_1d(wave_sampler(pixel), DIM_PASS_THROUGH + (*p).depth * MAX_PASS_THROUGHS + (*p).pass_throughs);
+    if u < s.alpha { return false; }
+    if (*p).medium != NONE { (*p).throughput *= transmittance((*p).medium, hit.t); }
+    (*p).ray.origin = offset_ray_origin(s.p, -s.ng);
+    (*p).pass_throughs++;
+    return true;
 }
 
 // One bounce of trace_path_from's loop (integrator/path.wgsl) from the surface (or the sky) the path's ray met:
@@ -281,7 +276,12 @@ fn first_bounce(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_in
     if gid.x < frame.width && gid.y < frame.height {
         let sample = camera_sample(gid.xy, pixel, frame.sample_base + atomicLoad(&queues.control[CONTROL_WAVE]));
         var p = WavePath(sample.ray, 0u, 0u, 0.0, vec3<f32>(1.0), NONE, LightSampleContext(sample.ray.origin, vec3<f32>(0.0)));
-        let hit = trace_path_ray(pixel, &p);
+        var hit: Hit;
+        loop {
+            rays_traced++;
+            hit = trace(p.ray, MISS, false);
+            if !pass_through(pixel, &p, hit) { break; }
+        }
         path_radiance[pixel] = vec4<f32>(0.0);
         step = shade_bounce(pixel, p, hit);
     }
@@ -293,7 +293,7 @@ fn live_path(i: u32) -> u32 {
 }
 
 // The queue's rays (invocations [0, live)), then the shadow rays queued the bounce before ([live, live +
-// shadows)): one dispatch for both, one call of the traversal.
+// shadows)): one dispatch for both, and one call of the traversal (a second call site would inline it twice).
 @compute @workgroup_size(128)
 fn extend(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
           @builtin(local_invocation_index) lid: u32) {
@@ -301,24 +301,40 @@ fn extend(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgroups) grou
     rays_traced = 0u;
     let i = queue_index(group, groups, lid);
     let live = atomicLoad(&queues.control[CONTROL_LIVE]);
-    if i < live {
-        let pixel = live_path(i);
-        var p = load_path(pixel);
+    let is_path = i < live;
+    let is_shadow = !is_path && i - live < atomicLoad(&queues.control[CONTROL_SHADOWS]);
+    var pixel = 0u;
+    var p: WavePath;
+    var t_max = MISS;
+    if is_path {
+        pixel = live_path(i);
+        p = load_path(pixel);
+    } else if is_shadow {
+        let origin = shadow_origin[i - live];
+        let dir = shadow_dir[i - live];
+        p.ray = Ray(origin.xyz, dir.xyz);
+        t_max = origin.w;
+        pixel = bitcast<u32>(dir.w);
+    }
+    if is_path || is_shadow {
         let pass_throughs = p.pass_throughs;
-        let hit = trace_path_ray(pixel, &p);
-        if p.pass_throughs != pass_throughs {
-            path_origin[pixel] = vec4<f32>(p.ray.origin, bitcast<f32>(p.depth | (p.pass_throughs << 16u)));
-            path_throughput[pixel] = vec4<f32>(p.throughput, bitcast<f32>(p.medium));
+        var hit: Hit;
+        loop {
+            rays_traced++;
+            hit = trace(p.ray, t_max, is_shadow);
+            if is_shadow || !pass_through(pixel, &p, hit) { break; }
         }
-        path_hit[pixel] = vec4<u32>(bitcast<u32>(hit.t), hit.instance, hit.triangle, bitcast<u32>(hit.bary.x));
-        path_vertex[pixel].w = hit.bary.y;
-    } else if i - live < atomicLoad(&queues.control[CONTROL_SHADOWS]) {
-        let slot = i - live;
-        rays_traced++;
-        let origin = shadow_origin[slot];
-        let dir = shadow_dir[slot];
-        if trace(Ray(origin.xyz, dir.xyz), origin.w, true).instance == NONE {
-            path_radiance[bitcast<u32>(dir.w)] += vec4<f32>(shadow_light[slot].xyz, 0.0);
+        if is_shadow {
+            if hit.instance == NONE {
+                path_radiance[pixel] += vec4<f32>(shadow_light[i - live].xyz, 0.0);
+            }
+        } else {
+            if p.pass_throughs != pass_throughs {
+                path_origin[pixel] = vec4<f32>(p.ray.origin, bitcast<f32>(p.depth | (p.pass_throughs << 16u)));
+                path_throughput[pixel] = vec4<f32>(p.throughput, bitcast<f32>(p.medium));
+            }
+            path_hit[pixel] = vec4<u32>(bitcast<u32>(hit.t), hit.instance, hit.triangle, bitcast<u32>(hit.bary.x));
+            path_vertex[pixel].w = hit.bary.y;
         }
     }
     atomicAdd(&workgroup_rays, rays_traced);
