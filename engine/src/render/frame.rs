@@ -2,7 +2,8 @@
 //!
 //! Accumulation (the default, and any still):
 //! 1. deform + refit: recorded by the deform plugin earlier in the frame ([`DeformCommands`]);
-//! 2. trace: `spp_per_frame` samples per pixel into the view's accumulation (skipped once converged);
+//! 2. trace: `spp_per_frame` samples per pixel into the view's accumulation (skipped once converged); the
+//!    wavefront pass instead where `RenderSettings::integrator` asks for it and only radiance is recorded;
 //! 3. denoise: when the display shows the denoised image;
 //! 4. tonemap: when the display runs each frame (the viewer).
 //!
@@ -34,11 +35,13 @@ use super::material_lobes::{KernelNeeds, MaterialNeeds};
 use super::passes::denoise::{DenoiseInputs, Denoiser};
 use super::passes::gradient::FILTERED;
 use super::passes::tonemap::{TonemapInput, TonemapPass};
-use super::passes::trace::{TracePass, TraceRequest};
+use super::passes::trace::TracePass;
+use super::passes::wavefront::{WavefrontPass, WavefrontSlot};
 use super::realtime::{
     Realtime, RealtimeImage, RealtimePasses, SceneGroups, Shown, runs as realtime_runs,
 };
 use super::scene_bindings::SceneBindings;
+use super::settings::Integrator;
 use super::settings::RenderSettings;
 use super::stats::*;
 use super::view::ViewTargets;
@@ -63,7 +66,7 @@ pub fn render_frame(
     mut bindings: ResMut<SceneBindings>,
     mut view: ResMut<ViewTargets>,
     mut accumulation: ResMut<Accumulation>,
-    mut trace: ResMut<TracePass>,
+    (mut trace, mut wavefront): (ResMut<TracePass>, ResMut<WavefrontSlot>),
     tonemap: Res<TonemapPass>,
     mut denoiser: ResMut<Denoiser>,
     mut stats: ResMut<FrameStats>,
@@ -131,23 +134,35 @@ pub fn render_frame(
                 max_depth: settings.max_depth,
             },
         );
-        trace.prepare(
-            &ctx,
-            &view,
-            TraceRequest {
-                needs: kernel_needs(&ctx, &scene),
-                aovs: accumulation.records_denoiser_inputs(&settings),
-                integrator: settings.integrator,
-                spp,
-                max_depth: settings.max_depth,
-                alpha_blend: scene
-                    .material_data
-                    .iter()
-                    .any(|m| m.flags & MATERIAL_ALPHA_BLEND != 0),
-            },
-        );
+        let needs = kernel_needs(&ctx, &scene);
+        let aovs = accumulation.records_denoiser_inputs(&settings);
+        // The wavefront form records radiance only.
+        let in_waves = settings.integrator == Integrator::Wavefront && !aovs && !view.hit_aov;
+        if in_waves {
+            let alpha_blend = scene
+                .material_data
+                .iter()
+                .any(|m| m.flags & MATERIAL_ALPHA_BLEND != 0);
+            let layout = &bindings.layout;
+            let pass = wavefront
+                .0
+                .get_or_insert_with(|| WavefrontPass::new(&ctx, layout));
+            pass.prepare(&ctx, &view, needs, alpha_blend);
+        } else {
+            trace.prepare(&ctx, &view, needs, aovs);
+        }
         let group = bindings.group(&ctx, &mut scene, &mut encoder, deformed_on_gpu(&deform));
-        trace.encode(&mut encoder, group, &view, stats.pass_writes(TRACE_PAIR));
+        let timestamps = stats.pass_writes(TRACE_PAIR);
+        match wavefront.0.as_ref().filter(|_| in_waves) {
+            Some(pass) => pass.encode(
+                &mut encoder,
+                group,
+                &view,
+                (spp, settings.max_depth),
+                timestamps,
+            ),
+            None => trace.encode(&mut encoder, group, &view, timestamps),
+        }
         accumulation.samples += spp;
     }
     let handover = realtime_runs(&settings).then(|| handover_weight(&settings, &accumulation));

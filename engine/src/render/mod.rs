@@ -85,6 +85,7 @@ pub fn insert_resources(
     world.insert_resource(systems::UploadedEnvironment(settings.environment.clone()));
     let bindings = SceneBindings::new(ctx);
     world.insert_resource(TracePass::new(ctx, &bindings.layout));
+    world.insert_resource(passes::wavefront::WavefrontSlot::default());
     world.insert_resource(TonemapPass::new(ctx));
     world.insert_resource(Denoiser::new(ctx));
     world.insert_resource(OnFirstUse::<PickPass>::default());

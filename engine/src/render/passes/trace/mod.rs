@@ -1,13 +1,11 @@
 //! The trace pass: `spp` paths per pixel through the path integrator (`shaders/integrator/path.wgsl`), added to
-//! the view's accumulation targets with the first-hit AOVs and the denoiser's moments. The integrator runs as
-//! one kernel (the megakernel beside this file) or, where [`Integrator::Wavefront`] is chosen and nothing but
-//! radiance is recorded, as the wavefront pass's kernels (`passes::wavefront`).
+//! the view's accumulation targets with the first-hit AOVs and the denoiser's moments. Where
+//! `RenderSettings::integrator` asks for waves and nothing but radiance is recorded, the frame runs the wavefront
+//! pass (`passes::wavefront`) in its place.
 
 use crate::gpu::GpuContext;
 use crate::gpu::bind::{Binding, CachedGroup, bind_group, compute_layout};
 use crate::render::material_lobes::{KernelNeeds, LobeKernels};
-use crate::render::passes::wavefront::WavefrontPass;
-use crate::render::settings::Integrator;
 use crate::render::shaders::{ShaderModule, compose};
 use crate::render::view::ViewTargets;
 use bevy_ecs::prelude::Resource;
@@ -33,30 +31,6 @@ pub struct TracePass {
     aovs: bool,
     view_layout: wgpu::BindGroupLayout,
     view_group: CachedGroup<u64>,
-    scene_layout: wgpu::BindGroupLayout,
-    /// Made the first time a dispatch runs in waves; `None` while the megakernel runs.
-    wavefront: Option<WavefrontPass>,
-    waves: Option<Waves>,
-}
-
-/// What a dispatch of the trace pass must record, and how.
-#[derive(Clone, Copy, Debug)]
-pub struct TraceRequest {
-    pub needs: KernelNeeds,
-    /// The denoisers' inputs (first-hit AOVs, moments).
-    pub aovs: bool,
-    pub integrator: Integrator,
-    pub spp: u32,
-    pub max_depth: u32,
-    /// Some material is alpha-blended (paths may pass through surfaces).
-    pub alpha_blend: bool,
-}
-
-/// A dispatch that runs in waves: samples per pixel, bounces.
-#[derive(Clone, Copy, Debug)]
-struct Waves {
-    spp: u32,
-    max_depth: u32,
 }
 
 impl TracePass {
@@ -95,30 +69,19 @@ impl TracePass {
             aovs: true,
             view_layout,
             view_group: CachedGroup::default(),
-            scene_layout: scene_layout.clone(),
-            wavefront: None,
-            waves: None,
         }
     }
 
     /// Binds the view's targets (again only when they were replaced) and picks the kernel for the lobes the
     /// scene's materials use, with the denoisers' inputs (first-hit AOVs, moments) when `aovs` (compiling it the
-    /// first time). Without them the view's AOV targets keep what they held. The wavefront form runs where it
-    /// is chosen and records everything asked: radiance only, no primary-hit AOV.
-    pub fn prepare(&mut self, ctx: &GpuContext, view: &ViewTargets, request: TraceRequest) {
-        let TraceRequest { needs, aovs, .. } = request;
-        let in_waves = request.integrator == Integrator::Wavefront && !aovs && !view.hit_aov;
-        self.waves = in_waves.then_some(Waves {
-            spp: request.spp,
-            max_depth: request.max_depth,
-        });
-        if in_waves {
-            let scene_layout = &self.scene_layout;
-            self.wavefront
-                .get_or_insert_with(|| WavefrontPass::new(ctx, scene_layout))
-                .prepare(ctx, view, needs, request.alpha_blend);
-            return;
-        }
+    /// first time). Without them the view's AOV targets keep what they held.
+    pub fn prepare(
+        &mut self,
+        ctx: &GpuContext,
+        view: &ViewTargets,
+        needs: KernelNeeds,
+        aovs: bool,
+    ) {
         self.kernels[aovs as usize].get(needs);
         self.needs = needs;
         self.aovs = aovs;
@@ -150,11 +113,6 @@ impl TracePass {
         view: &ViewTargets,
         timestamp_writes: Option<wgpu::ComputePassTimestampWrites>,
     ) {
-        if let (Some(waves), Some(wavefront)) = (self.waves, &self.wavefront) {
-            let shape = (waves.spp, waves.max_depth);
-            wavefront.encode(encoder, scene, view, shape, timestamp_writes);
-            return;
-        }
         let group = self
             .view_group
             .get(&view.generation)

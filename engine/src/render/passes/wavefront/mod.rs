@@ -1,7 +1,7 @@
 //! The wavefront trace pass (`RenderSettings::integrator` = [`Integrator::Wavefront`]): the path integrator cut
 //! at its traversals into kernels over a queue of live paths (`wavefront.wgsl` says which and why). The same
-//! estimator as the trace pass's megakernel, path for path; the megakernel stays where the denoisers' inputs or
-//! the primary-hit AOV are recorded, which this pass does not write.
+//! estimator as the trace pass's megakernel, path for path; the frame runs the trace pass instead where the
+//! denoisers' inputs or the primary-hit AOV are recorded, which this pass does not write.
 //!
 //! [`Integrator::Wavefront`]: crate::render::settings::Integrator::Wavefront
 
@@ -49,7 +49,10 @@ struct PathBuffers {
     _state: Vec<wgpu::Buffer>,
 }
 
-#[derive(Resource)]
+/// The pass, built the first time a frame runs in waves (its kernels and state cost nothing until then).
+#[derive(Resource, Default)]
+pub struct WavefrontSlot(pub Option<WavefrontPass>);
+
 pub struct WavefrontPass {
     kernels: Kernels,
     needs: KernelNeeds,
