@@ -96,6 +96,34 @@ fn quick_suite_writes_sane_results_and_charts() {
     let _ = std::fs::remove_dir_all(&out);
 }
 
+/// `--integrator wavefront` traces the megakernel's paths: the frame loop's rays per pixel and frame are the
+/// same to the ray, and the results say which integrator ran.
+#[test]
+fn wavefront_integrator_traces_the_same_rays() {
+    let frames = |name: &str, integrator: &str| {
+        let (results, out) = quick_results(
+            name,
+            &[
+                "--parts",
+                "frames",
+                "--scene",
+                "cornell",
+                "--integrator",
+                integrator,
+            ],
+        );
+        let _ = std::fs::remove_dir_all(&out);
+        results
+    };
+    let waves = frames("bench-waves-test", "wavefront");
+    let mega = frames("bench-mega-test", "megakernel");
+    assert_eq!(waves["integrator"], "Wavefront");
+    assert_eq!(mega["integrator"], "Megakernel");
+    let rays = |r: &Value| f(&r["rows"][0]["rays_per_pixel_per_frame"]);
+    assert!(rays(&mega) > 1.0, "cornell: {} rays per pixel", rays(&mega));
+    assert_eq!(rays(&waves), rays(&mega), "rays per pixel and frame");
+}
+
 #[test]
 fn quick_suite_motion_part_beats_restarting() {
     let (results, out) = quick_results("bench-motion-test", &["--parts", "motion"]);

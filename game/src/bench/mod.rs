@@ -70,6 +70,7 @@ struct Results {
     command: String,
     suite: suite::Suite,
     max_depth: u32,
+    integrator: raykin::render::Integrator,
     rows: Vec<frame_loop::FrameRow>,
     table: Vec<TableRow>,
     error_vs_time: Vec<error_curves::SceneErrors>,
@@ -225,8 +226,13 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     } else {
         format!(" ({})", suite.scaling_note)
     };
+    // The charts say which integrator traced them when it is not the default.
+    let integrator = match base.integrator {
+        raykin::render::Integrator::Megakernel => "",
+        raykin::render::Integrator::Wavefront => " | wavefront integrator",
+    };
     let context = format!(
-        "{} ({:?}) | {} suite{note} | commit {commit} | {date}",
+        "{} ({:?}) | {} suite{note}{integrator} | commit {commit} | {date}",
         ctx.info.name, ctx.info.device_type, suite.name
     );
     let title = |what: &str| charts::Title {
@@ -526,6 +532,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         command: std::env::args().collect::<Vec<_>>().join(" "),
         suite,
         max_depth: base.max_depth,
+        integrator: base.integrator,
         rows,
         table,
         error_vs_time: errors,
