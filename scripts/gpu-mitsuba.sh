@@ -4,7 +4,8 @@
 # beside them (`raykin bench --parts errors --mitsuba`). Needs Dr.Jit's and a stripped Mitsuba's cp312 wheels
 # unpacked on PYTHONPATH (docs/BENCHMARKS.md says how they were carried). Environment: MITSUBA_SCENES (default
 # the static bench scenes), MITSUBA_REPEATS (timed renders per sample count, default 2), MITSUBA_VARIANT, MITSUBA_SAMPLER
-# (default independent, Mitsuba's default; ldsampler is its low-discrepancy one).
+# (default independent, Mitsuba's default; ldsampler is its low-discrepancy one), RAYKIN_INTEGRATOR (raykin's
+# `--integrator` for its curves, default megakernel).
 set -u
 here="$(cd "$(dirname "$0")" && pwd)"
 source "$here/gpu-common.sh"
@@ -25,4 +26,4 @@ for s in $scenes; do
   cp "$export_dir/$s/mitsuba.json" "$work/mitsuba-$s.json" 2>/dev/null
 done
 "$bin" bench --suite full "${scene_args[@]}" --assets "$assets" --parts errors --curve "16 spp" \
-  --mitsuba "$export_dir" --out "$work/bench" --cache /tmp/bench-cache 2>&1 | tee "$work/bench.log"
+  --integrator "${RAYKIN_INTEGRATOR:-megakernel}" --mitsuba "$export_dir" --out "$work/bench" --cache /tmp/bench-cache 2>&1 | tee "$work/bench.log"
