@@ -112,13 +112,18 @@ struct DirectLight {
     contribution: vec3<f32>,
 }
 
+// Nothing to test: a shadow ray that adds nothing.
+fn no_direct_light() -> DirectLight {
+    return DirectLight(Ray(vec3<f32>(0.0), vec3<f32>(0.0, 0.0, 1.0)), 0.0, vec3<f32>(0.0));
+}
+
 // Next-event estimation at `s`: one light picked by the light sampler, one sample on it, weighed against BSDF
 // sampling (delta lights take no weight). The shadow ray is returned, not traced, so that the path loop traces
 // every ray at one call site (a smaller kernel).
 // `medium` is the volume the path is in; a shadow ray through a refracting surface crosses into the one behind
 // it, and its light is attenuated over its length.
 fn sample_direct(s: SurfaceInteraction, wo: vec3<f32>, tbn: mat3x3<f32>, sampler: Sampler, dims: u32, medium: u32) -> DirectLight {
-    let none = DirectLight(Ray(vec3<f32>(0.0), vec3<f32>(0.0, 0.0, 1.0)), 0.0, vec3<f32>(0.0));
+    let none = no_direct_light();
     let ctx = LightSampleContext(s.p, s.ng);
     let choice = light_sampler_sample_at(ctx, get_1d(sampler, dims + DIM_LIGHT_CHOICE));
     if choice.pmf <= 0.0 { return none; }

@@ -30,7 +30,7 @@ use super::frame_constants::{FrameConstants, write_frame_constants};
 use super::frame_denoiser::FrameDenoiser;
 use super::gpu_scene::{GpuScene, SceneWrites};
 use super::host_denoised::HostDenoised;
-use super::layout::{LIGHT_DIRECTIONAL, LIGHT_ENVIRONMENT, LIGHT_SUN, MATERIAL_ALPHA_BLEND};
+use super::layout::{LIGHT_DIRECTIONAL, LIGHT_ENVIRONMENT, LIGHT_SUN};
 use super::material_lobes::{KernelNeeds, MaterialNeeds};
 use super::passes::denoise::{DenoiseInputs, Denoiser};
 use super::passes::gradient::FILTERED;
@@ -41,8 +41,7 @@ use super::realtime::{
     Realtime, RealtimeImage, RealtimePasses, SceneGroups, Shown, runs as realtime_runs,
 };
 use super::scene_bindings::SceneBindings;
-use super::settings::Integrator;
-use super::settings::RenderSettings;
+use super::settings::{Integrator, RenderSettings};
 use super::stats::*;
 use super::view::ViewTargets;
 use crate::camera::CameraView;
@@ -139,15 +138,11 @@ pub fn render_frame(
         // The wavefront form records radiance only.
         let in_waves = settings.integrator == Integrator::Wavefront && !aovs && !view.hit_aov;
         if in_waves {
-            let alpha_blend = scene
-                .material_data
-                .iter()
-                .any(|m| m.flags & MATERIAL_ALPHA_BLEND != 0);
             let layout = &bindings.layout;
             let pass = wavefront
                 .0
                 .get_or_insert_with(|| WavefrontPass::new(&ctx, layout));
-            pass.prepare(&ctx, &view, needs, alpha_blend);
+            pass.prepare(&ctx, &view, needs);
         } else {
             trace.prepare(&ctx, &view, needs, aovs);
         }

@@ -8,8 +8,8 @@
 use super::gpu_scene::{TextureSlots, gpu_material};
 use super::layout::{
     CORE_TEXTURE_BASE_COLOR, CORE_TEXTURE_EMISSIVE, CORE_TEXTURE_METALLIC_ROUGHNESS,
-    CORE_TEXTURE_NORMAL, GpuMaterial, LOBES_LAYERS, LOBES_LEVEL, MATERIAL_ALPHA_MASK,
-    MATERIAL_UNLIT, NONE,
+    CORE_TEXTURE_NORMAL, GpuMaterial, LOBES_LAYERS, LOBES_LEVEL, MATERIAL_ALPHA_BLEND,
+    MATERIAL_ALPHA_MASK, MATERIAL_UNLIT, NONE,
 };
 use crate::gpu::ComputeModule;
 use std::collections::HashMap;
@@ -115,6 +115,9 @@ pub struct MaterialNeeds {
     pub core_textures: u32,
     /// Some material is alpha-masked: traversal tests the cut-outs (`ALPHA_MASKS`, `shaders/scene/alpha.wgsl`).
     pub alpha_masks: bool,
+    /// Some material is alpha-blended: paths may pass through surfaces. Not a constant of the library's; the
+    /// wavefront pass picks its kernels by it (`WAVE_PASS_THROUGHS`).
+    pub alpha_blend: bool,
 }
 
 impl MaterialNeeds {
@@ -124,6 +127,9 @@ impl MaterialNeeds {
             lobes: MaterialLobes::of(materials),
             core_textures: core_textures(materials),
             alpha_masks: materials.iter().any(|m| m.flags & MATERIAL_ALPHA_MASK != 0),
+            alpha_blend: materials
+                .iter()
+                .any(|m| m.flags & MATERIAL_ALPHA_BLEND != 0),
         }
     }
 
@@ -329,6 +335,7 @@ mod tests {
         let mut blend = plain.clone();
         blend.alpha_mode = crate::scene::AlphaMode::Blend;
         assert!(!needs(&[&blend]).alpha_masks);
+        assert!(needs(&[&blend]).alpha_blend && !needs(&[&cut]).alpha_blend);
         assert_eq!(
             all.constants().map(|(name, _)| name),
             ["MATERIAL_LOBES", "CORE_TEXTURES", "ALPHA_MASKS"]

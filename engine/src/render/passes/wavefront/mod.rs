@@ -56,7 +56,6 @@ pub struct WavefrontSlot(pub Option<WavefrontPass>);
 pub struct WavefrontPass {
     kernels: Kernels,
     needs: KernelNeeds,
-    alpha_blend: bool,
     view_layout: wgpu::BindGroupLayout,
     args_layout: wgpu::BindGroupLayout,
     buffers: Option<PathBuffers>,
@@ -106,7 +105,6 @@ impl WavefrontPass {
                 finish: kernel("finish", &queue),
             },
             needs: KernelNeeds::default(),
-            alpha_blend: false,
             view_layout,
             args_layout,
             buffers: None,
@@ -114,15 +112,10 @@ impl WavefrontPass {
     }
 
     /// Compiles the kernels for `needs` (the first time; with the pass-throughs of alpha-blended surfaces where
-    /// `alpha_blend`) and makes the paths' state for the view's size (again only when the view's targets were
-    /// replaced).
-    pub fn prepare(
-        &mut self,
-        ctx: &GpuContext,
-        view: &ViewTargets,
-        needs: KernelNeeds,
-        alpha_blend: bool,
-    ) {
+    /// some material blends) and makes the paths' state for the view's size (again only when the view's targets
+    /// were replaced).
+    pub fn prepare(&mut self, ctx: &GpuContext, view: &ViewTargets, needs: KernelNeeds) {
+        let alpha_blend = needs.materials.alpha_blend;
         let k = &mut self.kernels;
         for kernels in [
             &mut k.begin_wave,
@@ -135,7 +128,6 @@ impl WavefrontPass {
             kernels.get(needs);
         }
         self.needs = needs;
-        self.alpha_blend = alpha_blend;
         if self
             .buffers
             .as_ref()
@@ -219,7 +211,7 @@ impl WavefrontPass {
         let pipeline = |k| compiled(k, needs);
         let k = &self.kernels;
         encoder.clear_buffer(&buffers.queues, 0, Some(CONTROL_BYTES));
-        let extend = pipeline(&k.extend[self.alpha_blend as usize]);
+        let extend = pipeline(&k.extend[self.needs.materials.alpha_blend as usize]);
         let (x, y) = view.workgroups();
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
@@ -232,7 +224,9 @@ impl WavefrontPass {
             for _ in 0..spp {
                 pass.set_pipeline(pipeline(&k.begin_wave));
                 pass.dispatch_workgroups(1, 1, 1);
-                pass.set_pipeline(pipeline(&k.first_bounce[self.alpha_blend as usize]));
+                pass.set_pipeline(pipeline(
+                    &k.first_bounce[self.needs.materials.alpha_blend as usize],
+                ));
                 pass.dispatch_workgroups(x, y, 1);
                 pass.set_pipeline(pipeline(&k.advance));
                 pass.dispatch_workgroups(1, 1, 1);

@@ -130,10 +130,15 @@ fn load_path(path: u32) -> WavePath {
         bitcast<u32>(carried.w), vertex);
 }
 
-fn store_path(path: u32, p: WavePath) {
+// The ray's origin, depth and pass-throughs, and the throughput and medium: what a pass-through changes.
+fn store_origin_and_throughput(path: u32, p: WavePath) {
     path_origin[path] = vec4<f32>(p.ray.origin, bitcast<f32>(p.depth | (p.pass_throughs << 16u)));
-    path_dir[path] = vec4<f32>(p.ray.dir, p.last_bsdf_pdf);
     path_throughput[path] = vec4<f32>(p.throughput, bitcast<f32>(p.medium));
+}
+
+fn store_path(path: u32, p: WavePath) {
+    store_origin_and_throughput(path, p);
+    path_dir[path] = vec4<f32>(p.ray.dir, p.last_bsdf_pdf);
     path_vertex[path] = vec4<f32>(p.last_vertex.p, 0.0);
     path_normal[path] = vec4<f32>(p.last_vertex.n, 0.0);
 }
@@ -168,7 +173,7 @@ struct BounceStep {
 }
 
 fn shade_bounce(pixel: u32, path: WavePath, hit: Hit) -> BounceStep {
-    var step = BounceStep(false, false, DirectLight(Ray(vec3<f32>(0.0), vec3<f32>(0.0, 0.0, 1.0)), 0.0, vec3<f32>(0.0)));
+    var step = no_step();
     var p = path;
     let nee = (frame.flags & FRAME_NEE) != 0u && light_count() > 0u;
     if p.medium != NONE { p.throughput *= transmittance(p.medium, hit.t); }
@@ -262,7 +267,7 @@ fn queue_step(step: BounceStep, pixel: u32, lid: u32) {
 }
 
 fn no_step() -> BounceStep {
-    return BounceStep(false, false, DirectLight(Ray(vec3<f32>(0.0), vec3<f32>(0.0, 0.0, 1.0)), 0.0, vec3<f32>(0.0)));
+    return BounceStep(false, false, no_direct_light());
 }
 
 // Depth 0, per 8x8 tile: the camera ray, what it meets, and the next ray and shadow ray queued (by tile, so the
@@ -329,10 +334,7 @@ fn extend(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgroups) grou
                 path_radiance[pixel] += vec4<f32>(shadow_light[i - live].xyz, 0.0);
             }
         } else {
-            if p.pass_throughs != pass_throughs {
-                path_origin[pixel] = vec4<f32>(p.ray.origin, bitcast<f32>(p.depth | (p.pass_throughs << 16u)));
-                path_throughput[pixel] = vec4<f32>(p.throughput, bitcast<f32>(p.medium));
-            }
+            if p.pass_throughs != pass_throughs { store_origin_and_throughput(pixel, p); }
             path_hit[pixel] = vec4<u32>(bitcast<u32>(hit.t), hit.instance, hit.triangle, bitcast<u32>(hit.bary.x));
             path_vertex[pixel].w = hit.bary.y;
         }
