@@ -11,6 +11,12 @@
 // conditional CDF entries (row by row) and H - 1 marginal CDF entries, then the same two for the compensated
 // distribution where next-event estimation uses one (LIGHT_ENVIRONMENT_COMPENSATED).
 
+// Whether any environment's sampling follows the bilinear density inside its cells: the trace kernels set it
+// false where none does (engine/src/render/material_lobes.rs `KernelNeeds`), and that code compiles away. Smooth
+// maps (the sky gradient, constants) sample cells uniformly; on lavapipe, whose `if`s skip nothing, the bilinear
+// branches still cost them 9% of the Cornell box's render (docs/BENCHMARKS.md).
+override ENVIRONMENT_BILINEAR: bool = true;
+
 // A world direction in the map's frame.
 fn environment_to_map(light: Light, d: vec3<f32>) -> vec3<f32> {
     let c = light.position.x;
@@ -111,9 +117,10 @@ fn environment_distribution(light: Light, compensated: bool) -> EnvironmentDistr
     if compensated && (light.flags & LIGHT_ENVIRONMENT_COMPENSATED) != 0u {
         let compensated_conditional = marginal + rows;
         return EnvironmentDistribution(compensated_conditional, compensated_conditional + w * rows, light.range,
-            (light.flags & LIGHT_ENVIRONMENT_COMPENSATED_BILINEAR) != 0u);
+            ENVIRONMENT_BILINEAR && (light.flags & LIGHT_ENVIRONMENT_COMPENSATED_BILINEAR) != 0u);
     }
-    return EnvironmentDistribution(conditional, marginal, 0.0, (light.flags & LIGHT_ENVIRONMENT_BILINEAR) != 0u);
+    return EnvironmentDistribution(conditional, marginal, 0.0,
+        ENVIRONMENT_BILINEAR && (light.flags & LIGHT_ENVIRONMENT_BILINEAR) != 0u);
 }
 
 // Density of the cell (column i, row j) in (u, v), times the map's cell count.

@@ -475,10 +475,33 @@ fn kernels_compiled_for_the_scene_shape_render_the_general_kernels_image() {
                 "{file}: the top level holds one leaf"
             );
             assert_eq!(shape.blas_layouts, layouts, "{file}: BLAS layouts");
+            // The sky gradient's cells are sampled uniformly: the bilinear code is compiled out.
+            assert!(
+                shape.lights.environment_cells_uniform(),
+                "{file}: the sky samples its cells uniformly"
+            );
             app.radiance()
         };
         assert_forms_render_the_same_image(&image(true), &image(false), file);
     }
+    // A map with a sun samples inside its cells bilinearly: the kernels keep that code (spheres under it, lit by
+    // little else).
+    let mut sunny = settings(16, StaticLayout::Wide, true);
+    sunny.environment = raykin::render::Environment::Map(raykin::environment::MapSettings {
+        path: repo_root().join("tests/reference/lights/sunny_64x33.exr"),
+        rotation_degrees: 30.0,
+        strength: 1.0,
+    });
+    let spheres = load("MetalRoughSpheresNoTextures/glTF-Binary/MetalRoughSpheresNoTextures.glb");
+    let image = |shaped: bool| {
+        let app = four_samples(form(shaped), &spheres, sunny.clone());
+        assert!(
+            !app.gpu_scene().lights.environment_cells_uniform(),
+            "a sunny map is sampled bilinearly inside its cells"
+        );
+        app.radiance()
+    };
+    assert_forms_render_the_same_image(&image(true), &image(false), "spheres under a sunny map");
     // Not merged, the box's four meshes are four leaves: no shortcut; as BVH2s, the other layout.
     for (layout, layouts) in [
         (StaticLayout::Wide, BLAS_LAYOUT_WIDE),

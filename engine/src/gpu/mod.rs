@@ -77,7 +77,8 @@ pub struct GpuContext {
     pub path_regeneration: bool,
     /// The trace kernels are compiled for the scene's shape ([`crate::render::material_lobes::KernelNeeds`]):
     /// traversal starts in the top level's one leaf where it has one (`SOLE_INSTANCE`) and holds only the BLAS
-    /// layouts the leaves use (`BLAS_LAYOUTS`, both in `shaders/traversal/tlas.wgsl`). On by default;
+    /// layouts the leaves use (`BLAS_LAYOUTS`, both in `shaders/traversal/tlas.wgsl`), and the environment's
+    /// in-cell bilinear sampling only where a map uses it (`ENVIRONMENT_BILINEAR`). On by default;
     /// `RAYKIN_SCENE_SHAPE_KERNELS=off` keeps the general kernel (A/B runs).
     pub scene_shape_kernels: bool,
     /// The staging buffer of the last readback, kept for the next: allocating (and on discrete GPUs pinning)

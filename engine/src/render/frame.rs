@@ -206,8 +206,8 @@ fn deformed_on_gpu(deform: &[wgpu::CommandBuffer]) -> SceneWrites {
 }
 
 /// What the path-tracing kernels are compiled for this frame: the materials' needs and, where the adapter
-/// compiles for the scene's shape ([`GpuContext::scene_shape_kernels`]), the top level's one leaf and the BLAS
-/// layouts of its leaves.
+/// compiles for the scene's shape ([`GpuContext::scene_shape_kernels`]), the top level's one leaf, the BLAS
+/// layouts of its leaves and whether the environment maps sample their cells uniformly.
 fn kernel_needs(ctx: &GpuContext, scene: &GpuScene) -> KernelNeeds {
     let materials = MaterialNeeds::of(&scene.material_data);
     if !ctx.scene_shape_kernels {
@@ -220,6 +220,7 @@ fn kernel_needs(ctx: &GpuContext, scene: &GpuScene) -> KernelNeeds {
         materials,
         sole_instance: scene.sole_instance,
         blas_layouts: scene.blas_layouts,
+        environment_cells_uniform: scene.lights.environment_cells_uniform(),
     }
 }
 

@@ -166,13 +166,17 @@ pub fn core_textures(materials: &[GpuMaterial]) -> u32 {
 /// the leaf count, cost that scene 9% (docs/BENCHMARKS.md, "kernels compiled for the scene's shape").
 /// The BLAS layouts the leaves use (`GpuScene::blas_layouts`, `BLAS_LAYOUTS`) compile only their traversals: on
 /// lavapipe the child-pair BVH2's loop ran for every instance visited of a scene that has none (8% of the Cornell
-/// box's render).
+/// box's render). Where no environment map samples the bilinear density inside its cells
+/// (`LightList::environment_cells_uniform`, `ENVIRONMENT_BILINEAR` of `shaders/lights/environment.wgsl`), that
+/// code compiles away (9% of the Cornell box's render under the sky gradient).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub struct KernelNeeds {
     pub materials: MaterialNeeds,
     pub sole_instance: Option<u32>,
     /// `BLAS_LAYOUT_*` bits; 0: not known, every layout.
     pub blas_layouts: u32,
+    /// Every environment map samples its cells uniformly (false: not known, or some map is bilinear).
+    pub environment_cells_uniform: bool,
 }
 
 impl KernelNeeds {
@@ -184,6 +188,9 @@ impl KernelNeeds {
         }
         if self.blas_layouts != 0 {
             constants.push(("BLAS_LAYOUTS", f64::from(self.blas_layouts)));
+        }
+        if self.environment_cells_uniform {
+            constants.push(("ENVIRONMENT_BILINEAR", 0.0));
         }
         constants
     }

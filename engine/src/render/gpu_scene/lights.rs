@@ -92,6 +92,16 @@ impl LightList {
         self.triangles.iter().map(|l| l.power).sum()
     }
 
+    /// Whether no uploaded environment map samples the bilinear density inside its cells (either of its
+    /// distributions): the trace kernels then leave that code out (`KernelNeeds`).
+    pub fn environment_cells_uniform(&self) -> bool {
+        let bilinear = LIGHT_ENVIRONMENT_BILINEAR | LIGHT_ENVIRONMENT_COMPENSATED_BILINEAR;
+        !self
+            .uploaded
+            .iter()
+            .any(|l| l.kind == LIGHT_ENVIRONMENT && l.flags & bilinear != 0)
+    }
+
     pub(super) fn set_bounds_radius(&mut self, radius: f32) {
         if radius != self.bounds_radius {
             self.bounds_radius = radius;
