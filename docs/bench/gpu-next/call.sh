@@ -1,0 +1,35 @@
+#!/usr/bin/env bash
+# The next device call's plan (written 2026-12-05, sixteenth session, no device lent): the megakernel, the
+# wavefront form shipped since d0f86a6 (the first bounce as one kernel, extend/shade split after it) and the
+# wavefront as one kernel per bounce (docs/bench/lavapipe-2026-12-05-fused/wavefront-fused.patch), one call,
+# alternating, two rounds; then the seed-like interior with the three.
+# Set-up on the 2-core machine (from the repository root):
+#   cargo build --release -p raykin && strip -o rel/head target/release/raykin && xz -T2 -6 -f rel/head
+#   git apply docs/bench/lavapipe-2026-12-05-fused/wavefront-fused.patch && cargo build --release -p raykin \
+#     && strip -o rel/fused target/release/raykin && xz -T2 -6 -f rel/fused && git apply -R docs/bench/lavapipe-2026-12-05-fused/wavefront-fused.patch
+#   mkdir -p rel/assets && cp -r ../shared/assets/{CornellBox,FlightHelmet,MetalRoughSpheresNoTextures,CesiumMan,Fox} rel/assets/
+#   (.gl: the Vulkan loader recipe of ../.library/device/README.md)
+# Run: bash docs/bench/gpu-next/call.sh with carry [".gl", "rel"].
+set -u
+start=$(date +%s)
+export VK_DRIVER_FILES=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
+nvidia-smi --query-gpu=name,driver_version,clocks.sm,clocks.max.sm --format=csv > "$OUT/gpu.txt"
+ASSETS=rel/assets FRAMES=40 SCENES="cornell flight-helmet spheres env-lit crowd" timeout 400 \
+  bash scripts/gpu-ab-frames.sh 2 head head,--integrator=wavefront fused,--integrator=wavefront > "$OUT/ab-summary.txt"
+cat "$OUT/ab-summary.txt"
+echo "static scenes: $(( $(date +%s) - start )) s"
+for round in 1 2; do
+  for variant in head:megakernel head:wavefront fused:wavefront; do
+    left=$(( 570 - ($(date +%s) - start) ))
+    [ "$left" -lt 40 ] && break 2
+    w=$(mktemp -d)
+    timeout "$left" rel/${variant%%:*} bench --suite full --parts frames --frames 30 --scene seed-interior --width 2560 \
+      --height 1440 --integrator "${variant#*:}" --assets rel/assets --out "$w" --cache "$w/c" >> "$OUT/seed.log" 2>&1
+    python3 -c "
+import json; r=json.load(open('$w/results.json'))
+for row in r['rows']: print('$variant', $round, row.get('scene'), row.get('width'), row.get('height'), row.get('trace_ms_median'))
+" >> "$OUT/seed.txt"
+  done
+done
+cat "$OUT/seed.txt"
+echo "total: $(( $(date +%s) - start )) s"
