@@ -188,8 +188,10 @@ impl GpuScene {
             let map = &baked.map;
             let dist = &baked.distribution;
             let cdf_words = dist.conditional_cdf.len() + dist.marginal_cdf.len();
-            let mut words: Vec<f32> = Vec::with_capacity(map.texels.len() * 3 + 2 * cdf_words);
-            words.extend(map.texels.iter().flatten());
+            // Texels padded to four words: one 16-byte load each where the scene is read through textures
+            // (CPU adapters), instead of two loads and the word selects of a texel straddling two.
+            let mut words: Vec<f32> = Vec::with_capacity(map.texels.len() * 4 + 2 * cdf_words);
+            words.extend(map.texels.iter().flat_map(|&[r, g, b]| [r, g, b, 0.0]));
             let compensated = match &baked.next_event {
                 NextEventSampling::Compensated(c) => Some(c),
                 _ => None,
