@@ -13,7 +13,8 @@ struct MotionInstance {
 @group(2) @binding(0) var<storage, read> motion_instances: array<MotionInstance>;
 // Object id -> this frame's instance index (NONE: the object is gone).
 @group(2) @binding(1) var<storage, read> object_instances: array<u32>;
-// Previous positions (3 f32 each) of the meshes deformed this frame, at `mesh_motion[mesh]` words.
+// Previous positions (POSITION_WORDS f32 each: the vertex pool's words, copied) of the meshes deformed this
+// frame, at `mesh_motion[mesh]` words.
 @group(2) @binding(2) var<storage, read> prev_positions: array<f32>;
 // Per mesh: word offset of its previous positions, NONE when its vertices did not move this frame.
 @group(2) @binding(3) var<storage, read> mesh_motion: array<u32>;
@@ -28,7 +29,7 @@ fn instance_of_object(object: u32) -> u32 {
 fn previous_vertex(mesh_index: u32, mesh: Mesh, v: u32) -> vec3<f32> {
     let offset = mesh_motion[mesh_index];
     if offset == NONE { return vertex_position(mesh, v); }
-    let o = offset + 3u * v;
+    let o = offset + POSITION_WORDS * v;
     return vec3<f32>(prev_positions[o], prev_positions[o + 1u], prev_positions[o + 2u]);
 }
 

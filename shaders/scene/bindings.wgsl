@@ -33,8 +33,9 @@ fn read_pool_word(i: u32) -> u32 { return vertex_pool[i]; }
 fn read_pool_vec2(i: u32) -> vec2<f32> {
     return vec2<f32>(bitcast<f32>(vertex_pool[i]), bitcast<f32>(vertex_pool[i + 1u]));
 }
-fn read_pool_vec3(i: u32) -> vec3<f32> {
-    return vec3<f32>(bitcast<f32>(vertex_pool[i]), bitcast<f32>(vertex_pool[i + 1u]), bitcast<f32>(vertex_pool[i + 2u]));
+// A vertex position (word i, a multiple of POSITION_WORDS).
+fn read_pool_position(i: u32) -> vec3<f32> {
+    return bitcast<vec3<f32>>(vec3<u32>(vertex_pool[i], vertex_pool[i + 1u], vertex_pool[i + 2u]));
 }
 fn read_material(i: u32) -> Material { return materials[i]; }
 fn read_texel(i: u32) -> u32 { return texels[i]; }

@@ -92,8 +92,9 @@ fn read_pool_vec2(i: u32) -> vec2<f32> {
     return bitcast<vec2<f32>>(scene_words3(vertex_pool, i).xy);
 }
 
-fn read_pool_vec3(i: u32) -> vec3<f32> {
-    return bitcast<vec3<f32>>(scene_words3(vertex_pool, i));
+// A vertex position (word i, a multiple of POSITION_WORDS = 4): one texel.
+fn read_pool_position(i: u32) -> vec3<f32> {
+    return bitcast<vec3<f32>>(scene_texel(vertex_pool, i >> 2u).xyz);
 }
 
 fn read_material(i: u32) -> Material {

@@ -2,7 +2,7 @@
 // unorm8x4 colours (engine/src/render/gpu_scene/packing.rs writes them).
 
 fn vertex_position(mesh: Mesh, v: u32) -> vec3<f32> {
-    return read_pool_vec3(mesh.position_offset + 3u * v);
+    return read_pool_position(mesh.position_offset + POSITION_WORDS * v);
 }
 
 fn interpolate_uv(offset: u32, tri: vec4<u32>, w: vec3<f32>) -> vec2<f32> {

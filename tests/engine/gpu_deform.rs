@@ -126,8 +126,9 @@ fn oct_close(a: u32, b: u32) -> bool {
 }
 
 fn positions_of(pool: &[u32], offset: u32, n: usize) -> Vec<Vec3> {
-    pool[offset as usize..offset as usize + 3 * n]
-        .chunks_exact(3)
+    let words = raykin::render::layout::POSITION_WORDS as usize;
+    pool[offset as usize..offset as usize + words * n]
+        .chunks_exact(words)
         .map(|c| {
             Vec3::new(
                 f32::from_bits(c[0]),

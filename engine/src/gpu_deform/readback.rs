@@ -6,6 +6,7 @@
 use super::levels::LevelOrder;
 use crate::bvh::{BvhQuality, BvhTooDeep, MeshBvh};
 use crate::gpu::GpuContext;
+use crate::render::layout::POSITION_WORDS;
 use crate::scene::SceneAsset;
 use glam::Vec3;
 use std::sync::Arc;
@@ -165,7 +166,7 @@ impl RebuildJob {
         position_offset: u32,
         vertices: usize,
     ) -> Self {
-        let bytes = (vertices as u64 * 12).max(4);
+        let bytes = (vertices as u64 * POSITION_WORDS as u64 * 4).max(4);
         let staging = Staging::new(ctx, "rebuild positions", bytes);
         staging.capture(encoder, vertex_pool, position_offset as u64 * 4, bytes);
         Self {
@@ -188,9 +189,9 @@ impl RebuildJob {
                 Some(Some(bytes)) => bytes,
             };
             let vertices = scene.meshes[scene_mesh].positions.len();
-            let positions: Vec<Vec3> = bytemuck::cast_slice::<u8, [f32; 3]>(&bytes)[..vertices]
+            let positions: Vec<Vec3> = bytemuck::cast_slice::<u8, [f32; 4]>(&bytes)[..vertices]
                 .iter()
-                .map(|p| Vec3::from_array(*p))
+                .map(|p| Vec3::new(p[0], p[1], p[2]))
                 .collect();
             let scene = scene.clone();
             // A worker thread keeps the build out of the frame loop.

@@ -49,6 +49,11 @@ pub const BLAS_LAYOUTS_ALL: u32 = 3;
 /// 16-byte texels (64 KiB), so a 128 MiB buffer needs 2048 rows.
 pub const SCENE_TEXEL_ROW_LOG2: u32 = 12;
 
+/// Words per vertex position in the vertex pool: x, y, z and a zero, each mesh's positions starting at a
+/// multiple of four words, so that CPU adapters read a position as one 16-byte texel (three words could straddle
+/// two: 5-7% of the Cornell box's render on lavapipe, docs/BENCHMARKS.md).
+pub const POSITION_WORDS: u32 = 4;
+
 /// An object-to-world placement of a mesh (rows of 3x4 matrices).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
@@ -257,6 +262,7 @@ pub const WGSL_CONSTANTS: &[(&str, u32)] = &[
     ("BLAS_LAYOUT_BINARY", BLAS_LAYOUT_BINARY),
     ("BLAS_LAYOUTS_ALL", BLAS_LAYOUTS_ALL),
     ("SCENE_TEXEL_ROW_LOG2", SCENE_TEXEL_ROW_LOG2),
+    ("POSITION_WORDS", POSITION_WORDS),
     ("FRAME_NEE", FRAME_NEE),
     ("FRAME_HIT_AOV", FRAME_HIT_AOV),
     ("LIGHT_TRIANGLE", LIGHT_TRIANGLE),

@@ -1,7 +1,7 @@
 //! Deformed meshes on the CPU backend: their new vertices written over their own vertex-pool ranges, their
 //! BLASes refit or rebuilt in place.
 
-use super::packing::{OrderedTriangles, order_triangles};
+use super::packing::{OrderedTriangles, order_triangles, position_words};
 use super::{GpuScene, SceneWrites};
 use crate::bvh::refit::RebuildPolicy;
 use crate::bvh::{Blas, MeshBvh};
@@ -107,10 +107,15 @@ impl GpuScene {
                 }
                 let slot = &self.mesh_slots[u.mesh];
                 if let Some(d) = deformed.meshes[u.mesh].as_ref() {
+                    let words: Vec<u32> = d
+                        .positions
+                        .iter()
+                        .flat_map(|&p| position_words(p))
+                        .collect();
                     ctx.queue.write_buffer(
                         &self.vertex_pool,
                         slot.gpu.position_offset as u64 * 4,
-                        bytemuck::cast_slice(&d.positions),
+                        bytemuck::cast_slice(&words),
                     );
                 }
                 for (offset, words) in &u.words {

@@ -12,7 +12,7 @@
 use super::GpuScene;
 use crate::gpu::GpuContext;
 use crate::gpu::bind::{storage_buffer, storage_with, write_or_grow};
-use crate::render::layout::{GpuLight, GpuMotionInstance, NONE};
+use crate::render::layout::{GpuLight, GpuMotionInstance, NONE, POSITION_WORDS};
 use crate::scene::SceneAsset;
 
 pub struct SceneMotion {
@@ -48,7 +48,7 @@ impl SceneMotion {
         let mut words = 0u32;
         for (m, mesh) in scene.meshes.iter().enumerate() {
             if mesh.is_deformable() {
-                let n = 3 * mesh.positions.len() as u32;
+                let n = POSITION_WORDS * mesh.positions.len() as u32;
                 ranges.push(Some((words, gpu.mesh_slots[m].gpu.position_offset, n)));
                 words += n;
             } else {

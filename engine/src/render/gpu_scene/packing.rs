@@ -195,8 +195,19 @@ pub fn luminance(c: Vec3) -> f32 {
     c.dot(Vec3::new(0.2126, 0.7152, 0.0722))
 }
 
+/// Pads the vertex pool to where positions may start (a multiple of [`POSITION_WORDS`]).
+pub(super) fn align_positions(pool: &mut Vec<u32>) {
+    pool.resize(pool.len().next_multiple_of(POSITION_WORDS as usize), 0);
+}
+
+/// A position as the vertex pool holds it ([`POSITION_WORDS`] words).
+pub fn position_words(p: Vec3) -> [u32; POSITION_WORDS as usize] {
+    [p.x.to_bits(), p.y.to_bits(), p.z.to_bits(), 0]
+}
+
 /// Appends a mesh's attributes to the vertex pool; returns the mesh's offsets.
 pub(super) fn pack_vertices(mesh: &MeshData, pool: &mut Vec<u32>) -> GpuMesh {
+    align_positions(pool);
     let mut gpu = GpuMesh {
         blas_root: 0,
         triangle_offset: 0,
@@ -207,11 +218,7 @@ pub(super) fn pack_vertices(mesh: &MeshData, pool: &mut Vec<u32>) -> GpuMesh {
         uv1_offset: NONE,
         color_offset: NONE,
     };
-    pool.extend(
-        mesh.positions
-            .iter()
-            .flat_map(|p| p.to_array().map(f32::to_bits)),
-    );
+    pool.extend(mesh.positions.iter().flat_map(|&p| position_words(p)));
     if let Some(n) = &mesh.normals {
         gpu.normal_offset = pool.len() as u32;
         pool.extend(n.iter().map(|n| oct_encode(*n)));

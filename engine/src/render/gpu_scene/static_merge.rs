@@ -13,6 +13,7 @@
 //! gets an alpha-masked material leaves the merge for good: the rest is rebuilt into the same room.
 
 use super::MeshSlot;
+use super::packing::{align_positions, position_words};
 use crate::bvh::{BvhQuality, WideBvh};
 use crate::render::layout::*;
 use crate::scene::SceneAsset;
@@ -212,11 +213,7 @@ pub fn build(
     }));
     Some(MergedGeometry {
         members,
-        positions: positions
-            .iter()
-            .flat_map(|p| p.to_array())
-            .map(f32::to_bits)
-            .collect(),
+        positions: positions.iter().flat_map(|&p| position_words(p)).collect(),
         entries,
         triangles: count,
         nodes: tree.nodes,
@@ -236,6 +233,7 @@ impl StaticMerge {
         if triangles.len() % 2 == 1 {
             triangles.push([0; 4]);
         }
+        align_positions(pool);
         let start = Room {
             pool_words: pool.len(),
             triangle_entries: triangles.len(),

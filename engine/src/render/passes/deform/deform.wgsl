@@ -124,9 +124,9 @@ fn deform(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index)
     // Never hand a non-finite vertex to the BVH.
     if !all_finite(p) { p = rest; }
 
-    vertex_pool[m.out_position + 3u * v] = bitcast<u32>(p.x);
-    vertex_pool[m.out_position + 3u * v + 1u] = bitcast<u32>(p.y);
-    vertex_pool[m.out_position + 3u * v + 2u] = bitcast<u32>(p.z);
+    vertex_pool[m.out_position + POSITION_WORDS * v] = bitcast<u32>(p.x);
+    vertex_pool[m.out_position + POSITION_WORDS * v + 1u] = bitcast<u32>(p.y);
+    vertex_pool[m.out_position + POSITION_WORDS * v + 2u] = bitcast<u32>(p.z);
     if m.out_normal != NONE { vertex_pool[m.out_normal + v] = oct_encode(n); }
     if m.out_tangent != NONE {
         vertex_pool[m.out_tangent + 2u * v] = oct_encode(t);

@@ -27,7 +27,7 @@ struct RefitMesh {
 var<workgroup> partial: array<f32, REFIT_GROUP>;
 
 fn position(m: RefitMesh, v: u32) -> vec3<f32> {
-    let o = m.position_offset + 3u * v;
+    let o = m.position_offset + POSITION_WORDS * v;
     return vec3<f32>(bitcast<f32>(vertex_pool[o]), bitcast<f32>(vertex_pool[o + 1u]), bitcast<f32>(vertex_pool[o + 2u]));
 }
 
