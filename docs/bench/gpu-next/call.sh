@@ -22,18 +22,5 @@ ASSETS=rel/assets FRAMES=40 SCENES="cornell flight-helmet spheres env-lit crowd"
   bash scripts/gpu-ab-frames.sh 2 start head head,--integrator=wavefront fused,--integrator=wavefront > "$OUT/ab-summary.txt"
 cat "$OUT/ab-summary.txt"
 echo "static scenes: $(( $(date +%s) - start )) s"
-for round in 1 2; do
-  for variant in head:megakernel head:wavefront fused:wavefront; do
-    left=$(( 570 - ($(date +%s) - start) ))
-    [ "$left" -lt 40 ] && break 2
-    w=$(mktemp -d)
-    timeout "$left" rel/${variant%%:*} bench --suite full --parts frames --frames 30 --scene seed-interior --width 2560 \
-      --height 1440 --integrator "${variant#*:}" --assets rel/assets --out "$w" --cache "$w/c" >> "$OUT/seed.log" 2>&1
-    python3 -c "
-import json; r=json.load(open('$w/results.json'))
-for row in r['rows']: print('$variant', $round, row.get('scene'), row.get('width'), row.get('height'), row.get('trace_ms_median'))
-" >> "$OUT/seed.txt"
-  done
-done
-cat "$OUT/seed.txt"
+START=$start bash scripts/gpu-seed-ab.sh 2 head:megakernel head:wavefront fused:wavefront
 echo "total: $(( $(date +%s) - start )) s"
