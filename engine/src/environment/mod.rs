@@ -110,8 +110,9 @@ impl BakedEnvironment {
     pub fn load_map(settings: &MapSettings, byte_limit: u64) -> Result<Self, EnvironmentError> {
         let (mut map, mut notes) = EnvironmentMap::load(&settings.path)?;
         let (w, h) = (map.width, map.height);
-        // Texels (3 f32) and the two distributions' conditional CDFs (1 f32 each).
-        let halvings = map.fit_to(20, byte_limit);
+        // Texels (4 f32: rgb and a pad, render/gpu_scene/lights.rs) and the two distributions' conditional CDFs
+        // (1 f32 each).
+        let halvings = map.fit_to(24, byte_limit);
         if halvings > 0 {
             notes.push(format!(
                 "{}: {w}x{h} is over this GPU's buffer limit; downscaled to {}x{}",
