@@ -26,23 +26,9 @@ fn scene_texel(buffer: texture_storage_2d<rgba32uint, read>, i: u32) -> vec4<u32
     return textureLoad(buffer, vec2<u32>(i & ((1u << SCENE_TEXEL_ROW_LOG2) - 1u), i >> SCENE_TEXEL_ROW_LOG2));
 }
 
-// Word j (0..7) of two consecutive texels.
-fn word_of_pair(a: vec4<u32>, b: vec4<u32>, j: u32) -> u32 {
-    return select(a[j & 3u], b[j & 3u], j >= 4u);
-}
-
 // Word i of a buffer of words.
 fn scene_word(buffer: texture_storage_2d<rgba32uint, read>, i: u32) -> u32 {
     return scene_texel(buffer, i >> 2u)[i & 3u];
-}
-
-// Words i .. i + 2 of a buffer of words, from the two texels they can span, both read (a branch would not save
-// the second load: lanes take both sides).
-fn scene_words3(buffer: texture_storage_2d<rgba32uint, read>, i: u32) -> vec3<u32> {
-    let a = scene_texel(buffer, i >> 2u);
-    let b = scene_texel(buffer, (i >> 2u) + 1u);
-    let k = i & 3u;
-    return vec3<u32>(word_of_pair(a, b, k), word_of_pair(a, b, k + 1u), word_of_pair(a, b, k + 2u));
 }
 
 fn bvh_child(lo: vec4<u32>, hi: vec4<u32>) -> BvhChild {
@@ -88,8 +74,10 @@ fn read_pool_word(i: u32) -> u32 {
     return scene_word(vertex_pool, i);
 }
 
+// A UV pair (word i, even: packing.rs starts every UV set on an even word), one texel.
 fn read_pool_vec2(i: u32) -> vec2<f32> {
-    return bitcast<vec2<f32>>(scene_words3(vertex_pool, i).xy);
+    let t = scene_texel(vertex_pool, i >> 2u);
+    return bitcast<vec2<f32>>(select(t.xy, t.zw, (i & 2u) != 0u));
 }
 
 // A vertex position (word i, a multiple of POSITION_WORDS = 4): one texel.

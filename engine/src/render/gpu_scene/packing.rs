@@ -237,6 +237,8 @@ pub(super) fn pack_vertices(mesh: &MeshData, pool: &mut Vec<u32>) -> GpuMesh {
         (&mesh.uv1, &mut gpu.uv1_offset),
     ] {
         if let Some(uv) = uv {
+            // From an even word: a UV pair never straddles two 16-byte texels (CPU adapters read it as one).
+            pool.resize(pool.len().next_multiple_of(2), 0);
             *offset = pool.len() as u32;
             pool.extend(uv.iter().flat_map(|v| v.to_array().map(f32::to_bits)));
         }
