@@ -7,7 +7,7 @@
 //
 // Fields: index_a = map width W, index_b = map height H, position.xy = (cos, sin) of the rotation about +Y,
 // range = the compensated distribution's offset, radiance = strength, flags: LIGHT_ENVIRONMENT_BILINEAR,
-// LIGHT_ENVIRONMENT_COMPENSATED, LIGHT_ENVIRONMENT_COMPENSATED_BILINEAR. `environment_map` holds W H texels of 4 values (rgb, 0), then W (H - 1)
+// LIGHT_ENVIRONMENT_COMPENSATED, LIGHT_ENVIRONMENT_COMPENSATED_BILINEAR. `environment_map` holds W H texels of ENVIRONMENT_TEXEL_WORDS values (rgb, 0), then W (H - 1)
 // conditional CDF entries (row by row) and H - 1 marginal CDF entries, then the same two for the compensated
 // distribution where next-event estimation uses one (LIGHT_ENVIRONMENT_COMPENSATED).
 
@@ -43,7 +43,7 @@ fn environment_direction(uv: vec2<f32>) -> vec3<f32> {
 }
 
 fn environment_texel(width: u32, i: u32, j: u32) -> vec3<f32> {
-    return read_environment_texel(4u * (j * width + i));
+    return read_environment_texel(ENVIRONMENT_TEXEL_WORDS * (j * width + i));
 }
 
 // Column `i` wrapped into 0..w, for i in [-w, 2w) (every caller's column is in [-1, w]): selects instead of an
@@ -111,7 +111,7 @@ struct EnvironmentDistribution {
 fn environment_distribution(light: Light, compensated: bool) -> EnvironmentDistribution {
     let w = light.index_a;
     let rows = light.index_b - 1u;
-    let conditional = 4u * w * (rows + 1u);
+    let conditional = ENVIRONMENT_TEXEL_WORDS * w * (rows + 1u);
     let marginal = conditional + w * rows;
     if compensated && (light.flags & LIGHT_ENVIRONMENT_COMPENSATED) != 0u {
         let compensated_conditional = marginal + rows;

@@ -44,7 +44,7 @@ fn read_light(i: u32) -> Light { return lights[i]; }
 fn read_wide_node(i: u32) -> WideNode { return wide_nodes[i]; }
 fn read_light_cdf(i: u32) -> f32 { return light_cdf[i]; }
 fn read_environment(i: u32) -> f32 { return environment_map[i]; }
-// The texel whose four words start at i (a multiple of 4): rgb.
+// The texel whose ENVIRONMENT_TEXEL_WORDS words start at i: rgb.
 fn read_environment_texel(i: u32) -> vec3<f32> {
     return vec3<f32>(environment_map[i], environment_map[i + 1u], environment_map[i + 2u]);
 }

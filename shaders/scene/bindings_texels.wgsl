@@ -152,7 +152,7 @@ fn read_environment(i: u32) -> f32 {
     return bitcast<f32>(scene_word(environment_map, i));
 }
 
-// The texel whose four words start at i (a multiple of 4): rgb, one texel load.
+// The texel whose ENVIRONMENT_TEXEL_WORDS (= 4) words start at i: rgb, one texel load.
 fn read_environment_texel(i: u32) -> vec3<f32> {
     return bitcast<vec3<f32>>(scene_texel(environment_map, i >> 2u).xyz);
 }

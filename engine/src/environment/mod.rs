@@ -110,9 +110,10 @@ impl BakedEnvironment {
     pub fn load_map(settings: &MapSettings, byte_limit: u64) -> Result<Self, EnvironmentError> {
         let (mut map, mut notes) = EnvironmentMap::load(&settings.path)?;
         let (w, h) = (map.width, map.height);
-        // Texels (4 f32: rgb and a pad, render/gpu_scene/lights.rs) and the two distributions' conditional CDFs
-        // (1 f32 each).
-        let halvings = map.fit_to(24, byte_limit);
+        // Texels (ENVIRONMENT_TEXEL_WORDS f32: rgb and a pad) and the two distributions' conditional CDFs (1 f32
+        // each).
+        let bytes_per_texel = 4 * (crate::render::layout::ENVIRONMENT_TEXEL_WORDS as u64 + 2);
+        let halvings = map.fit_to(bytes_per_texel, byte_limit);
         if halvings > 0 {
             notes.push(format!(
                 "{}: {w}x{h} is over this GPU's buffer limit; downscaled to {}x{}",

@@ -54,6 +54,10 @@ pub const SCENE_TEXEL_ROW_LOG2: u32 = 12;
 /// two: 5-7% of the Cornell box's render on lavapipe, docs/BENCHMARKS.md).
 pub const POSITION_WORDS: u32 = 4;
 
+/// Words per texel of an environment map in `environment_map`: r, g, b and a zero, one 16-byte texel on CPU
+/// adapters (docs/BENCHMARKS.md, "Vertex positions and environment texels padded to 16 bytes").
+pub const ENVIRONMENT_TEXEL_WORDS: u32 = 4;
+
 /// An object-to-world placement of a mesh (rows of 3x4 matrices).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
@@ -263,6 +267,7 @@ pub const WGSL_CONSTANTS: &[(&str, u32)] = &[
     ("BLAS_LAYOUTS_ALL", BLAS_LAYOUTS_ALL),
     ("SCENE_TEXEL_ROW_LOG2", SCENE_TEXEL_ROW_LOG2),
     ("POSITION_WORDS", POSITION_WORDS),
+    ("ENVIRONMENT_TEXEL_WORDS", ENVIRONMENT_TEXEL_WORDS),
     ("FRAME_NEE", FRAME_NEE),
     ("FRAME_HIT_AOV", FRAME_HIT_AOV),
     ("LIGHT_TRIANGLE", LIGHT_TRIANGLE),

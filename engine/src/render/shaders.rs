@@ -64,7 +64,7 @@ pub const LIBRARY: &[ShaderModule] = library! {
         "sampling",
         "math",
     ],
-    "lights/environment" => ["lights/light", "scene/bindings", "math", "traversal/ray"],
+    "lights/environment" => ["constants", "lights/light", "scene/bindings", "math", "traversal/ray"],
     "lights/sun" => ["lights/light", "scene/types", "math", "sampling", "traversal/ray"],
     "lights/dispatch" => [
         "constants",

@@ -93,11 +93,13 @@ impl LightList {
     }
 
     /// Whether no uploaded environment map samples the bilinear density inside its cells (either of its
-    /// distributions): the trace kernels then leave that code out (`KernelNeeds`).
+    /// distributions): the trace kernels then leave that code out (`KernelNeeds`). Asked every frame, so only
+    /// the lights at infinity are looked at, not the emissive triangles before them.
     pub fn environment_cells_uniform(&self) -> bool {
         let bilinear = LIGHT_ENVIRONMENT_BILINEAR | LIGHT_ENVIRONMENT_COMPENSATED_BILINEAR;
-        !self
-            .uploaded
+        let first = self.infinite_first as usize;
+        let at_infinity = &self.uploaded[first..first + self.infinite_count as usize];
+        !at_infinity
             .iter()
             .any(|l| l.kind == LIGHT_ENVIRONMENT && l.flags & bilinear != 0)
     }
@@ -188,10 +190,15 @@ impl GpuScene {
             let map = &baked.map;
             let dist = &baked.distribution;
             let cdf_words = dist.conditional_cdf.len() + dist.marginal_cdf.len();
-            // Texels padded to four words: one 16-byte load each where the scene is read through textures
-            // (CPU adapters), instead of two loads and the word selects of a texel straddling two.
-            let mut words: Vec<f32> = Vec::with_capacity(map.texels.len() * 4 + 2 * cdf_words);
-            words.extend(map.texels.iter().flat_map(|&[r, g, b]| [r, g, b, 0.0]));
+            // Texels padded to ENVIRONMENT_TEXEL_WORDS: one 16-byte load each where the scene is read through
+            // textures (CPU adapters), instead of two loads and the word selects of a texel straddling two.
+            let texel_words = ENVIRONMENT_TEXEL_WORDS as usize;
+            let mut words: Vec<f32> =
+                Vec::with_capacity(map.texels.len() * texel_words + 2 * cdf_words);
+            for texel in &map.texels {
+                words.extend(texel);
+                words.resize(words.len() + texel_words - texel.len(), 0.0);
+            }
             let compensated = match &baked.next_event {
                 NextEventSampling::Compensated(c) => Some(c),
                 _ => None,
