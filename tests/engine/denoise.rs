@@ -81,14 +81,15 @@ fn flat_region_keeps_its_mean() {
     let mut app = HeadlessApp::new(ctx, scene, settings(1), &camera).expect("uploads");
     let pixels = (size * size) as usize;
     let seeds = 1..=8u32;
+    let weight = 1.0 / seeds.clone().count() as f32;
     let (mut noisy, mut denoised) = (vec![[0.0f32; 3]; pixels], vec![[0.0f32; 3]; pixels]);
-    for seed in seeds.clone() {
+    for seed in seeds {
         app.settings_mut().seed = seed;
         app.accumulate(1, 64, |_| {});
         let add = |sum: &mut Vec<[f32; 3]>, img: Vec<[f32; 3]>| {
             for (s, p) in sum.iter_mut().zip(img) {
                 for c in 0..3 {
-                    s[c] += p[c] / seeds.clone().count() as f32;
+                    s[c] += p[c] * weight;
                 }
             }
         };

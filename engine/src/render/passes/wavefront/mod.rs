@@ -211,7 +211,9 @@ impl WavefrontPass {
         let pipeline = |k| compiled(k, needs);
         let k = &self.kernels;
         encoder.clear_buffer(&buffers.queues, 0, Some(CONTROL_BYTES));
-        let extend = pipeline(&k.extend[self.needs.materials.alpha_blend as usize]);
+        // The kernels with or without the pass-throughs of alpha-blended surfaces.
+        let passing = self.needs.materials.alpha_blend as usize;
+        let extend = pipeline(&k.extend[passing]);
         let (x, y) = view.workgroups();
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
@@ -224,9 +226,7 @@ impl WavefrontPass {
             for _ in 0..spp {
                 pass.set_pipeline(pipeline(&k.begin_wave));
                 pass.dispatch_workgroups(1, 1, 1);
-                pass.set_pipeline(pipeline(
-                    &k.first_bounce[self.needs.materials.alpha_blend as usize],
-                ));
+                pass.set_pipeline(pipeline(&k.first_bounce[passing]));
                 pass.dispatch_workgroups(x, y, 1);
                 pass.set_pipeline(pipeline(&k.advance));
                 pass.dispatch_workgroups(1, 1, 1);
