@@ -106,13 +106,14 @@ impl BakedEnvironment {
         baked
     }
 
-    /// Loads an HDR map, halving it until its GPU copy fits `byte_limit`.
-    pub fn load_map(settings: &MapSettings, byte_limit: u64) -> Result<Self, EnvironmentError> {
+    /// Loads an HDR map, halving it until its GPU copy, `bytes_per_texel` for each texel, fits `byte_limit`.
+    pub fn load_map(
+        settings: &MapSettings,
+        bytes_per_texel: u64,
+        byte_limit: u64,
+    ) -> Result<Self, EnvironmentError> {
         let (mut map, mut notes) = EnvironmentMap::load(&settings.path)?;
         let (w, h) = (map.width, map.height);
-        // Texels (ENVIRONMENT_TEXEL_WORDS f32: rgb and a pad) and the two distributions' conditional CDFs (1 f32
-        // each).
-        let bytes_per_texel = 4 * (crate::render::layout::ENVIRONMENT_TEXEL_WORDS as u64 + 2);
         let halvings = map.fit_to(bytes_per_texel, byte_limit);
         if halvings > 0 {
             notes.push(format!(

@@ -8,6 +8,10 @@ use crate::environment::{BakedEnvironment, EnvironmentError, EnvironmentMap};
 /// reconstruction within 0.1% of it).
 const GRADIENT_ROWS: u32 = 65;
 
+/// What a map texel costs in `environment_map`: the texel (`ENVIRONMENT_TEXEL_WORDS` f32: rgb and a pad) and
+/// its entry in each of the two distributions' conditional CDFs (1 f32 each).
+const GPU_BYTES_PER_TEXEL: u64 = 4 * (super::layout::ENVIRONMENT_TEXEL_WORDS as u64 + 2);
+
 /// The environment as a map (and a sun). `byte_limit` bounds an HDR map's GPU copy (it is halved until it
 /// fits, with a note). Errors name the map file.
 pub fn bake(
@@ -19,7 +23,9 @@ pub fn bake(
             BakedEnvironment::from_map(EnvironmentMap::constant(*c), 0.0, 1.0)
         }
         Environment::Sky => BakedEnvironment::from_map(gradient_sky(), 0.0, 1.0),
-        Environment::Map(settings) => BakedEnvironment::load_map(settings, byte_limit)?,
+        Environment::Map(settings) => {
+            BakedEnvironment::load_map(settings, GPU_BYTES_PER_TEXEL, byte_limit)?
+        }
         Environment::SunSky(settings) => BakedEnvironment::sun_sky(settings),
     })
 }
