@@ -254,6 +254,8 @@ fn compare(scene: &Arc<SceneAsset>, cpu: &HeadlessApp, gpu_app: &HeadlessApp, t:
 
 #[test]
 fn gpu_deformation_matches_cpu_reference() {
+    // The device's lock: these tests compile pipelines, which other tests count.
+    let _device = crate::common::gpu().1;
     let assets = shared_assets();
     let cases: Vec<(&str, Arc<SceneAsset>, usize, [f32; 3])> = vec![
         (
@@ -321,6 +323,7 @@ fn gpu_deformation_matches_cpu_reference() {
 /// The SAH cost measured on the GPU and read back a frame late equals the CPU's cost of the same tree.
 #[test]
 fn gpu_sah_ratio_matches_cpu() {
+    let _device = crate::common::gpu().1;
     let scene = load(shared_assets().join("CesiumMan/glTF-Binary/CesiumMan.glb"));
     let mut app = posed(&scene, DeformBackend::Gpu, 0, 1.3);
     app.app
@@ -370,6 +373,7 @@ fn gpu_sah_ratio_matches_cpu() {
 /// backend in the same frame: CPU after GPU writes exactly the CPU's vertices, GPU after CPU the GPU's.
 #[test]
 fn switching_backend_mid_run_redeforms_everything() {
+    let _device = crate::common::gpu().1;
     let scene = load(shared_assets().join("CesiumMan/glTF-Binary/CesiumMan.glb"));
     let reference = posed(&scene, DeformBackend::Cpu, 0, 0.8);
     let want = words(&reference, &reference.gpu_scene().vertex_pool);

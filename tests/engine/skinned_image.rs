@@ -83,6 +83,8 @@ fn mean_abs_diff(a: &[[f32; 3]], b: &[[f32; 3]]) -> (f64, f64) {
 
 #[test]
 fn skinned_cesium_man_matches_static_reference_mesh() {
+    // The device's lock: these tests compile pipelines, which other tests count.
+    let _device = crate::common::gpu().1;
     let fixtures: Value = serde_json::from_str(
         &std::fs::read_to_string(repo_root().join("tests/reference/skinning/fixtures.json"))
             .unwrap(),
@@ -179,6 +181,7 @@ fn skinned_cesium_man_matches_static_reference_mesh() {
 
 #[test]
 fn same_time_same_image_and_no_ghosting() {
+    let _device = crate::common::gpu().1;
     let scene = cesium();
     let a = render(scene.clone(), Some((0, 1.0)));
     let b = render(scene.clone(), Some((0, 1.0)));
@@ -205,6 +208,7 @@ fn same_time_same_image_and_no_ghosting() {
 /// path is as reproducible as the CPU path.
 #[test]
 fn gpu_and_cpu_deformation_render_the_same_image() {
+    let _device = crate::common::gpu().1;
     let scene = cesium();
     for t in [0.4, 1.3] {
         let cpu = render_with(scene.clone(), Some((0, t)), DeformBackend::Cpu);
@@ -223,6 +227,7 @@ fn gpu_and_cpu_deformation_render_the_same_image() {
 
 #[test]
 fn time_on_scene_without_animation_is_an_error() {
+    let _device = crate::common::gpu().1;
     let scene = Arc::new(procedural::scene_from_meshes(
         "quad",
         vec![(procedural::ground_quad(1.0, 0), NodeTransform::default())],
