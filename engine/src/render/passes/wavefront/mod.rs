@@ -24,6 +24,8 @@ const CONTROL_RAYS: u64 = 7;
 const CONTROL_BYTES: u64 = 16 * 4;
 const QUEUE_ENTRY: u64 = 4;
 const STATE_ENTRY: u64 = 16;
+/// `ShadowRay` in the WGSL: origin, direction, light.
+const SHADOW_ENTRY: u64 = 48;
 
 /// The kernels a wave runs, in order.
 struct Kernels {
@@ -64,15 +66,17 @@ pub struct WavefrontPass {
 impl WavefrontPass {
     pub fn new(ctx: &GpuContext, scene_layout: &wgpu::BindGroupLayout) -> Self {
         use Binding::*;
-        // frame, accum, 6 path arrays, hits, counters and queues, 3 shadow arrays
+        // frame, accum, 6 path arrays, hits, counters and queues, shadow rays
         let mut bindings = vec![Params];
-        bindings.extend([ReadWrite; 12]);
+        bindings.extend([ReadWrite; 10]);
         let view_layout = compute_layout(ctx, "wavefront view", &bindings);
         let args_layout = compute_layout(ctx, "wavefront dispatch sizes", &[ReadWrite]);
         let source = compose(&KERNEL);
         let queue = [Some(scene_layout), Some(&view_layout)];
-        // The sizing kernels read no scene: without its group their stage binds no more than the others'.
-        let sizing = [None, Some(&view_layout), Some(&args_layout)];
+        // The sizing kernels read no scene but keep its group: a gap there would make their layout incompatible
+        // with the queue kernels' for the view's group too (Vulkan's compatibility is by prefix), and wgpu 30
+        // does not bind that group again when a pass switches to them: on NVIDIA, `advance` then sized nothing.
+        let sizing = [Some(scene_layout), Some(&view_layout), Some(&args_layout)];
         let constants: &'static [(&'static str, f64)] = &[("PATH_AOVS", 0.0)];
         let kernel_with = |entry: &'static str,
                            layouts: &[Option<&wgpu::BindGroupLayout>],
@@ -158,11 +162,7 @@ impl WavefrontPass {
             "wavefront queues",
             CONTROL_BYTES + 2 * pixels * QUEUE_ENTRY,
         );
-        let shadows = arrays(&[
-            "wavefront shadow origin",
-            "wavefront shadow direction",
-            "wavefront shadow light",
-        ]);
+        let shadows = storage_buffer(ctx, "wavefront shadow rays", pixels * SHADOW_ENTRY);
         let args = ctx.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("wavefront dispatch sizes"),
             size: 32,
@@ -172,10 +172,10 @@ impl WavefrontPass {
         let mut group: Vec<&wgpu::Buffer> = vec![&view.frame, &view.accum];
         group.extend(paths.iter());
         group.push(&queues);
-        group.extend(shadows.iter());
+        group.push(&shadows);
         let view_group = bind_group(ctx, "wavefront view", &self.view_layout, &group);
         let args_group = bind_group(ctx, "wavefront dispatch sizes", &self.args_layout, &[&args]);
-        let state = paths.into_iter().chain(shadows).collect();
+        let state = paths.into_iter().chain([shadows]).collect();
         self.buffers = Some(PathBuffers {
             pixels,
             generation: view.generation,

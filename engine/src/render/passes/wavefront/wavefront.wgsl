@@ -31,18 +31,24 @@
 // What extend found: t (bits), instance (NONE: nothing), triangle slot, first barycentric (bits).
 @group(1) @binding(8) var<storage, read_write> path_hit: array<vec4<u32>>;
 // The counters (CONTROL_*, zeroed before the pass), then two queues of path indices, [0, N) and [N, 2N): one read
-// this bounce, the other filled for the next. One binding for both: with the scene's 14 and the frame's, this
-// group's 13 storage buffers are the most a stage may bind (`MIN_STORAGE_BUFFERS_PER_STAGE`).
+// this bounce, the other filled for the next. One binding for both, and one for the shadow rays' three arrays:
+// the sizing kernels bind the scene's group too (see `WavefrontPass::new`), within the storage buffers a stage
+// may bind (`MIN_STORAGE_BUFFERS_PER_STAGE`).
 struct Queues {
     control: array<atomic<u32>, 16>,
     entries: array<u32>,
 }
 @group(1) @binding(9) var<storage, read_write> queues: Queues;
-// Shadow rays in the order they were queued: origin and t_max; direction and the path (bits); what the light
-// adds when nothing blocks it.
-@group(1) @binding(10) var<storage, read_write> shadow_origin: array<vec4<f32>>;
-@group(1) @binding(11) var<storage, read_write> shadow_dir: array<vec4<f32>>;
-@group(1) @binding(12) var<storage, read_write> shadow_light: array<vec4<f32>>;
+// Shadow rays in the order they were queued.
+struct ShadowRay {
+    // Origin and t_max.
+    origin: vec4<f32>,
+    // Direction and the path (bits).
+    dir: vec4<f32>,
+    // What the light adds when nothing blocks it.
+    light: vec4<f32>,
+}
+@group(1) @binding(10) var<storage, read_write> shadow_rays: array<ShadowRay>;
 // Indirect dispatch sizes, written by begin_wave and advance only (a buffer read as dispatch arguments cannot be
 // bound to the kernels it sizes): [0..3) extend (live paths and shadow rays), [3..6) shade (live paths).
 @group(2) @binding(0) var<storage, read_write> dispatch_args: array<u32, 8>;
@@ -259,10 +265,10 @@ fn queue_step(step: BounceStep, pixel: u32, lid: u32) {
         queues.entries[out + workgroup_next_base + next_slot] = pixel;
     }
     if step.shadow {
-        let slot = workgroup_shadows_base + shadow_slot;
-        shadow_origin[slot] = vec4<f32>(step.direct.ray.origin, step.direct.t_max);
-        shadow_dir[slot] = vec4<f32>(step.direct.ray.dir, bitcast<f32>(pixel));
-        shadow_light[slot] = vec4<f32>(step.direct.contribution, 0.0);
+        shadow_rays[workgroup_shadows_base + shadow_slot] = ShadowRay(
+            vec4<f32>(step.direct.ray.origin, step.direct.t_max),
+            vec4<f32>(step.direct.ray.dir, bitcast<f32>(pixel)),
+            vec4<f32>(step.direct.contribution, 0.0));
     }
 }
 
@@ -315,8 +321,8 @@ fn extend(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgroups) grou
         pixel = live_path(i);
         p = load_path(pixel);
     } else if is_shadow {
-        let origin = shadow_origin[i - live];
-        let dir = shadow_dir[i - live];
+        let origin = shadow_rays[i - live].origin;
+        let dir = shadow_rays[i - live].dir;
         p.ray = Ray(origin.xyz, dir.xyz);
         t_max = origin.w;
         pixel = bitcast<u32>(dir.w);
@@ -331,7 +337,7 @@ fn extend(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgroups) grou
         }
         if is_shadow {
             if hit.instance == NONE {
-                path_radiance[pixel] += vec4<f32>(shadow_light[i - live].xyz, 0.0);
+                path_radiance[pixel] += vec4<f32>(shadow_rays[i - live].light.xyz, 0.0);
             }
         } else {
             if p.pass_throughs != pass_throughs { store_origin_and_throughput(pixel, p); }

@@ -1,0 +1,18 @@
+#!/usr/bin/env bash
+# The seventeenth session's second device call: after call.sh showed the wavefront forms tracing only camera rays
+# on NVIDIA (their sizing kernels' pipeline layout left a gap where the scene's group is, which made the view's
+# group incompatible for them; fixed in the commit this runs), the head's megakernel, the head's wavefront and the
+# fused wavefront (wavefront-fused-layout.patch: the fused form with the same layout fix) on the bench's static
+# scenes and the crowd, alternating, two rounds; then the seed-like interior. Binaries: rel/head.xz (this tree's
+# release build, stripped) and rel/fused.xz (the patch applied); assets as call.sh. Carry [".gl", "rel"].
+set -u
+start=$(date +%s)
+export VK_DRIVER_FILES=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
+nvidia-smi --query-gpu=name,driver_version,clocks.sm,clocks.max.sm --format=csv > "$OUT/gpu.txt"
+ASSETS=rel/assets FRAMES=40 SCENES="cornell flight-helmet spheres env-lit crowd" timeout 360 \
+  bash scripts/gpu-ab-frames.sh 2 head head,--integrator=wavefront fused,--integrator=wavefront > "$OUT/ab-summary.txt"
+cat "$OUT/ab-summary.txt"
+echo "static scenes: $(( $(date +%s) - start )) s"
+START=$start BUDGET=540 bash scripts/gpu-seed-ab.sh 2 head:megakernel head:wavefront fused:wavefront
+grep -v warning "$OUT/bench.log" | grep "ms/frame" > "$OUT/frames.txt"
+echo "total: $(( $(date +%s) - start )) s"
