@@ -73,10 +73,12 @@ impl WavefrontPass {
         let args_layout = compute_layout(ctx, "wavefront dispatch sizes", &[ReadWrite]);
         let source = compose(&KERNEL);
         let queue = [Some(scene_layout), Some(&view_layout)];
-        // The sizing kernels read no scene but keep its group: a gap there would make their layout incompatible
-        // with the queue kernels' for the view's group too (Vulkan's compatibility is by prefix), and wgpu 30
-        // does not bind that group again when a pass switches to them: on NVIDIA, `advance` then sized nothing.
-        let sizing = [Some(scene_layout), Some(&view_layout), Some(&args_layout)];
+        // The sizing kernels' layout is the queue kernels' plus the sizes, never a gap where the scene's group is
+        // (although they read no scene): Vulkan's layouts are compatible for a group only when every group before
+        // it matches, and wgpu 30 does not bind the view's group again when a pass switches to a layout that
+        // differs only below it. With a gap, `advance` wrote through a stale group on NVIDIA and sized nothing.
+        let [scene, view] = queue;
+        let sizing = [scene, view, Some(&args_layout)];
         let constants: &'static [(&'static str, f64)] = &[("PATH_AOVS", 0.0)];
         let kernel_with = |entry: &'static str,
                            layouts: &[Option<&wgpu::BindGroupLayout>],
