@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # One-time machine set-up for raykin on Debian/Ubuntu: a Vulkan loader and, when no GPU driver is present,
-# Mesa's software Vulkan driver (lavapipe) so everything also runs on the CPU; Xvfb, xauth and ImageMagick for
-# the viewer's end-to-end test; Intel Open Image Denoise (the `oidn` denoiser) from its PyPI wheel into the
-# checkout's .oidn/lib, where raykin loads it at run time. Installs only what is missing; safe to run repeatedly.
+# Mesa's software Vulkan driver (lavapipe) so everything also runs on the CPU; Vulkan's validation layer for the
+# tests; Xvfb, xauth and ImageMagick for the viewer's end-to-end test; Intel Open Image Denoise (the `oidn`
+# denoiser) from its PyPI wheel into the checkout's .oidn/lib, where raykin loads it at run time. Installs only what is missing; safe to run repeatedly.
 set -euo pipefail
 
 need=()
@@ -14,8 +14,11 @@ fi
 command -v xvfb-run >/dev/null && command -v Xvfb >/dev/null || need+=(xvfb)
 command -v xauth >/dev/null || need+=(xauth)
 command -v import >/dev/null || need+=(imagemagick)
+# Vulkan's validation layer: the tests run the commands under it (tests/cli/validation.rs), since lavapipe
+# renders some invalid command buffers as if they were valid.
+[ -f /usr/share/vulkan/explicit_layer.d/VkLayer_khronos_validation.json ] || need+=(vulkan-validationlayers)
 if ((${#need[@]})); then
-  echo "setup: installing ${need[*]} (Vulkan loader / software driver / Xvfb for the viewer test)" >&2
+  echo "setup: installing ${need[*]} (Vulkan loader / software driver / validation layer / Xvfb for the viewer test)" >&2
   sudo=""
   [ "$(id -u)" -ne 0 ] && sudo="sudo"
   $sudo apt-get update -qq

@@ -11,4 +11,5 @@ mod cli_args;
 mod denoise;
 mod oidn;
 mod record;
+mod validation;
 mod viewer;

@@ -86,14 +86,24 @@ pub struct GpuContext {
     readback_staging: Arc<std::sync::Mutex<Option<wgpu::Buffer>>>,
 }
 
+/// wgpu's instance flags as a release build sets them, whatever the build, then `WGPU_DEBUG`, `WGPU_VALIDATION`
+/// and the like from the environment. A debug build would otherwise turn on Vulkan's validation layer wherever it
+/// is installed (the set-up installs it for the tests, which ask for it where they mean to) and write shader debug
+/// information that Debian 12's layer misreads.
+pub fn instance_flags() -> wgpu::InstanceFlags {
+    wgpu::InstanceFlags::VALIDATION_INDIRECT_CALL.with_env()
+}
+
 impl GpuContext {
     /// Picks the highest-performance adapter (WGPU_BACKEND and WGPU_ADAPTER_NAME are honoured) and opens a
     /// device with the adapter's own limits: the path tracer binds more storage buffers than wgpu's defaults.
     /// wgpu is built without its GL backend: a GL adapter binds 16 storage buffers per stage, too few for the
     /// trace kernel ([`MIN_STORAGE_BUFFERS_PER_STAGE`]).
     pub fn new_headless() -> Result<Self, GpuError> {
-        let instance =
-            wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+        let instance = wgpu::Instance::new(wgpu::InstanceDescriptor {
+            flags: instance_flags(),
+            ..wgpu::InstanceDescriptor::new_without_display_handle_from_env()
+        });
         Self::from_instance(&instance, None)
     }
 

@@ -121,10 +121,12 @@ impl Viewer {
                 )
                 .map_err(|e| WindowUnavailable(format!("cannot create the window: {e}")))?,
         );
-        let instance =
-            wgpu::Instance::new(wgpu::InstanceDescriptor::new_with_display_handle_from_env(
-                Box::new(event_loop.owned_display_handle()),
-            ));
+        let instance = wgpu::Instance::new(wgpu::InstanceDescriptor {
+            flags: raykin::gpu::instance_flags(),
+            ..wgpu::InstanceDescriptor::new_with_display_handle_from_env(Box::new(
+                event_loop.owned_display_handle(),
+            ))
+        });
         let surface = instance.create_surface(window.clone()).map_err(|e| {
             WindowUnavailable(format!(
                 "cannot create a drawing surface for the window: {e}"

@@ -1,0 +1,201 @@
+//! The commands' GPU work under Vulkan's validation layer (Debian: vulkan-validationlayers, installed by
+//! scripts/setup.sh): no error and no warning, synchronisation validation included. Lavapipe runs invalid command
+//! buffers as if they were valid (it reads whatever descriptor set was bound last and runs dispatches in order), so
+//! a fault that only a real GPU shows needs the layer to be seen here: the wavefront integrator's sizing kernels
+//! once had a pipeline layout incompatible with the view's group, which lavapipe rendered correctly and NVIDIA
+//! rendered as camera rays only (VUID-vkCmdDispatch-None-02697; docs/BENCHMARKS.md, "The sixteenth session's
+//! CPU-path changes on the GPU").
+
+use crate::common::{repo_root, shared_assets};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::sync::{Mutex, MutexGuard};
+
+const LAYER_MANIFEST: &str = "/usr/share/vulkan/explicit_layer.d/VkLayer_khronos_validation.json";
+
+/// The processes share 2 cores with lavapipe: one test of this module at a time.
+fn serial() -> MutexGuard<'static, ()> {
+    static LOCK: Mutex<()> = Mutex::new(());
+    LOCK.lock().unwrap_or_else(|p| p.into_inner())
+}
+
+/// A fresh, empty folder for one test.
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir()
+        .join(format!("raykin-validation-tests-{}", std::process::id()))
+        .join(name);
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// Runs `raykin ARGS` with the validation layer reporting errors, warnings and information (the information
+/// proves the layer ran); returns the layer's and raykin's output.
+fn validated(dir: &Path, args: &[&dyn AsRef<std::ffi::OsStr>]) -> String {
+    assert!(
+        Path::new(LAYER_MANIFEST).exists(),
+        "Vulkan's validation layer is not installed ({LAYER_MANIFEST}): run scripts/setup.sh \
+         (apt-get install vulkan-validationlayers)"
+    );
+    let settings = dir.join("vk_layer_settings.txt");
+    std::fs::write(
+        &settings,
+        "khronos_validation.report_flags = error,warn,info\n\
+         khronos_validation.debug_action = VK_DBG_LAYER_ACTION_LOG_MSG\n\
+         khronos_validation.enables = VK_VALIDATION_FEATURE_ENABLE_SYNCHRONIZATION_VALIDATION_EXT\n",
+    )
+    .unwrap();
+    let xdg = std::env::temp_dir().join("raykin-xdg");
+    let _ = std::fs::create_dir_all(&xdg);
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        let _ = std::fs::set_permissions(&xdg, std::fs::Permissions::from_mode(0o700));
+    }
+    let out = Command::new(env!("CARGO_BIN_EXE_raykin"))
+        .args(args.iter().map(|a| a.as_ref()))
+        .current_dir(repo_root())
+        .env("XDG_RUNTIME_DIR", xdg)
+        .env("VK_INSTANCE_LAYERS", "VK_LAYER_KHRONOS_validation")
+        .env("VK_LAYER_SETTINGS_PATH", dir)
+        // Debug builds write shader debug information naming WGSL as the source language (10), which Debian 12's
+        // layer (1.3.239) does not know yet and reports as invalid SPIR-V; release builds write none.
+        .env("WGPU_DEBUG", "0")
+        .output()
+        .unwrap();
+    let text = format!(
+        "{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(out.status.success(), "raykin failed: {text}");
+    assert!(
+        text.contains("khronos-validation-createinstance-status-message"),
+        "the validation layer did not run: {text}"
+    );
+    text
+}
+
+/// The messages the layer reported as errors or warnings (performance warnings included), one line each.
+fn complaints(text: &str) -> Vec<&str> {
+    text.lines()
+        .filter(|l| l.contains("Validation Error") || l.contains("Validation Warning"))
+        .filter(|l| !l.contains("createinstance-status-message"))
+        .collect()
+}
+
+fn assert_valid(what: &str, text: &str) {
+    let found = complaints(text);
+    assert!(
+        found.is_empty(),
+        "{what}: {} validation messages, the first: {}",
+        found.len(),
+        found[0]
+    );
+}
+
+fn cornell() -> PathBuf {
+    shared_assets().join("CornellBox/CornellBox.glb")
+}
+
+#[test]
+fn both_integrators_and_the_denoiser_record_valid_commands() {
+    let _serial = serial();
+    let dir = scratch("render");
+    for integrator in ["megakernel", "wavefront"] {
+        let out = dir.join(format!("{integrator}.exr"));
+        let text = validated(
+            &dir,
+            &[
+                &"render",
+                &cornell(),
+                &"--width",
+                &"16",
+                &"--height",
+                &"16",
+                &"--spp",
+                &"2",
+                &"--integrator",
+                &integrator,
+                &"--out",
+                &out,
+            ],
+        );
+        assert_valid(integrator, &text);
+    }
+    let out = dir.join("denoised.exr");
+    let text = validated(
+        &dir,
+        &[
+            &"render",
+            &cornell(),
+            &"--width",
+            &"16",
+            &"--height",
+            &"16",
+            &"--spp",
+            &"4",
+            &"--denoise",
+            &"--out",
+            &out,
+        ],
+    );
+    assert_valid("denoised render", &text);
+}
+
+#[test]
+fn real_time_recording_of_a_skinned_scene_records_valid_commands() {
+    let _serial = serial();
+    let dir = scratch("record");
+    let scene = shared_assets().join("CesiumMan/glTF-Binary/CesiumMan.glb");
+    let text = validated(
+        &dir,
+        &[
+            &"record",
+            &scene,
+            &"--frames",
+            &"3",
+            &"--fps",
+            &"10",
+            &"--width",
+            &"16",
+            &"--height",
+            &"16",
+            &"--spp",
+            &"2",
+            &"--deform",
+            &"gpu",
+            &"--realtime",
+            &"--out",
+            &dir.join("frames"),
+        ],
+    );
+    assert_valid("real-time recording", &text);
+}
+
+#[test]
+fn bench_frame_loop_records_valid_commands() {
+    let _serial = serial();
+    let dir = scratch("bench");
+    let text = validated(
+        &dir,
+        &[
+            &"bench",
+            &"--suite",
+            &"quick",
+            &"--parts",
+            &"frames",
+            &"--frames",
+            &"3",
+            &"--scene",
+            &"cornell",
+            &"--assets",
+            &shared_assets(),
+            &"--out",
+            &dir.join("out"),
+            &"--cache",
+            &dir.join("cache"),
+        ],
+    );
+    assert_valid("bench frame loop", &text);
+}
