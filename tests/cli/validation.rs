@@ -182,3 +182,25 @@ fn bench_frame_loop_records_valid_commands() {
     );
     assert_valid("bench frame loop", &text);
 }
+
+#[test]
+fn offscreen_viewer_records_valid_commands() {
+    let _serial = serial();
+    let dir = scratch("viewer");
+    // The viewer's frame: the real-time mode while the skinned figure walks, and the editor's panels drawn by egui.
+    let scene = shared_assets().join("CesiumMan/glTF-Binary/CesiumMan.glb");
+    let text = validated(
+        &dir,
+        &[
+            &"view",
+            &scene,
+            &"--offscreen",
+            &"--no-settings",
+            &"--frames",
+            &"4",
+            &"--image-size",
+            &"32x32",
+        ],
+    );
+    assert_valid("offscreen viewer", &text);
+}
