@@ -2,9 +2,10 @@
 # The seventeenth session's second device call: after call.sh showed the wavefront forms tracing only camera rays
 # on NVIDIA (their sizing kernels' pipeline layout left a gap where the scene's group is, which made the view's
 # group incompatible for them; fixed in the commit this runs), the head's megakernel, the head's wavefront and the
-# fused wavefront (wavefront-fused-layout.patch: the fused form with the same layout fix) on the bench's static
-# scenes and the crowd, alternating, two rounds; then the seed-like interior. Binaries: rel/head.xz (this tree's
-# release build, stripped) and rel/fused.xz (the patch applied); assets as call.sh. Carry [".gl", "rel"].
+# fused wavefront (wavefront-fused-head.patch: the fused form on d384a2c, with the same layout rule; the same
+# image as the megakernel bit for bit and clean under the validation layer on lavapipe) on the bench's static
+# scenes and the crowd; then the seed-like interior. Binaries: rel/head.xz (the head's release build, stripped)
+# and rel/fused.xz (the patch applied); assets as call.sh (its header has the build recipe). Carry [".gl", "rel"].
 set -u
 start=$(date +%s)
 export VK_DRIVER_FILES=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
