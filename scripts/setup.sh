@@ -2,7 +2,8 @@
 # One-time machine set-up for raykin on Debian/Ubuntu: a Vulkan loader and, when no GPU driver is present,
 # Mesa's software Vulkan driver (lavapipe) so everything also runs on the CPU; Vulkan's validation layer for the
 # tests; Xvfb, xauth and ImageMagick for the viewer's end-to-end test; Intel Open Image Denoise (the `oidn`
-# denoiser) from its PyPI wheel into the checkout's .oidn/lib, where raykin loads it at run time. Installs only what is missing; safe to run repeatedly.
+# denoiser) from its PyPI wheel into the checkout's .oidn/lib, where raykin loads it at run time. Installs only
+# what is missing; safe to run repeatedly.
 set -euo pipefail
 
 need=()

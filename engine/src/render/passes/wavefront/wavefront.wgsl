@@ -31,9 +31,9 @@
 // What extend found: t (bits), instance (NONE: nothing), triangle slot, first barycentric (bits).
 @group(1) @binding(8) var<storage, read_write> path_hit: array<vec4<u32>>;
 // The counters (CONTROL_*, zeroed before the pass), then two queues of path indices, [0, N) and [N, 2N): one read
-// this bounce, the other filled for the next. One binding for both, and one for the shadow rays' three arrays:
-// the sizing kernels bind the scene's group too (see `WavefrontPass::new`), within the storage buffers a stage
-// may bind (`MIN_STORAGE_BUFFERS_PER_STAGE`).
+// this bounce, the other filled for the next. One binding for both, and the shadow rays one array of a struct,
+// so that the sizing kernels, which bind the scene's group too (`WavefrontPass::new` says why), stay within the
+// storage buffers a stage may bind (`MIN_STORAGE_BUFFERS_PER_STAGE`).
 struct Queues {
     control: array<atomic<u32>, 16>,
     entries: array<u32>,
