@@ -189,10 +189,11 @@ impl RebuildJob {
                 Some(Some(bytes)) => bytes,
             };
             let vertices = scene.meshes[scene_mesh].positions.len();
-            let positions: Vec<Vec3> = bytemuck::cast_slice::<u8, [f32; 4]>(&bytes)[..vertices]
-                .iter()
-                .map(|p| Vec3::new(p[0], p[1], p[2]))
-                .collect();
+            let positions: Vec<Vec3> =
+                bytemuck::cast_slice::<u8, [f32; POSITION_WORDS as usize]>(&bytes)[..vertices]
+                    .iter()
+                    .map(|p| Vec3::from_slice(p))
+                    .collect();
             let scene = scene.clone();
             // A worker thread keeps the build out of the frame loop.
             let spawned = std::thread::Builder::new()
