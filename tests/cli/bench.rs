@@ -21,8 +21,6 @@ fn finite_positive(v: &Value, what: &str) -> f64 {
 
 /// `raykin bench --suite quick` into `out` (cache under it, the shared assets) with `args` added: its output.
 fn run_quick_bench(out: &Path, args: &[&str]) -> std::process::Output {
-    let xdg = std::env::temp_dir().join("raykin-xdg");
-    std::fs::create_dir_all(&xdg).unwrap();
     std::process::Command::new(env!("CARGO_BIN_EXE_raykin"))
         .args(["bench", "--suite", "quick"])
         .args(args)
@@ -32,7 +30,7 @@ fn run_quick_bench(out: &Path, args: &[&str]) -> std::process::Output {
         .arg(out.join("cache"))
         .arg("--assets")
         .arg(shared_assets())
-        .env("XDG_RUNTIME_DIR", &xdg)
+        .env("XDG_RUNTIME_DIR", crate::common::xdg_runtime_dir())
         .output()
         .expect("raykin runs")
 }
@@ -381,7 +379,7 @@ fn bad_arguments_fail_with_clear_messages() {
             .args(args)
             .arg("--out")
             .arg(&out)
-            .env("XDG_RUNTIME_DIR", std::env::temp_dir().join("raykin-xdg"))
+            .env("XDG_RUNTIME_DIR", crate::common::xdg_runtime_dir())
             .output()
             .expect("raykin runs");
         assert!(!output.status.success(), "{args:?} should fail");

@@ -79,7 +79,7 @@ fn missing_library_falls_back_to_svgf_with_a_message() {
         .arg("--report")
         .arg(&report)
         .env(raykin::oidn::library::DIR_VARIABLE, &empty)
-        .env("XDG_RUNTIME_DIR", std::env::temp_dir().join("raykin-xdg"))
+        .env("XDG_RUNTIME_DIR", crate::common::xdg_runtime_dir())
         .output()
         .expect("raykin runs");
     let log = String::from_utf8_lossy(&output.stderr);

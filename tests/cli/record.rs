@@ -44,15 +44,8 @@ fn serial() -> MutexGuard<'static, ()> {
 }
 
 fn raykin() -> Command {
-    let xdg = std::env::temp_dir().join("raykin-xdg");
-    let _ = std::fs::create_dir_all(&xdg);
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::PermissionsExt;
-        let _ = std::fs::set_permissions(&xdg, std::fs::Permissions::from_mode(0o700));
-    }
     let mut c = Command::new(env!("CARGO_BIN_EXE_raykin"));
-    c.env("XDG_RUNTIME_DIR", xdg);
+    c.env("XDG_RUNTIME_DIR", crate::common::xdg_runtime_dir());
     c
 }
 
@@ -755,7 +748,7 @@ fn in_mount_namespace(script: &str, mnt: &Path) -> Option<Output> {
     if !probe.status.success() {
         return None;
     }
-    let xdg = std::env::temp_dir().join("raykin-xdg");
+    let xdg = crate::common::xdg_runtime_dir();
     Command::new("unshare")
         .args(["-rm", "sh", "-c", script])
         .env("RAYKIN", env!("CARGO_BIN_EXE_raykin"))
@@ -845,7 +838,7 @@ fn write_failure_under_file_size_limit() {
         .env("RAYKIN", env!("CARGO_BIN_EXE_raykin"))
         .env("SCENE", rigged_simple())
         .env("OUT", &dir)
-        .env("XDG_RUNTIME_DIR", std::env::temp_dir().join("raykin-xdg"))
+        .env("XDG_RUNTIME_DIR", crate::common::xdg_runtime_dir())
         .output()
         .unwrap();
     let log = stderr(&o);

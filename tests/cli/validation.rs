@@ -6,7 +6,7 @@
 //! rendered as camera rays only (VUID-vkCmdDispatch-None-02697; docs/BENCHMARKS.md, "The sixteenth session's
 //! CPU-path changes on the GPU").
 
-use crate::common::{repo_root, shared_assets};
+use crate::common::{fresh_dir, repo_root, shared_assets, xdg_runtime_dir};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::sync::{Mutex, MutexGuard};
@@ -17,16 +17,6 @@ const LAYER_MANIFEST: &str = "/usr/share/vulkan/explicit_layer.d/VkLayer_khronos
 fn serial() -> MutexGuard<'static, ()> {
     static LOCK: Mutex<()> = Mutex::new(());
     LOCK.lock().unwrap_or_else(|p| p.into_inner())
-}
-
-/// A fresh, empty folder for one test.
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir()
-        .join(format!("raykin-validation-tests-{}", std::process::id()))
-        .join(name);
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
 }
 
 /// Runs `raykin ARGS` with the validation layer reporting errors, warnings and information (the information
@@ -45,17 +35,10 @@ fn validated(dir: &Path, args: &[&dyn AsRef<std::ffi::OsStr>]) -> String {
          khronos_validation.enables = VK_VALIDATION_FEATURE_ENABLE_SYNCHRONIZATION_VALIDATION_EXT\n",
     )
     .unwrap();
-    let xdg = std::env::temp_dir().join("raykin-xdg");
-    let _ = std::fs::create_dir_all(&xdg);
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::PermissionsExt;
-        let _ = std::fs::set_permissions(&xdg, std::fs::Permissions::from_mode(0o700));
-    }
     let out = Command::new(env!("CARGO_BIN_EXE_raykin"))
         .args(args.iter().map(|a| a.as_ref()))
         .current_dir(repo_root())
-        .env("XDG_RUNTIME_DIR", xdg)
+        .env("XDG_RUNTIME_DIR", xdg_runtime_dir())
         .env("VK_INSTANCE_LAYERS", "VK_LAYER_KHRONOS_validation")
         .env("VK_LAYER_SETTINGS_PATH", dir)
         // Debug builds write shader debug information naming WGSL as the source language (10), which Debian 12's
@@ -101,7 +84,7 @@ fn cornell() -> PathBuf {
 #[test]
 fn both_integrators_and_the_denoiser_record_valid_commands() {
     let _serial = serial();
-    let dir = scratch("render");
+    let dir = fresh_dir("validation-render");
     // The Cornell box at 16x16 with each form's own options.
     let forms: [(&str, &[&str]); 3] = [
         ("megakernel", &["--spp", "2", "--integrator", "megakernel"]),
@@ -129,7 +112,7 @@ fn both_integrators_and_the_denoiser_record_valid_commands() {
 #[test]
 fn real_time_recording_of_a_skinned_scene_records_valid_commands() {
     let _serial = serial();
-    let dir = scratch("record");
+    let dir = fresh_dir("validation-record");
     let scene = shared_assets().join("CesiumMan/glTF-Binary/CesiumMan.glb");
     let text = validated(
         &dir,
@@ -159,7 +142,7 @@ fn real_time_recording_of_a_skinned_scene_records_valid_commands() {
 #[test]
 fn bench_frame_loop_records_valid_commands() {
     let _serial = serial();
-    let dir = scratch("bench");
+    let dir = fresh_dir("validation-bench");
     let text = validated(
         &dir,
         &[
@@ -186,7 +169,7 @@ fn bench_frame_loop_records_valid_commands() {
 #[test]
 fn offscreen_viewer_records_valid_commands() {
     let _serial = serial();
-    let dir = scratch("viewer");
+    let dir = fresh_dir("validation-viewer");
     // The viewer's frame: the real-time mode while the skinned figure walks, and the editor's panels drawn by egui.
     let scene = shared_assets().join("CesiumMan/glTF-Binary/CesiumMan.glb");
     let text = validated(

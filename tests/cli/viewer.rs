@@ -29,15 +29,8 @@ fn on_path(program: &str) -> bool {
 
 /// Runs `command` to completion within `limit`, returning (stdout+stderr, success); kills it on timeout.
 fn run_with_limit(mut command: Command, limit: Duration) -> (String, bool) {
-    let xdg = std::env::temp_dir().join("raykin-xdg");
-    let _ = std::fs::create_dir_all(&xdg);
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::PermissionsExt;
-        let _ = std::fs::set_permissions(&xdg, std::fs::Permissions::from_mode(0o700));
-    }
     command
-        .env("XDG_RUNTIME_DIR", &xdg)
+        .env("XDG_RUNTIME_DIR", crate::common::xdg_runtime_dir())
         .stdout(Stdio::piped())
         .stderr(Stdio::piped());
     let mut child = command.spawn().expect("the command starts");

@@ -60,17 +60,24 @@ pub fn gpu() -> (GpuContext, std::sync::MutexGuard<'static, ()>) {
     (gpu_context(), guard)
 }
 
+/// The `XDG_RUNTIME_DIR` the tests give the device and the `raykin` processes: one private (0700) folder under
+/// the temporary directory, made if missing.
+pub fn xdg_runtime_dir() -> PathBuf {
+    let dir = std::env::temp_dir().join("raykin-xdg");
+    let _ = std::fs::create_dir_all(&dir);
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        let _ = std::fs::set_permissions(&dir, std::fs::Permissions::from_mode(0o700));
+    }
+    dir
+}
+
 /// The test binary's device, without serialising (for tests that run one at a time anyway).
 pub fn gpu_context() -> GpuContext {
     static CTX: OnceLock<GpuContext> = OnceLock::new();
     CTX.get_or_init(|| {
-        let dir = std::env::temp_dir().join("raykin-xdg");
-        let _ = std::fs::create_dir_all(&dir);
-        #[cfg(unix)]
-        {
-            use std::os::unix::fs::PermissionsExt;
-            let _ = std::fs::set_permissions(&dir, std::fs::Permissions::from_mode(0o700));
-        }
+        let dir = xdg_runtime_dir();
         // SAFETY: set before any GPU thread starts, once per process.
         unsafe { std::env::set_var("XDG_RUNTIME_DIR", &dir) };
         GpuContext::new_headless()
