@@ -278,6 +278,13 @@ impl HeadlessApp {
         self.app.world().resource::<FrameStats>()
     }
 
+    /// Which form of the path integrator traced the last frame, and `Integrator::Auto`'s trial outcome.
+    pub fn integrator_choice(&self) -> &crate::render::integrator_choice::IntegratorChoice {
+        self.app
+            .world()
+            .resource::<crate::render::integrator_choice::IntegratorChoice>()
+    }
+
     /// GPU times of the last frame's passes (set while `FrameStats::time_passes` is on).
     pub fn pass_times(&self) -> Option<crate::render::PassTimes> {
         self.frame_stats().last_pass_times

@@ -258,7 +258,7 @@ pub struct BenchArgs {
     #[arg(long, value_enum, default_value_t = StaticBvh::Merged)]
     pub static_bvh: StaticBvh,
     /// How paths are traced (see `render --help`).
-    #[arg(long, value_enum, default_value_t = IntegratorArg::Megakernel)]
+    #[arg(long, value_enum, default_value_t = IntegratorArg::Auto)]
     pub integrator: IntegratorArg,
     /// Override the suite's frame-loop sizes with one size.
     #[arg(long, value_parser = at_least_one(), allow_negative_numbers = true)]
@@ -413,15 +413,18 @@ pub struct SceneArgs {
     #[arg(long, value_enum, default_value_t = StaticBvh::Merged)]
     pub static_bvh: StaticBvh,
     /// How paths are traced: one kernel per pixel's paths, or kernels per stage over a queue of the paths
-    /// still alive (only where nothing but radiance is recorded: not with --denoise or --aovs). The image is
-    /// the same.
-    #[arg(long, value_enum, default_value_t = IntegratorArg::Megakernel)]
+    /// still alive (only where nothing but radiance is recorded: not with --denoise or --aovs), or by default
+    /// whichever of the two the first frames time faster on this GPU (the megakernel on CPU adapters). The
+    /// image is the same.
+    #[arg(long, value_enum, default_value_t = IntegratorArg::Auto)]
     pub integrator: IntegratorArg,
 }
 
 /// `--integrator`.
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
 pub enum IntegratorArg {
+    /// The faster form on this GPU, scene and size, timed on the first frames; the megakernel on CPU adapters.
+    Auto,
     Megakernel,
     Wavefront,
 }
@@ -429,6 +432,7 @@ pub enum IntegratorArg {
 impl From<IntegratorArg> for raykin::render::Integrator {
     fn from(a: IntegratorArg) -> Self {
         match a {
+            IntegratorArg::Auto => Self::Auto,
             IntegratorArg::Megakernel => Self::Megakernel,
             IntegratorArg::Wavefront => Self::Wavefront,
         }

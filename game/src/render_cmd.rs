@@ -498,7 +498,7 @@ pub fn run_default() -> Result<()> {
         denoise_aovs: crate::cli::DenoiseAovs::Prefilter,
         deform: crate::cli::DeformArg::Auto,
         static_bvh: crate::cli::StaticBvh::Merged,
-        integrator: crate::cli::IntegratorArg::Megakernel,
+        integrator: crate::cli::IntegratorArg::Auto,
     };
     let camera = embedded_camera();
     let out = Path::new("out/default.png");

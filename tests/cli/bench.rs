@@ -95,7 +95,8 @@ fn quick_suite_writes_sane_results_and_charts() {
 }
 
 /// `--integrator wavefront` traces the megakernel's paths: the frame loop's rays per pixel and frame are the
-/// same to the ray, and the results say which integrator ran.
+/// same to the ray, and the results say which integrator was asked for and which traced (the default, auto,
+/// traces with the megakernel on a CPU adapter, without a trial).
 #[test]
 fn wavefront_integrator_traces_the_same_rays() {
     let frames = |name: &str, integrator: &str| {
@@ -115,8 +116,15 @@ fn wavefront_integrator_traces_the_same_rays() {
     };
     let waves = frames("bench-waves-test", "wavefront");
     let mega = frames("bench-mega-test", "megakernel");
+    let auto = frames("bench-auto-test", "auto");
     assert_eq!(waves["integrator"], "Wavefront");
     assert_eq!(mega["integrator"], "Megakernel");
+    assert_eq!(auto["integrator"], "Auto");
+    let traced = |r: &Value| r["rows"][0]["integrator"].clone();
+    assert_eq!(traced(&waves), "wavefront");
+    assert_eq!(traced(&mega), "megakernel");
+    assert_eq!(traced(&auto), "megakernel");
+    assert!(auto["rows"][0]["auto_trial_ms"].is_null());
     let rays = |r: &Value| f(&r["rows"][0]["rays_per_pixel_per_frame"]);
     assert!(rays(&mega) > 1.0, "cornell: {} rays per pixel", rays(&mega));
     assert_eq!(rays(&waves), rays(&mega), "rays per pixel and frame");

@@ -90,3 +90,62 @@ fn cornell_box_in_waves_matches_mitsuba_within_noise() {
     let (ra, rb) = cornell::reference_halves();
     cornell::assert_agree_within_noise("Cornell box in waves vs Mitsuba", (&a, &b), (&ra, &rb));
 }
+
+/// `Integrator::Auto` times both forms on its first frames (here on the CPU adapter too, which otherwise keeps
+/// the megakernel untimed), alternating, and then keeps one; the image it accumulates across the switches is
+/// the megakernel's bit for bit.
+#[test]
+fn auto_times_both_forms_and_keeps_the_image() {
+    use raykin::render::integrator_choice::IntegratorChoice;
+    let (ctx, _gpu) = gpu();
+    let path = shared_assets().join("CornellBox/CornellBox.glb");
+    let scene = Arc::new(raykin::scene::load_gltf(&path, &Default::default()).expect("loads"));
+    let frames = 12;
+    let render = |integrator: Integrator, trial: bool| {
+        let settings = RenderSettings {
+            width: 24,
+            height: 20,
+            environment: Environment::Sky,
+            integrator,
+            ..Default::default()
+        };
+        let mut app = HeadlessApp::new(ctx.clone(), scene.clone(), settings, &CameraChoice::Auto)
+            .expect("scene uploads");
+        app.set_keep_denoiser_inputs(false);
+        if trial {
+            app.app
+                .world_mut()
+                .insert_resource(IntegratorChoice::new(true));
+        }
+        let mut forms = Vec::new();
+        for _ in 0..frames {
+            app.accumulate(1, 1, |_| {});
+            forms.push(app.integrator_choice().last_form());
+        }
+        (app.radiance(), forms, app.integrator_choice().decision())
+    };
+    let (auto, forms, decision) = render(Integrator::Auto, true);
+    let decision = decision.expect("both forms timed within 12 frames");
+    assert!(
+        decision.megakernel_ms.is_finite() && decision.wavefront_ms.is_finite(),
+        "{decision:?}"
+    );
+    let (mega, wave) = (Some(Integrator::Megakernel), Some(Integrator::Wavefront));
+    // One warm-up and three timed frames each, alternating, then the chosen form.
+    assert_eq!(
+        forms[..8],
+        [mega, wave, mega, wave, mega, wave, mega, wave],
+        "{forms:?}"
+    );
+    assert!(
+        forms[8..].iter().all(|f| *f == Some(decision.chosen)),
+        "{forms:?} after {decision:?}"
+    );
+    let (megakernel, mega_forms, _) = render(Integrator::Megakernel, false);
+    assert!(mega_forms.iter().all(|f| *f == mega));
+    assert_forms_render_the_same_image(&auto, &megakernel, "auto's trial");
+    // Without a trial (a CPU adapter, as this one is), Auto is the megakernel, untimed.
+    let (_, cpu_forms, cpu_decision) = render(Integrator::Auto, false);
+    assert!(cpu_forms.iter().all(|f| *f == mega), "{cpu_forms:?}");
+    assert_eq!(cpu_decision, None);
+}

@@ -3,7 +3,8 @@
 use super::EditorState;
 use crate::environment::{MapSettings, SunSkySettings};
 use crate::render::{
-    AovView, DenoiserKind, Environment, FrameOidn, RenderMode, RenderSettings, Tonemapper,
+    AovView, DenoiserKind, Environment, FrameOidn, Integrator, RenderMode, RenderSettings,
+    Tonemapper,
 };
 use bevy_ecs::prelude::*;
 
@@ -40,6 +41,24 @@ pub fn show(ui: &mut egui::Ui, world: &mut World, state: &mut EditorState) {
             ui.end_row();
             ui.label("max depth");
             ui.add(egui::DragValue::new(&mut s.max_depth).range(0..=64));
+            ui.end_row();
+            ui.label("integrator");
+            egui::ComboBox::from_id_salt("integrator")
+                .selected_text(format!("{:?}", s.integrator))
+                .show_ui(ui, |ui| {
+                    for i in [
+                        Integrator::Auto,
+                        Integrator::Megakernel,
+                        Integrator::Wavefront,
+                    ] {
+                        ui.selectable_value(&mut s.integrator, i, format!("{i:?}"));
+                    }
+                })
+                .response
+                .on_hover_text(
+                    "How paths are traced; the image is the same. Auto times both forms on the first \
+                     frames and keeps the faster (the statistics panel says which).",
+                );
             ui.end_row();
             ui.label("stop at spp");
             ui.add(egui::DragValue::new(&mut state.sample_limit).range(0..=1_000_000))

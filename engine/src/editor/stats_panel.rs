@@ -5,11 +5,34 @@ use super::ViewerStats;
 use crate::bvh::refit::BvhStats;
 use crate::frame_timing::FrameTimings;
 use crate::gpu::GpuContext;
-use crate::render::{Accumulation, GpuScene, ViewTargets};
+use crate::render::integrator_choice::IntegratorChoice;
+use crate::render::{Accumulation, GpuScene, Integrator, RenderSettings, ViewTargets};
 use bevy_ecs::prelude::*;
 
 fn mib(bytes: u64) -> String {
     format!("{:.1} MiB", bytes as f64 / 1048576.0)
+}
+
+/// The form that traces the frames and, under `Auto`, why.
+fn integrator_line(world: &World) -> String {
+    let Some(choice) = world.get_resource::<IntegratorChoice>() else {
+        return "-".into();
+    };
+    let requested = world.resource::<RenderSettings>().integrator;
+    let form = choice
+        .last_form()
+        .map_or("-".into(), |f| format!("{f:?}").to_lowercase());
+    match (requested, choice.decision()) {
+        (Integrator::Auto, Some(d)) => format!(
+            "{form} (auto: megakernel {:.2} ms, wavefront {:.2} ms per frame)",
+            d.megakernel_ms, d.wavefront_ms
+        ),
+        (Integrator::Auto, None) if choice.trials() => format!("{form} (auto: timing both forms)"),
+        (Integrator::Auto, None) => {
+            format!("{form} (auto: no trial on a CPU adapter or without timestamps)")
+        }
+        _ => form,
+    }
 }
 
 pub fn show(ui: &mut egui::Ui, world: &mut World) {
@@ -80,6 +103,9 @@ pub fn show(ui: &mut egui::Ui, world: &mut World) {
             None if timestamps => ui.label("waiting for the first frame"),
             None => ui.label("n/a: the adapter has no timestamp queries"),
         };
+        ui.end_row();
+        ui.label("integrator");
+        ui.label(integrator_line(world));
         ui.end_row();
         ui.label("rays/s");
         ui.label(stats.rays_per_second.map_or("-".into(), |r| {

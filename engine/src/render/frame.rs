@@ -3,7 +3,8 @@
 //! Accumulation (the default, and any still):
 //! 1. deform + refit: recorded by the deform plugin earlier in the frame ([`DeformCommands`]);
 //! 2. trace: `spp_per_frame` samples per pixel into the view's accumulation (skipped once converged); the
-//!    wavefront pass instead where `RenderSettings::integrator` asks for it and only radiance is recorded;
+//!    wavefront pass instead where `RenderSettings::integrator` asks for it (or `Auto` timed it faster:
+//!    [`IntegratorChoice`]) and only radiance is recorded;
 //! 3. denoise: when the display shows the denoised image;
 //! 4. tonemap: when the display runs each frame (the viewer).
 //!
@@ -30,6 +31,7 @@ use super::frame_constants::{FrameConstants, write_frame_constants};
 use super::frame_denoiser::FrameDenoiser;
 use super::gpu_scene::{GpuScene, SceneWrites};
 use super::host_denoised::HostDenoised;
+use super::integrator_choice::{IntegratorChoice, Workload};
 use super::layout::{LIGHT_DIRECTIONAL, LIGHT_ENVIRONMENT, LIGHT_SUN};
 use super::material_lobes::{KernelNeeds, MaterialNeeds};
 use super::passes::denoise::{DenoiseInputs, Denoiser};
@@ -65,7 +67,11 @@ pub fn render_frame(
     mut bindings: ResMut<SceneBindings>,
     mut view: ResMut<ViewTargets>,
     mut accumulation: ResMut<Accumulation>,
-    (mut trace, mut wavefront): (ResMut<TracePass>, ResMut<WavefrontSlot>),
+    (mut trace, mut wavefront, mut choice): (
+        ResMut<TracePass>,
+        ResMut<WavefrontSlot>,
+        ResMut<IntegratorChoice>,
+    ),
     tonemap: Res<TonemapPass>,
     mut denoiser: ResMut<Denoiser>,
     mut stats: ResMut<FrameStats>,
@@ -135,8 +141,23 @@ pub fn render_frame(
         );
         let needs = kernel_needs(&ctx, &scene);
         let aovs = accumulation.records_denoiser_inputs(&settings);
+        let workload = Workload {
+            width: view.width,
+            height: view.height,
+            spp_per_frame: spp,
+            max_depth: settings.max_depth,
+            needs,
+        };
         // The wavefront form records radiance only.
-        let in_waves = settings.integrator == Integrator::Wavefront && !aovs && !view.hit_aov;
+        let waves_possible = !aovs && !view.hit_aov;
+        let in_waves =
+            choice.form(settings.integrator, workload, waves_possible) == Integrator::Wavefront;
+        if settings.integrator == Integrator::Auto
+            && choice.decision().map(|d| d.chosen) == Some(Integrator::Megakernel)
+        {
+            // Auto settled on the megakernel: the waves' per-pixel state is memory nothing uses.
+            wavefront.0 = None;
+        }
         if in_waves {
             let layout = &bindings.layout;
             let pass = wavefront
@@ -190,8 +211,12 @@ pub fn render_frame(
     ctx.queue
         .submit(deform.into_iter().chain([encoder.finish()]));
     stats.after_submit();
-    if stats.time_passes {
+    if stats.time_passes || choice.timing() {
         stats.last_pass_times = stats.read_pass_times(&ctx);
+    }
+    if choice.timing() {
+        // A frame of Auto's trial: its trace time (blocking, for the trial's few frames only).
+        choice.record(stats.last_pass_times.map(|t| t.trace_ms));
     }
 }
 

@@ -10,7 +10,8 @@
 //! - [`frame`]: the frame's passes in order, in one submission; [`systems`]: what runs before it (refit on the
 //!   CPU backend, the top-level BVH, material edits, the light list); [`queries`]: GPU work run on demand;
 //!   [`picking`].
-//! - [`stats`]: GPU pass times; [`layout`]: the structs and constants Rust shares with WGSL; [`settings`].
+//! - [`integrator_choice`]: which form of the path integrator traces a frame; [`stats`]: GPU pass times;
+//!   [`layout`]: the structs and constants Rust shares with WGSL; [`settings`].
 
 pub mod accumulation;
 pub mod display;
@@ -20,6 +21,7 @@ pub mod frame_constants;
 pub mod frame_denoiser;
 pub mod gpu_scene;
 pub mod host_denoised;
+pub mod integrator_choice;
 pub mod layout;
 pub mod material_lobes;
 pub mod passes;
@@ -86,6 +88,7 @@ pub fn insert_resources(
     let bindings = SceneBindings::new(ctx);
     world.insert_resource(TracePass::new(ctx, &bindings.layout));
     world.insert_resource(passes::wavefront::WavefrontSlot::default());
+    world.insert_resource(integrator_choice::IntegratorChoice::for_adapter(ctx));
     world.insert_resource(TonemapPass::new(ctx));
     world.insert_resource(Denoiser::new(ctx));
     world.insert_resource(OnFirstUse::<PickPass>::default());

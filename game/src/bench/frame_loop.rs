@@ -67,6 +67,11 @@ pub struct FrameRow {
     pub height: u32,
     pub spp_per_frame: u32,
     pub max_depth: u32,
+    /// The form of the path integrator that traced the measured frames (`--integrator`, resolved by `auto`'s
+    /// trial on the warm-up frames).
+    pub integrator: String,
+    /// `auto`'s trial: the median trace ms per frame of the megakernel and of the wavefront form.
+    pub auto_trial_ms: Option<[f64; 2]>,
     pub frames: usize,
     pub bvh_build_and_upload_ms: f64,
     pub gpu_memory_geometry_bvh_mib: f64,
@@ -211,6 +216,11 @@ pub fn measure(
         passes.skinning + passes.refit
     };
     let deform_backend = format!("{:?}", app.deformation().backend);
+    let choice = app.integrator_choice();
+    let integrator = choice
+        .last_form()
+        .map_or("none".into(), |f| format!("{f:?}").to_lowercase());
+    let auto_trial_ms = choice.decision().map(|d| [d.megakernel_ms, d.wavefront_ms]);
     let stats = app.bvh_stats();
     Ok(FrameRow {
         scene: scene.name.clone(),
@@ -219,6 +229,8 @@ pub fn measure(
         height,
         spp_per_frame: settings.spp_per_frame,
         max_depth: settings.max_depth,
+        integrator,
+        auto_trial_ms,
         frames,
         bvh_build_and_upload_ms: app.gpu_scene().build_seconds * 1e3,
         gpu_memory_geometry_bvh_mib: memory.geometry_and_bvh() as f64 / 1048576.0,

@@ -228,7 +228,8 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     };
     // The charts say which integrator traced them when it is not the default.
     let integrator = match base.integrator {
-        raykin::render::Integrator::Megakernel => "",
+        raykin::render::Integrator::Auto => "",
+        raykin::render::Integrator::Megakernel => " | megakernel integrator",
         raykin::render::Integrator::Wavefront => " | wavefront integrator",
     };
     let context = format!(
@@ -273,6 +274,14 @@ pub fn run(args: &BenchArgs) -> Result<()> {
                     row.all_rays_per_s / 1e6,
                     row.raycast_camera_rays_per_s / 1e6,
                     row.raycast_diffuse_rays_per_s / 1e6
+                );
+                eprintln!(
+                    "raykin bench: {} {width}x{height}: traced by the {} integrator{}",
+                    row.scene,
+                    row.integrator,
+                    row.auto_trial_ms.map_or(String::new(), |[m, w]| format!(
+                        " (auto's trial: megakernel {m:.3} ms, wavefront {w:.3} ms)"
+                    ))
                 );
                 let (c, b) = (&row.traversal_per_camera_ray, &row.traversal_per_bounce_ray);
                 eprintln!(

@@ -38,8 +38,11 @@ pub enum LightSampler {
 /// the same random numbers: the choice changes the speed, never the image.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize, Default)]
 pub enum Integrator {
-    /// One kernel runs each pixel's paths from the camera to their end.
+    /// The faster of the two on this GPU, scene and image size, timed on the first frames of each workload;
+    /// the megakernel on CPU adapters (`render::integrator_choice`).
     #[default]
+    Auto,
+    /// One kernel runs each pixel's paths from the camera to their end.
     Megakernel,
     /// Kernels per stage over a queue of the paths still alive (`render::passes::wavefront`): a bounce costs
     /// what its live paths cost. Renders that record the denoisers' inputs or the primary-hit AOV use the
