@@ -1,7 +1,8 @@
 //! The wavefront form of the path integrator (`render::passes::wavefront`) traces the megakernel's paths: every
 //! decision draws the same sampler dimension and the radiance is summed in the same order, so with one sample
 //! per dispatch (both add each sample to the accumulation as it ends) the image is the same bit for bit, and
-//! with several it differs only by the order the accumulation adds them. Its image against Mitsuba's is checked
+//! with several (a small view's waves hold several samples of each pixel) it differs only by the order the
+//! accumulation adds them. Its image against Mitsuba's is checked
 //! in `cornell_box_in_waves_matches_mitsuba_within_noise`.
 
 use crate::common::cornell::{self, SIZE, camera};
@@ -27,7 +28,7 @@ fn waves_trace_the_megakernels_paths() {
             raykin::scene::load_gltf(&path, &Default::default())
                 .unwrap_or_else(|e| panic!("{}: {e}", path.display())),
         );
-        let render = |integrator: Integrator, chunk: u32| {
+        let render = |integrator: Integrator, spp: u32, chunk: u32| {
             let settings = RenderSettings {
                 width: 24,
                 height: 20,
@@ -39,27 +40,38 @@ fn waves_trace_the_megakernels_paths() {
                 HeadlessApp::new(ctx.clone(), scene.clone(), settings, &CameraChoice::Auto)
                     .expect("scene uploads");
             app.set_keep_denoiser_inputs(false);
-            app.accumulate(6, chunk, |_| {});
+            app.accumulate(spp, chunk, |_| {});
             let rays = app.view().read_ray_count(&app.ctx);
             (app.radiance(), rays)
         };
-        let (waves, wave_rays) = render(Integrator::Wavefront, 1);
-        let (mega, mega_rays) = render(Integrator::Megakernel, 1);
+        let (waves, wave_rays) = render(Integrator::Wavefront, 6, 1);
+        let (mega, mega_rays) = render(Integrator::Megakernel, 6, 1);
         assert_forms_render_the_same_image(&waves, &mega, file);
         assert_eq!(
             wave_rays, mega_rays,
             "{file}: rays traced by the last dispatch"
         );
-        // Several samples per dispatch: the megakernel sums a pixel's samples before adding them.
-        let (waves3, _) = render(Integrator::Wavefront, 3);
-        let worst = waves3
-            .iter()
-            .zip(&mega)
-            .flat_map(|(a, b)| (0..3).map(move |c| (a[c] - b[c]).abs() / b[c].abs().max(1e-3)))
-            .fold(0.0f32, f32::max);
+        // Several samples per dispatch: the megakernel sums a pixel's samples before adding them, the waves
+        // (here 3 samples of each pixel in one wave) add a wave's at its end.
+        let worst = |a: &[[f32; 3]], b: &[[f32; 3]]| {
+            a.iter()
+                .zip(b)
+                .flat_map(|(a, b)| (0..3).map(move |c| (a[c] - b[c]).abs() / b[c].abs().max(1e-3)))
+                .fold(0.0f32, f32::max)
+        };
+        let (waves3, _) = render(Integrator::Wavefront, 6, 3);
+        let differ = worst(&waves3, &mega);
         assert!(
-            worst < 1e-4,
-            "{file}: 3-sample waves differ by {worst} (relative)"
+            differ < 1e-4,
+            "{file}: 3-sample waves differ by {differ} (relative)"
+        );
+        // 20 samples in one dispatch: a wave of 16 samples of each pixel (the most), then one of 4.
+        let (waves20, _) = render(Integrator::Wavefront, 20, 20);
+        let (mega20, _) = render(Integrator::Megakernel, 20, 1);
+        let differ = worst(&waves20, &mega20);
+        assert!(
+            differ < 1e-4,
+            "{file}: 20 samples in waves of 16 and 4 differ by {differ} (relative)"
         );
     }
     // The adapter check at start-up asks for the storage buffers the engine's kernels bind: the waves' kernels

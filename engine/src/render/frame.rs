@@ -163,7 +163,7 @@ pub fn render_frame(
             let pass = wavefront
                 .0
                 .get_or_insert_with(|| WavefrontPass::new(&ctx, layout));
-            pass.prepare(&ctx, &view, needs);
+            pass.prepare(&ctx, &view, needs, spp);
         } else {
             trace.prepare(&ctx, &view, needs, aovs);
         }

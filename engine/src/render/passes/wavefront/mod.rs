@@ -26,6 +26,19 @@ const QUEUE_ENTRY: u64 = 4;
 const STATE_ENTRY: u64 = 16;
 /// `ShadowRay` in the WGSL: origin, direction, light.
 const SHADOW_ENTRY: u64 = 48;
+/// Paths a wave should hold when the view has fewer pixels: a wave of one sample per pixel leaves a GPU half idle
+/// below about 1080p (2.07 M pixels), since every bounce's dispatch waits for the one before it and each costs a
+/// drain; several samples of every pixel per wave fill it as a 1080p wave does.
+const WAVE_PATHS: u64 = 1 << 21;
+/// The most samples of a pixel one wave holds.
+const MAX_SAMPLES_PER_WAVE: u64 = 16;
+
+/// Samples per pixel per wave for a view of `pixels` and a dispatch of `spp` samples per pixel.
+fn samples_per_wave(pixels: u64, spp: u32) -> u64 {
+    (WAVE_PATHS / pixels.max(1))
+        .clamp(1, MAX_SAMPLES_PER_WAVE)
+        .min(spp.max(1) as u64)
+}
 
 /// The kernels a wave runs, in order.
 struct Kernels {
@@ -38,9 +51,11 @@ struct Kernels {
     finish: LobeKernels,
 }
 
-/// The paths' state for one image size: per pixel, the arrays of `wavefront.wgsl`'s group 1.
+/// The paths' state for one image size and wave: per path, the arrays of `wavefront.wgsl`'s group 1 (whose
+/// length tells the kernels how many samples of each pixel a wave holds).
 struct PathBuffers {
     pixels: u64,
+    samples_per_wave: u64,
     generation: u64,
     view_group: wgpu::BindGroup,
     /// The counters, then the queues.
@@ -118,9 +133,9 @@ impl WavefrontPass {
     }
 
     /// Compiles the kernels for `needs` (the first time; with the pass-throughs of alpha-blended surfaces where
-    /// some material blends) and makes the paths' state for the view's size (again only when the view's targets
-    /// were replaced).
-    pub fn prepare(&mut self, ctx: &GpuContext, view: &ViewTargets, needs: KernelNeeds) {
+    /// some material blends) and makes the paths' state for the view's size and dispatches of `spp` samples per
+    /// pixel (again only when the view's targets were replaced or a wave's samples per pixel change).
+    pub fn prepare(&mut self, ctx: &GpuContext, view: &ViewTargets, needs: KernelNeeds, spp: u32) {
         let alpha_blend = needs.materials.alpha_blend;
         let k = &mut self.kernels;
         for kernels in [
@@ -134,23 +149,23 @@ impl WavefrontPass {
             kernels.get(needs);
         }
         self.needs = needs;
-        if self
-            .buffers
-            .as_ref()
-            .is_some_and(|b| b.generation == view.generation)
-        {
+        let pixels = view.pixels();
+        let samples_per_wave = samples_per_wave(pixels, spp);
+        if self.buffers.as_ref().is_some_and(|b| {
+            b.generation == view.generation && b.samples_per_wave == samples_per_wave
+        }) {
             return;
         }
         // Release the old state before making the new one.
         self.buffers = None;
-        let pixels = view.pixels();
+        let paths = pixels * samples_per_wave;
         let arrays = |labels: &[&str]| -> Vec<wgpu::Buffer> {
             labels
                 .iter()
-                .map(|label| storage_buffer(ctx, label, pixels * STATE_ENTRY))
+                .map(|label| storage_buffer(ctx, label, paths * STATE_ENTRY))
                 .collect()
         };
-        let paths = arrays(&[
+        let states = arrays(&[
             "wavefront path origin",
             "wavefront path direction",
             "wavefront path throughput",
@@ -162,9 +177,9 @@ impl WavefrontPass {
         let queues = storage_buffer(
             ctx,
             "wavefront queues",
-            CONTROL_BYTES + 2 * pixels * QUEUE_ENTRY,
+            CONTROL_BYTES + 2 * paths * QUEUE_ENTRY,
         );
-        let shadows = storage_buffer(ctx, "wavefront shadow rays", pixels * SHADOW_ENTRY);
+        let shadows = storage_buffer(ctx, "wavefront shadow rays", paths * SHADOW_ENTRY);
         let args = ctx.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("wavefront dispatch sizes"),
             size: 32,
@@ -172,14 +187,15 @@ impl WavefrontPass {
             mapped_at_creation: false,
         });
         let mut group: Vec<&wgpu::Buffer> = vec![&view.frame, &view.accum];
-        group.extend(paths.iter());
+        group.extend(states.iter());
         group.push(&queues);
         group.push(&shadows);
         let view_group = bind_group(ctx, "wavefront view", &self.view_layout, &group);
         let args_group = bind_group(ctx, "wavefront dispatch sizes", &self.args_layout, &[&args]);
-        let state = paths.into_iter().chain([shadows]).collect();
+        let state = states.into_iter().chain([shadows]).collect();
         self.buffers = Some(PathBuffers {
             pixels,
+            samples_per_wave,
             generation: view.generation,
             view_group,
             queues,
@@ -189,8 +205,8 @@ impl WavefrontPass {
         });
     }
 
-    /// Records the pass (after [`Self::prepare`] for this view): `spp` waves of one sample per pixel, each
-    /// `max_depth + 1` bounces, in one compute pass. The view's frame uniform must hold this dispatch's
+    /// Records the pass (after [`Self::prepare`] for this view and `spp`): `spp` samples per pixel in waves of
+    /// the prepared samples per pixel, each `max_depth + 1` bounces, in one compute pass. The view's frame uniform must hold this dispatch's
     /// constants; its ray counter gets the rays traced.
     pub fn encode(
         &self,
@@ -225,11 +241,12 @@ impl WavefrontPass {
             pass.set_bind_group(0, scene, &[]);
             pass.set_bind_group(1, &buffers.view_group, &[]);
             pass.set_bind_group(2, &buffers.args_group, &[]);
-            for _ in 0..spp {
+            let samples_per_wave = buffers.samples_per_wave as u32;
+            for _ in 0..spp.div_ceil(samples_per_wave) {
                 pass.set_pipeline(pipeline(&k.begin_wave));
                 pass.dispatch_workgroups(1, 1, 1);
                 pass.set_pipeline(pipeline(&k.first_bounce[passing]));
-                pass.dispatch_workgroups(x, y, 1);
+                pass.dispatch_workgroups(x, y, samples_per_wave);
                 pass.set_pipeline(pipeline(&k.advance));
                 pass.dispatch_workgroups(1, 1, 1);
                 for _ in 1..=max_depth {

@@ -1,14 +1,15 @@
 // The wavefront path tracer (Laine, Karras and Aila 2013, "Megakernels Considered Harmful"): the path loop of
 // integrator/path.wgsl cut at its traversals into kernels over a queue of the paths still alive, so that a warp
 // runs only live paths and deep bounces cost what their live paths cost, not what a warp's longest path costs.
-// One path per pixel per wave (a wave = one sample of every pixel); between kernels a path's state lives in the
-// arrays below, indexed by pixel. Per wave:
+// A wave holds samples_per_wave() paths per pixel (a wave = that many samples of every pixel: several where the
+// view has too few pixels to fill the GPU, `WavefrontPass::prepare` says how many); between kernels a path's
+// state lives in the arrays below, indexed by path: path = sample in the wave x pixels + pixel. Per wave:
 //   begin_wave; first_bounce (a megakernel for depth 0: camera ray, its surface shaded, the shadow ray and the
 //   next ray queued; every path is alive there, so a queue would only add traffic); advance; then per bounce:
 //   extend (the queue's rays, passing through alpha-blended surfaces, and the shadow rays of the bounce before),
 //   shade (emission, next-event estimation's shadow ray, BSDF sampling, Russian roulette: the next queue),
 //   advance (the next bounce's counts and dispatch sizes); a last extend for the last shadow rays; finish (each
-//   path's radiance into the accumulation).
+//   pixel's paths' radiance into the accumulation).
 // Every decision draws the same sampler dimension as the megakernel's and the radiance is summed in the same
 // order, so a path is the same path (tests/engine/wavefront.rs). What the megakernel records for the denoisers
 // (first-hit AOVs, moments) and the real-time integrator's start are not here: the trace pass runs the
@@ -16,7 +17,7 @@
 
 // The view's accumulation: rgb radiance sums, w samples.
 @group(1) @binding(1) var<storage, read_write> accum: array<vec4<f32>>;
-// Path state, one entry per pixel. The ray to trace: origin and `depth | pass_throughs << 16` (bits).
+// Path state, one entry per path. The ray to trace: origin and `depth | pass_throughs << 16` (bits).
 @group(1) @binding(2) var<storage, read_write> path_origin: array<vec4<f32>>;
 // The ray's direction and the density with which the BSDF sampled it.
 @group(1) @binding(3) var<storage, read_write> path_dir: array<vec4<f32>>;
@@ -61,7 +62,7 @@ const CONTROL_NEXT: u32 = 1u;
 const CONTROL_SHADOWS_QUEUED: u32 = 2u;
 const CONTROL_SHADOWS: u32 = 3u;
 const CONTROL_PARITY: u32 = 4u;
-// This wave's sample, counted from frame.sample_base; and the next wave's.
+// This wave, counted from the dispatch's first; and the next.
 const CONTROL_WAVE: u32 = 5u;
 const CONTROL_NEXT_WAVE: u32 = 6u;
 // Rays traced (camera, bounce and shadow), copied to the view's ray counter after the pass.
@@ -75,8 +76,27 @@ override WAVE_PASS_THROUGHS: bool = true;
 const QUEUE_GROUP: u32 = 128u;
 const MAX_GROUPS_X: u32 = 32768u;
 
-fn path_count() -> u32 {
+fn pixel_count() -> u32 {
     return frame.width * frame.height;
+}
+
+// The paths of a wave per pixel: the state arrays hold that many per pixel.
+fn samples_per_wave() -> u32 {
+    return arrayLength(&path_radiance) / pixel_count();
+}
+
+fn path_count() -> u32 {
+    return arrayLength(&path_radiance);
+}
+
+// The first sample of this wave, counted from this dispatch's first.
+fn wave_first_sample() -> u32 {
+    return atomicLoad(&queues.control[CONTROL_WAVE]) * samples_per_wave();
+}
+
+// The samples this wave traces per pixel: samples_per_wave(), or fewer in the dispatch's last wave.
+fn wave_samples() -> u32 {
+    return min(samples_per_wave(), frame.spp - wave_first_sample());
 }
 
 fn queue_index(group: vec3<u32>, groups: vec3<u32>, lid: u32) -> u32 {
@@ -149,19 +169,20 @@ fn store_path(path: u32, p: WavePath) {
     path_normal[path] = vec4<f32>(p.last_vertex.n, 0.0);
 }
 
-fn wave_sampler(pixel: u32) -> Sampler {
-    return sampler_start(pixel, frame.sample_base + atomicLoad(&queues.control[CONTROL_WAVE]), frame.seed);
+fn wave_sampler(path: u32) -> Sampler {
+    let pixels = pixel_count();
+    return sampler_start(path % pixels, frame.sample_base + wave_first_sample() + path / pixels, frame.seed);
 }
 
 // Whether the path's ray, which met `hit`, passes through it: alpha blending as stochastic coverage, with
 // probability 1 - alpha, as trace_path_from decides it (the same sampler dimension, the same offset origin, the
 // medium's attenuation over the segment). If so, `p` has the ray from behind the surface, the pass-through
 // counted and the throughput attenuated.
-fn pass_through(pixel: u32, p: ptr<function, WavePath>, hit: Hit) -> bool {
+fn pass_through(path: u32, p: ptr<function, WavePath>, hit: Hit) -> bool {
     if !WAVE_PASS_THROUGHS || hit.instance == NONE || (*p).pass_throughs >= MAX_PASS_THROUGHS { return false; }
     if (read_material(read_triangle(hit.triangle).w).flags & MATERIAL_ALPHA_BLEND) == 0u { return false; }
     let s = resolve_hit(hit, (*p).ray);
-    let u = get_1d(wave_sampler(pixel), DIM_PASS_THROUGH + (*p).depth * MAX_PASS_THROUGHS + (*p).pass_throughs);
+    let u = get_1d(wave_sampler(path), DIM_PASS_THROUGH + (*p).depth * MAX_PASS_THROUGHS + (*p).pass_throughs);
     if u < s.alpha { return false; }
     if (*p).medium != NONE { (*p).throughput *= transmittance((*p).medium, hit.t); }
     (*p).ray.origin = offset_ray_origin(s.p, -s.ng);
@@ -178,13 +199,13 @@ struct BounceStep {
     direct: DirectLight,
 }
 
-fn shade_bounce(pixel: u32, path: WavePath, hit: Hit) -> BounceStep {
+fn shade_bounce(path: u32, state: WavePath, hit: Hit) -> BounceStep {
     var step = no_step();
-    var p = path;
+    var p = state;
     let nee = (frame.flags & FRAME_NEE) != 0u && light_count() > 0u;
     if p.medium != NONE { p.throughput *= transmittance(p.medium, hit.t); }
     if hit.instance == NONE {
-        path_radiance[pixel] += vec4<f32>(p.throughput * escaped_radiance(p.ray.dir, p.last_bsdf_pdf, nee), 0.0);
+        path_radiance[path] += vec4<f32>(p.throughput * escaped_radiance(p.ray.dir, p.last_bsdf_pdf, nee), 0.0);
         return step;
     }
     let s = resolve_hit(hit, p.ray);
@@ -193,13 +214,13 @@ fn shade_bounce(pixel: u32, path: WavePath, hit: Hit) -> BounceStep {
         if nee && p.last_bsdf_pdf > 0.0 {
             weight = power_heuristic(p.last_bsdf_pdf, direct_pdf_of_hit(hit, s.p, p.last_vertex, p.ray.dir));
         }
-        path_radiance[pixel] += vec4<f32>(p.throughput * s.emission * weight, 0.0);
+        path_radiance[path] += vec4<f32>(p.throughput * s.emission * weight, 0.0);
     }
     // An unlit surface scatters nothing.
     if MATERIAL_LOBES != 0u && (s.flags & MATERIAL_UNLIT) != 0u { return step; }
     if p.depth >= frame.max_depth { return step; }
 
-    let sampler = wave_sampler(pixel);
+    let sampler = wave_sampler(path);
     let dims = bounce_dimensions(p.depth);
     let tbn = basis(s.n);
     let wo = -p.ray.dir * tbn;
@@ -224,7 +245,7 @@ fn shade_bounce(pixel: u32, path: WavePath, hit: Hit) -> BounceStep {
     p.ray = Ray(offset_ray_origin(s.p, select(s.ng, -s.ng, transmitted)), dir);
     if transmitted { p.medium = medium_after_transmission(s, p.medium); }
     p.last_vertex = LightSampleContext(s.p, s.ng);
-    store_path(pixel, p);
+    store_path(path, p);
     step.continues = true;
     return step;
 }
@@ -247,7 +268,7 @@ fn clear_workgroup_counts(lid: u32) {
 // Queues what a shading kernel's invocations produced, one global atomic per queue and workgroup (each
 // invocation at its workgroup's offset), and adds the workgroup's rays to the count. Called by every
 // invocation, in uniform control flow.
-fn queue_step(step: BounceStep, pixel: u32, lid: u32) {
+fn queue_step(step: BounceStep, path: u32, lid: u32) {
     var next_slot = 0u;
     var shadow_slot = 0u;
     if step.continues { next_slot = atomicAdd(&workgroup_next, 1u); }
@@ -262,12 +283,12 @@ fn queue_step(step: BounceStep, pixel: u32, lid: u32) {
     workgroupBarrier();
     if step.continues {
         let out = (1u - atomicLoad(&queues.control[CONTROL_PARITY])) * path_count();
-        queues.entries[out + workgroup_next_base + next_slot] = pixel;
+        queues.entries[out + workgroup_next_base + next_slot] = path;
     }
     if step.shadow {
         shadow_rays[workgroup_shadows_base + shadow_slot] = ShadowRay(
             vec4<f32>(step.direct.ray.origin, step.direct.t_max),
-            vec4<f32>(step.direct.ray.dir, bitcast<f32>(pixel)),
+            vec4<f32>(step.direct.ray.dir, bitcast<f32>(path)),
             vec4<f32>(step.direct.contribution, 0.0));
     }
 }
@@ -276,27 +297,29 @@ fn no_step() -> BounceStep {
     return BounceStep(false, false, no_direct_light());
 }
 
-// Depth 0, per 8x8 tile: the camera ray, what it meets, and the next ray and shadow ray queued (by tile, so the
-// next queue's neighbours are neighbouring pixels).
+// Depth 0, per 8x8 tile and sample of the wave (z): the camera ray, what it meets, and the next ray and shadow ray
+// queued (by tile, so the next queue's neighbours are neighbouring pixels).
 @compute @workgroup_size(8, 8)
 fn first_bounce(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
     clear_workgroup_counts(lid);
     rays_traced = 0u;
     var step = no_step();
     let pixel = gid.y * frame.width + gid.x;
-    if gid.x < frame.width && gid.y < frame.height {
-        let sample = camera_sample(gid.xy, pixel, frame.sample_base + atomicLoad(&queues.control[CONTROL_WAVE]));
+    let path = gid.z * pixel_count() + pixel;
+    if gid.x < frame.width && gid.y < frame.height && gid.z < wave_samples() {
+        let index = frame.sample_base + wave_first_sample() + gid.z;
+        let sample = camera_sample(gid.xy, pixel, index);
         var p = WavePath(sample.ray, 0u, 0u, 0.0, vec3<f32>(1.0), NONE, LightSampleContext(sample.ray.origin, vec3<f32>(0.0)));
         var hit: Hit;
         loop {
             rays_traced++;
             hit = trace(p.ray, MISS, false);
-            if !pass_through(pixel, &p, hit) { break; }
+            if !pass_through(path, &p, hit) { break; }
         }
-        path_radiance[pixel] = vec4<f32>(0.0);
-        step = shade_bounce(pixel, p, hit);
+        path_radiance[path] = vec4<f32>(0.0);
+        step = shade_bounce(path, p, hit);
     }
-    queue_step(step, pixel, lid);
+    queue_step(step, path, lid);
 }
 
 fn live_path(i: u32) -> u32 {
@@ -314,18 +337,18 @@ fn extend(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgroups) grou
     let live = atomicLoad(&queues.control[CONTROL_LIVE]);
     let is_path = i < live;
     let is_shadow = !is_path && i - live < atomicLoad(&queues.control[CONTROL_SHADOWS]);
-    var pixel = 0u;
+    var path = 0u;
     var p: WavePath;
     var t_max = MISS;
     if is_path {
-        pixel = live_path(i);
-        p = load_path(pixel);
+        path = live_path(i);
+        p = load_path(path);
     } else if is_shadow {
         let origin = shadow_rays[i - live].origin;
         let dir = shadow_rays[i - live].dir;
         p.ray = Ray(origin.xyz, dir.xyz);
         t_max = origin.w;
-        pixel = bitcast<u32>(dir.w);
+        path = bitcast<u32>(dir.w);
     }
     if is_path || is_shadow {
         let pass_throughs = p.pass_throughs;
@@ -333,16 +356,16 @@ fn extend(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgroups) grou
         loop {
             rays_traced++;
             hit = trace(p.ray, t_max, is_shadow);
-            if is_shadow || !pass_through(pixel, &p, hit) { break; }
+            if is_shadow || !pass_through(path, &p, hit) { break; }
         }
         if is_shadow {
             if hit.instance == NONE {
-                path_radiance[pixel] += vec4<f32>(shadow_rays[i - live].light.xyz, 0.0);
+                path_radiance[path] += vec4<f32>(shadow_rays[i - live].light.xyz, 0.0);
             }
         } else {
-            if p.pass_throughs != pass_throughs { store_origin_and_throughput(pixel, p); }
-            path_hit[pixel] = vec4<u32>(bitcast<u32>(hit.t), hit.instance, hit.triangle, bitcast<u32>(hit.bary.x));
-            path_vertex[pixel].w = hit.bary.y;
+            if p.pass_throughs != pass_throughs { store_origin_and_throughput(path, p); }
+            path_hit[path] = vec4<u32>(bitcast<u32>(hit.t), hit.instance, hit.triangle, bitcast<u32>(hit.bary.x));
+            path_vertex[path].w = hit.bary.y;
         }
     }
     atomicAdd(&workgroup_rays, rays_traced);
@@ -360,21 +383,27 @@ fn shade(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgroups) group
     rays_traced = 0u;
     let i = queue_index(group, groups, lid);
     var step = no_step();
-    var pixel = 0u;
+    var path = 0u;
     if i < atomicLoad(&queues.control[CONTROL_LIVE]) {
-        pixel = live_path(i);
-        let h = path_hit[pixel];
-        let hit = Hit(bitcast<f32>(h.x), h.y, h.z, vec2<f32>(bitcast<f32>(h.w), path_vertex[pixel].w));
-        step = shade_bounce(pixel, load_path(pixel), hit);
+        path = live_path(i);
+        let h = path_hit[path];
+        let hit = Hit(bitcast<f32>(h.x), h.y, h.z, vec2<f32>(bitcast<f32>(h.w), path_vertex[path].w));
+        step = shade_bounce(path, load_path(path), hit);
     }
-    queue_step(step, pixel, lid);
+    queue_step(step, path, lid);
 }
 
-// Each path's sample into the accumulation (a non-finite sample adds nothing but counts, as in the megakernel).
+// Each pixel's samples of the wave into the accumulation, in sample order (a non-finite sample adds nothing but
+// counts, as in the megakernel).
 @compute @workgroup_size(8, 8)
 fn finish(@builtin(global_invocation_id) gid: vec3<u32>) {
     if gid.x >= frame.width || gid.y >= frame.height { return; }
     let pixel = gid.y * frame.width + gid.x;
-    let r = path_radiance[pixel].xyz;
-    accum[pixel] += vec4<f32>(select(vec3<f32>(0.0), r, finite3(r)), 1.0);
+    let samples = wave_samples();
+    var sum = vec3<f32>(0.0);
+    for (var j = 0u; j < samples; j++) {
+        let r = path_radiance[j * pixel_count() + pixel].xyz;
+        sum += select(vec3<f32>(0.0), r, finite3(r));
+    }
+    accum[pixel] += vec4<f32>(sum, f32(samples));
 }
