@@ -89,6 +89,9 @@ pub struct CurveResult {
     pub ms_to_rel_mse_0_01: Option<f64>,
     /// Trace ms of every frame, per repeat, in order: where the time of a curve went (runs of slow frames).
     pub frame_trace_ms: Vec<Vec<f64>>,
+    /// The form of the path integrator that traced the curve's last frame (`auto` resolved by its trial in the
+    /// warm-up frames).
+    pub integrator: String,
 }
 
 #[derive(Clone, Debug, serde::Serialize)]
@@ -150,6 +153,7 @@ pub fn measure(
         // runs[r][k] = (time, relMSE, FLIP, linear relMSE, wall time) at checkpoint k of repeat r.
         let mut runs: Vec<Vec<[f64; 5]>> = Vec::new();
         let mut frame_trace_ms = Vec::new();
+        let mut integrator = String::from("none");
         let oidn = settings.denoise && settings.denoiser == DenoiserKind::Oidn;
         for repeat in 0..suite.error_repeats {
             settings.seed = 1000 + 100 * index as u32 + repeat as u32;
@@ -206,6 +210,9 @@ pub fn measure(
                 };
                 denoise_times.push(denoise_ms);
                 images.push((elapsed_ms, wall_ms, image));
+            }
+            if let Some(form) = app.integrator_choice().last_form() {
+                integrator = format!("{form:?}").to_lowercase();
             }
             drop(app);
             frame_trace_ms.push(frame_times);
@@ -266,7 +273,13 @@ pub fn measure(
             ms_to_rel_mse_0_01: time_to_reach(&reached, 0.01),
             points,
             frame_trace_ms,
+            integrator,
         });
+        let curve = curves.last().expect("pushed");
+        eprintln!(
+            "raykin bench: {}: curve `{}` traced by the {} integrator",
+            scene.name, curve.name, curve.integrator
+        );
     }
     // Fits on the default curve, reference noise subtracted; the first two points (1-2 spp) are left out of
     // the slopes: there the estimator is dominated by which pixels found the light at all.

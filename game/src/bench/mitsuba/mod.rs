@@ -251,6 +251,7 @@ pub fn compare(
         ms_to_rel_mse_0_01: result.mitsuba_ms_to_0_01,
         points,
         frame_trace_ms: Vec::new(),
+        integrator: format!("Mitsuba's path ({})", run.variant),
     });
     Ok(Some(result))
 }
