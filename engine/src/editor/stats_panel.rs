@@ -29,7 +29,7 @@ fn integrator_line(world: &World) -> String {
         ),
         (Integrator::Auto, None) if choice.trials() => format!("{form} (auto: timing both forms)"),
         (Integrator::Auto, None) => {
-            format!("{form} (auto: no trial on a CPU adapter or without timestamps)")
+            format!("{form} (auto: untimed on this adapter)")
         }
         _ => form,
     }
@@ -105,7 +105,7 @@ pub fn show(ui: &mut egui::Ui, world: &mut World) {
         };
         ui.end_row();
         ui.label("integrator");
-        ui.label(integrator_line(world));
+        ui.add(egui::Label::new(integrator_line(world)).wrap());
         ui.end_row();
         ui.label("rays/s");
         ui.label(stats.rays_per_second.map_or("-".into(), |r| {
