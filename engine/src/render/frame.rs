@@ -155,7 +155,7 @@ pub fn render_frame(
         if settings.integrator == Integrator::Auto
             && choice.decision().map(|d| d.chosen) == Some(Integrator::Megakernel)
         {
-            // Auto settled on the megakernel: the waves' per-pixel state is memory nothing uses.
+            // Auto settled on the megakernel: the waves' path state is memory nothing uses.
             wavefront.0 = None;
         }
         if in_waves {
