@@ -14,10 +14,14 @@ use super::settings::Integrator;
 use crate::gpu::GpuContext;
 use bevy_ecs::prelude::Resource;
 
-/// Frames each form traces before its times count: the first compiles its pipelines and allocates its buffers.
-const WARM_UP_FRAMES: usize = 1;
-/// Timed frames per form; their median stands for the form.
-const TIMED_FRAMES: usize = 3;
+use Integrator::{Megakernel as M, Wavefront as W};
+/// The forms a trial's frames run, in order. The first frame of each is not timed (it compiles its pipelines and
+/// allocates its buffers); the timed ones come in an ABBA BAAB order, so that a drift of the GPU's clocks over
+/// the trial (they rise during the first fraction of a second of work: docs/BENCHMARKS.md, "Clocks after
+/// idle") favours neither form: the mean of each form's timed frames stands for it (a median would not cancel
+/// the drift). GPU timestamps of a pass vary by well under 1% from frame to frame once the clocks are up.
+const TRIAL: [Integrator; 10] = [M, W, M, W, W, M, W, M, M, W];
+const WARM_UP_FRAMES: usize = 2;
 /// The wavefront form must be at least this much faster to be chosen: on a tie the megakernel, which holds no
 /// per-pixel path state, traces.
 const WAVES_MUST_SAVE: f64 = 0.02;
@@ -37,7 +41,7 @@ pub struct Workload {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Decision {
     pub chosen: Integrator,
-    /// Median trace ms per frame of each form over its timed frames.
+    /// Mean trace ms per frame of each form over its timed frames.
     pub megakernel_ms: f64,
     pub wavefront_ms: f64,
 }
@@ -47,8 +51,8 @@ pub struct IntegratorChoice {
     /// Whether `Auto` times the forms at all (a GPU adapter with timestamp queries).
     trials: bool,
     workload: Option<Workload>,
-    /// Trace ms of each frame traced in the trial, warm-up frames included: megakernel, wavefront.
-    frames: [Vec<f64>; 2],
+    /// Trace ms of the trial's frames so far, in [`TRIAL`]'s order, warm-up frames included.
+    frames: Vec<f64>,
     decision: Option<Decision>,
     /// The form of the frame being traced while its time is still to be recorded.
     timing: Option<Integrator>,
@@ -67,7 +71,7 @@ impl IntegratorChoice {
         Self {
             trials,
             workload: None,
-            frames: [Vec::new(), Vec::new()],
+            frames: Vec::new(),
             decision: None,
             timing: None,
             last: None,
@@ -90,18 +94,13 @@ impl IntegratorChoice {
             Integrator::Auto => {
                 if self.workload != Some(workload) {
                     self.workload = Some(workload);
-                    self.frames = [Vec::new(), Vec::new()];
+                    self.frames.clear();
                     self.decision = None;
                 }
                 match self.decision {
                     Some(d) => d.chosen,
                     None => {
-                        // Alternate, the megakernel first, so that both see the same state of the GPU.
-                        let form = if self.frames[0].len() <= self.frames[1].len() {
-                            Integrator::Megakernel
-                        } else {
-                            Integrator::Wavefront
-                        };
+                        let form = TRIAL[self.frames.len()];
                         self.timing = Some(form);
                         form
                     }
@@ -128,11 +127,16 @@ impl IntegratorChoice {
             self.decision = None;
             return;
         };
-        self.frames[form_index(form)].push(ms);
-        let needed = WARM_UP_FRAMES + TIMED_FRAMES;
-        if self.frames.iter().all(|f| f.len() >= needed) {
-            let [megakernel_ms, wavefront_ms] =
-                [0, 1].map(|i| median(&self.frames[i][WARM_UP_FRAMES..needed]));
+        debug_assert_eq!(form, TRIAL[self.frames.len()]);
+        self.frames.push(ms);
+        if self.frames.len() == TRIAL.len() {
+            let [megakernel_ms, wavefront_ms] = [M, W].map(|form| {
+                let timed: Vec<f64> = (WARM_UP_FRAMES..TRIAL.len())
+                    .filter(|&i| TRIAL[i] == form)
+                    .map(|i| self.frames[i])
+                    .collect();
+                timed.iter().sum::<f64>() / timed.len() as f64
+            });
             let chosen = if wavefront_ms < megakernel_ms * (1.0 - WAVES_MUST_SAVE) {
                 Integrator::Wavefront
             } else {
@@ -160,19 +164,6 @@ impl IntegratorChoice {
     pub fn last_form(&self) -> Option<Integrator> {
         self.last
     }
-}
-
-fn form_index(form: Integrator) -> usize {
-    match form {
-        Integrator::Wavefront => 1,
-        _ => 0,
-    }
-}
-
-fn median(values: &[f64]) -> f64 {
-    let mut v = values.to_vec();
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
 }
 
 #[cfg(test)]
@@ -227,12 +218,8 @@ mod tests {
                 },
                 100,
             );
-            assert_eq!(frames, 2 * (WARM_UP_FRAMES + TIMED_FRAMES));
-            let forms = forms.into_inner();
-            assert!(
-                forms.windows(2).all(|w| w[0] != w[1]),
-                "alternating: {forms:?}"
-            );
+            assert_eq!(frames, TRIAL.len());
+            assert_eq!(forms.into_inner(), TRIAL);
             let decision = choice.decision().expect("decided");
             assert_eq!(decision.chosen, expected, "wavefront at {waves_ms} ms");
             assert_eq!(
@@ -244,6 +231,26 @@ mod tests {
             assert!(!choice.timing());
             assert_eq!(choice.last_form(), Some(expected));
         }
+    }
+
+    /// Clocks rising linearly over the trial (each frame 0.5 ms faster than the one before) do not favour the
+    /// form timed later: equal forms stay a tie, so the megakernel.
+    #[test]
+    fn a_drift_over_the_trial_favours_neither_form() {
+        let mut choice = IntegratorChoice::new(true);
+        let frame = std::cell::Cell::new(0);
+        trial(
+            &mut choice,
+            |_| {
+                frame.set(frame.get() + 1);
+                10.0 - 0.5 * frame.get() as f64
+            },
+            100,
+        );
+        let d = choice.decision().expect("decided");
+        assert_eq!((d.megakernel_ms, d.wavefront_ms), (6.75, 6.75));
+        // The order alone decides this: alternating forms would have timed the wavefront 0.5 ms faster.
+        assert_eq!(d.chosen, Integrator::Megakernel);
     }
 
     #[test]
@@ -283,7 +290,7 @@ mod tests {
         }
         // A record with no frame in trial changes nothing.
         choice.record(Some(1.0));
-        assert_eq!(choice.frames, [Vec::<f64>::new(), Vec::new()]);
+        assert!(choice.frames.is_empty());
         let mut cpu = IntegratorChoice::new(false);
         assert_eq!(
             cpu.form(Integrator::Auto, workload(8), true),
