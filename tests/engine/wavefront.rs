@@ -12,6 +12,25 @@ use raykin::headless::HeadlessApp;
 use raykin::render::{Environment, Integrator, RenderSettings};
 use std::sync::Arc;
 
+/// A 24x20 view of `scene` under the sky, tracing with `integrator`, radiance only.
+fn small_app(
+    ctx: &raykin::gpu::GpuContext,
+    scene: &Arc<raykin::scene::SceneAsset>,
+    integrator: Integrator,
+) -> HeadlessApp {
+    let settings = RenderSettings {
+        width: 24,
+        height: 20,
+        environment: Environment::Sky,
+        integrator,
+        ..Default::default()
+    };
+    let mut app = HeadlessApp::new(ctx.clone(), scene.clone(), settings, &CameraChoice::Auto)
+        .expect("scene uploads");
+    app.set_keep_denoiser_inputs(false);
+    app
+}
+
 #[test]
 fn waves_trace_the_megakernels_paths() {
     let (ctx, _gpu) = gpu();
@@ -29,17 +48,7 @@ fn waves_trace_the_megakernels_paths() {
                 .unwrap_or_else(|e| panic!("{}: {e}", path.display())),
         );
         let render = |integrator: Integrator, spp: u32, chunk: u32| {
-            let settings = RenderSettings {
-                width: 24,
-                height: 20,
-                environment: Environment::Sky,
-                integrator,
-                ..Default::default()
-            };
-            let mut app =
-                HeadlessApp::new(ctx.clone(), scene.clone(), settings, &CameraChoice::Auto)
-                    .expect("scene uploads");
-            app.set_keep_denoiser_inputs(false);
+            let mut app = small_app(&ctx, &scene, integrator);
             app.accumulate(spp, chunk, |_| {});
             let rays = app.view().read_ray_count(&app.ctx);
             (app.radiance(), rays)
@@ -114,16 +123,7 @@ fn auto_times_both_forms_and_keeps_the_image() {
     let scene = Arc::new(raykin::scene::load_gltf(&path, &Default::default()).expect("loads"));
     let frames = 14;
     let render = |integrator: Integrator, trial: bool| {
-        let settings = RenderSettings {
-            width: 24,
-            height: 20,
-            environment: Environment::Sky,
-            integrator,
-            ..Default::default()
-        };
-        let mut app = HeadlessApp::new(ctx.clone(), scene.clone(), settings, &CameraChoice::Auto)
-            .expect("scene uploads");
-        app.set_keep_denoiser_inputs(false);
+        let mut app = small_app(&ctx, &scene, integrator);
         if trial {
             app.app
                 .world_mut()
