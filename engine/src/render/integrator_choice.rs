@@ -1,9 +1,9 @@
 //! [`Integrator::Auto`]: which form of the path integrator traces a frame. Both forms trace the same paths, so
-//! the choice is one of speed alone, and the faster form depends on the GPU, the scene and the image size (an
-//! H100 at bdfc95a: the wavefront form takes 0.71-0.76x the megakernel's trace time on the Cornell box at
-//! 1080p-1440p and 0.69x on the seed-like interior, but 1.26-1.61x on FlightHelmet, and every scene's samples
-//! cost it more at 512x512; docs/BENCHMARKS.md). So the first frames of each workload time both forms with the
-//! trace pass's GPU timestamps, one after the other, and the faster traces the frames after them.
+//! the choice is one of speed alone, and the faster form depends on the GPU, the scene, the image size and the
+//! samples per frame (an H100, 2026-12-05: the wavefront form takes 0.71-0.76x the megakernel's trace time on
+//! the Cornell box at 1080p-1440p and 0.69x on the seed-like interior, but 1.25-1.63x on FlightHelmet; at 960x540
+//! and 16 samples per frame 0.73-0.88x on every bench scene; docs/BENCHMARKS.md). So the first frames of each
+//! workload time both forms with the trace pass's GPU timestamps, interleaved, and the faster traces the rest.
 //!
 //! CPU adapters (lavapipe) keep the megakernel without a trial: it is the faster form there on every scene
 //! measured, their timestamps can miss compute work, and a trial would compile the wavefront's kernels, seconds
@@ -12,9 +12,9 @@
 use super::material_lobes::KernelNeeds;
 use super::settings::Integrator;
 use crate::gpu::GpuContext;
+use Integrator::{Megakernel as M, Wavefront as W};
 use bevy_ecs::prelude::Resource;
 
-use Integrator::{Megakernel as M, Wavefront as W};
 /// The forms a trial's frames run, in order. The first frame of each is not timed (it compiles its pipelines and
 /// allocates its buffers); the timed ones come in an ABBA BAAB order, so that a drift of the GPU's clocks over
 /// the trial (they rise during the first fraction of a second of work: docs/BENCHMARKS.md, "Clocks after
@@ -23,7 +23,7 @@ use Integrator::{Megakernel as M, Wavefront as W};
 const TRIAL: [Integrator; 10] = [M, W, M, W, W, M, W, M, M, W];
 const WARM_UP_FRAMES: usize = 2;
 /// The wavefront form must be at least this much faster to be chosen: on a tie the megakernel, which holds no
-/// per-pixel path state, traces.
+/// path state between kernels, traces.
 const WAVES_MUST_SAVE: f64 = 0.02;
 
 /// What a trial's outcome holds for: a change of any of these times both forms again.
