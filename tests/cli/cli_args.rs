@@ -163,6 +163,40 @@ fn an_image_over_the_adapters_limits_is_a_clear_error() {
     refused(&out, &["image size 100000x100000", "at most"]);
 }
 
+/// An image the megakernel can trace but whose wavefront path state would not fit one binding (lavapipe's 128 MiB
+/// hold 2.8 M paths of the shadow rays' 48 bytes; 2048x1536 is 3.1 M) is traced by the megakernel, with one line
+/// saying so (it was a panic: wgpu's validation error on the bind group).
+#[test]
+fn an_image_too_large_for_the_waves_is_traced_by_the_megakernel() {
+    let out = scratch("waves-too-large.png");
+    let result = raykin(&[
+        &"render",
+        &cornell(),
+        &"--width",
+        &"2048",
+        &"--height",
+        &"1536",
+        &"--spp",
+        &"1",
+        &"--integrator",
+        &"wavefront",
+        &"--out",
+        &out,
+    ]);
+    let text = stderr(&result);
+    assert!(result.status.success(), "{text}");
+    assert!(out.exists(), "the image is written");
+    let warnings: Vec<&str> = text
+        .lines()
+        .filter(|l| l.contains("too large for the wavefront"))
+        .collect();
+    assert_eq!(warnings.len(), 1, "{text}");
+    assert!(
+        warnings[0].contains("2048x1536") && warnings[0].contains("megakernel"),
+        "{text}"
+    );
+}
+
 /// A top-level tree obvhs builds deeper than the traversal stack (80 nested instances) is rebuilt balanced
 /// and renders (it was refused; before that, instances vanished without a word).
 #[test]

@@ -148,8 +148,20 @@ pub fn render_frame(
             max_depth: settings.max_depth,
             needs,
         };
-        // The wavefront form records radiance only.
-        let waves_possible = !aovs && !view.hit_aov;
+        // The wavefront form records radiance only, and its state must fit the adapter's bindings.
+        let waves_fit = WavefrontPass::fits(&ctx, view.pixels());
+        if !waves_fit
+            && settings.integrator == Integrator::Wavefront
+            && choice.first_too_large(view.width, view.height)
+        {
+            tracing::warn!(
+                "{}x{} is too large for the wavefront integrator's path state on this adapter (48 bytes a \
+                 pixel in one binding); the megakernel traces it",
+                view.width,
+                view.height
+            );
+        }
+        let waves_possible = !aovs && !view.hit_aov && waves_fit;
         let in_waves =
             choice.form(settings.integrator, workload, waves_possible) == Integrator::Wavefront;
         if settings.integrator == Integrator::Auto

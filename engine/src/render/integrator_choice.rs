@@ -58,6 +58,8 @@ pub struct IntegratorChoice {
     timing: Option<Integrator>,
     /// The form that traced the last frame.
     last: Option<Integrator>,
+    /// The last view size found too large for the waves, so that the user is told once.
+    too_large: Option<(u32, u32)>,
 }
 
 impl IntegratorChoice {
@@ -75,7 +77,15 @@ impl IntegratorChoice {
             decision: None,
             timing: None,
             last: None,
+            too_large: None,
         }
+    }
+
+    /// Whether a view of this size is reported too large for the waves for the first time.
+    pub fn first_too_large(&mut self, width: u32, height: u32) -> bool {
+        let first = self.too_large != Some((width, height));
+        self.too_large = Some((width, height));
+        first
     }
 
     /// The form that traces this frame. `waves_possible` is false when the frame records what only the

@@ -33,11 +33,22 @@ const WAVE_PATHS: u64 = 1 << 21;
 /// The most samples of a pixel one wave holds.
 const MAX_SAMPLES_PER_WAVE: u64 = 16;
 
-/// Samples per pixel per wave for a view of `pixels` and a dispatch of `spp` samples per pixel.
-fn samples_per_wave(pixels: u64, spp: u32) -> u64 {
-    (WAVE_PATHS / pixels.max(1))
+/// Samples per pixel per wave for a view of `pixels` and a dispatch of `spp` samples per pixel, within the
+/// paths the adapter's bindings hold (`max_paths`, at least `pixels`).
+fn samples_per_wave(pixels: u64, spp: u32, max_paths: u64) -> u64 {
+    (WAVE_PATHS.min(max_paths) / pixels.max(1))
         .clamp(1, MAX_SAMPLES_PER_WAVE)
         .min(spp.max(1) as u64)
+}
+
+/// The paths one binding of each state array holds: the shadow rays' entries are the largest, and the queues
+/// hold two entries per path after the counters.
+fn max_paths(ctx: &GpuContext) -> u64 {
+    let binding = ctx
+        .limits
+        .max_storage_buffer_binding_size
+        .min(ctx.limits.max_buffer_size);
+    (binding / SHADOW_ENTRY).min(binding.saturating_sub(CONTROL_BYTES) / (2 * QUEUE_ENTRY))
 }
 
 /// The kernels a wave runs, in order.
@@ -79,6 +90,12 @@ pub struct WavefrontPass {
 }
 
 impl WavefrontPass {
+    /// Whether a view of `pixels` can be traced in waves on this adapter: one path per pixel must fit each of
+    /// the state's bindings (the megakernel needs 16 bytes a pixel, the waves' shadow rays 48 a path).
+    pub fn fits(ctx: &GpuContext, pixels: u64) -> bool {
+        pixels <= max_paths(ctx)
+    }
+
     pub fn new(ctx: &GpuContext, scene_layout: &wgpu::BindGroupLayout) -> Self {
         use Binding::*;
         // frame, accum, 6 path arrays, hits, counters and queues, shadow rays
@@ -150,7 +167,7 @@ impl WavefrontPass {
         }
         self.needs = needs;
         let pixels = view.pixels();
-        let samples_per_wave = samples_per_wave(pixels, spp);
+        let samples_per_wave = samples_per_wave(pixels, spp, max_paths(ctx));
         if self.buffers.as_ref().is_some_and(|b| {
             b.generation == view.generation && b.samples_per_wave == samples_per_wave
         }) {
