@@ -4,7 +4,8 @@
 use super::EditorState;
 use crate::camera::CameraRig;
 use crate::render::{
-    AovView, DenoiserKind, Environment, RealtimeSettings, RenderMode, RenderSettings, Tonemapper,
+    AovView, DenoiserKind, Environment, Integrator, RealtimeSettings, RenderMode, RenderSettings,
+    Tonemapper,
 };
 
 use bevy_ecs::prelude::*;
@@ -16,6 +17,8 @@ use std::path::{Path, PathBuf};
 pub struct ViewerPrefs {
     pub spp_per_frame: u32,
     pub max_depth: u32,
+    /// The form of the path integrator (the Render panel; auto by default).
+    pub integrator: Integrator,
     pub environment: Environment,
     pub exposure: f32,
     pub tonemapper: Tonemapper,
@@ -49,6 +52,7 @@ impl Default for ViewerPrefs {
         Self {
             spp_per_frame: 1,
             max_depth: render.max_depth,
+            integrator: render.integrator,
             environment: render.environment,
             exposure: render.exposure,
             tonemapper: render.tonemapper,
@@ -131,6 +135,7 @@ impl ViewerPrefs {
         if let Some(mut s) = world.get_resource_mut::<RenderSettings>() {
             s.spp_per_frame = self.spp_per_frame.max(1);
             s.max_depth = self.max_depth;
+            s.integrator = self.integrator;
             s.environment = self.environment.clone();
             s.exposure = if self.exposure.is_finite() {
                 self.exposure
@@ -167,6 +172,7 @@ impl ViewerPrefs {
         if let Some(s) = world.get_resource::<RenderSettings>() {
             self.spp_per_frame = s.spp_per_frame;
             self.max_depth = s.max_depth;
+            self.integrator = s.integrator;
             self.environment = s.environment.clone();
             self.exposure = s.exposure;
             self.tonemapper = s.tonemapper;
@@ -209,6 +215,7 @@ mod tests {
         assert!(ViewerPrefs::load(&path).expect("missing is fine").is_none());
         let prefs = ViewerPrefs {
             spp_per_frame: 4,
+            integrator: Integrator::Wavefront,
             environment: Environment::Constant([0.5, 0.25, 1.0]),
             tonemapper: Tonemapper::Reinhard,
             vsync: false,
@@ -246,5 +253,7 @@ mod tests {
         let prefs = ViewerPrefs::load(&path).expect("loads").expect("exists");
         assert_eq!(prefs.max_depth, 3);
         assert_eq!(prefs.spp_per_frame, ViewerPrefs::default().spp_per_frame);
+        // A file from before the integrator was kept: auto.
+        assert_eq!(prefs.integrator, Integrator::Auto);
     }
 }
