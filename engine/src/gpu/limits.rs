@@ -15,6 +15,13 @@ pub struct ImageSizeError {
     pub reason: String,
 }
 
+/// The bytes one storage buffer bound whole may hold on this adapter.
+pub fn max_binding_bytes(limits: &wgpu::Limits) -> u64 {
+    limits
+        .max_storage_buffer_binding_size
+        .min(limits.max_buffer_size)
+}
+
 /// Checks that a `width` x `height` image fits the adapter's buffer, binding and dispatch limits.
 pub fn check_image_size(
     limits: &wgpu::Limits,
@@ -39,9 +46,7 @@ pub fn check_image_size(
             limits.max_compute_workgroups_per_dimension
         )));
     }
-    let binding = limits
-        .max_storage_buffer_binding_size
-        .min(limits.max_buffer_size);
+    let binding = max_binding_bytes(limits);
     let bytes = width as u64 * height as u64 * MAX_BYTES_PER_PIXEL;
     if bytes > binding {
         let max_pixels = binding / MAX_BYTES_PER_PIXEL;

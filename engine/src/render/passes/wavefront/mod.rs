@@ -44,10 +44,7 @@ fn samples_per_wave(pixels: u64, spp: u32, max_paths: u64) -> u64 {
 /// The paths one binding of each state array holds: the shadow rays' entries are the largest, and the queues
 /// hold two entries per path after the counters.
 fn max_paths(ctx: &GpuContext) -> u64 {
-    let binding = ctx
-        .limits
-        .max_storage_buffer_binding_size
-        .min(ctx.limits.max_buffer_size);
+    let binding = crate::gpu::limits::max_binding_bytes(&ctx.limits);
     (binding / SHADOW_ENTRY).min(binding.saturating_sub(CONTROL_BYTES) / (2 * QUEUE_ENTRY))
 }
 
