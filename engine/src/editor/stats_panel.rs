@@ -19,9 +19,7 @@ fn integrator_line(world: &World) -> String {
         return "-".into();
     };
     let requested = world.resource::<RenderSettings>().integrator;
-    let form = choice
-        .last_form()
-        .map_or("-".into(), |f| format!("{f:?}").to_lowercase());
+    let form = choice.last_form().map_or("-", Integrator::name);
     match (requested, choice.decision()) {
         (Integrator::Auto, Some(d)) => format!(
             "{form} (auto: megakernel {:.2} ms, wavefront {:.2} ms per frame)",
@@ -31,7 +29,7 @@ fn integrator_line(world: &World) -> String {
         (Integrator::Auto, None) => {
             format!("{form} (auto: untimed on this adapter)")
         }
-        _ => form,
+        _ => form.to_string(),
     }
 }
 

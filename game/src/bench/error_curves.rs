@@ -212,7 +212,7 @@ pub fn measure(
                 images.push((elapsed_ms, wall_ms, image));
             }
             if let Some(form) = app.integrator_choice().last_form() {
-                integrator = format!("{form:?}").to_lowercase();
+                integrator = form.name().to_string();
             }
             drop(app);
             frame_trace_ms.push(frame_times);

@@ -219,7 +219,8 @@ pub fn measure(
     let choice = app.integrator_choice();
     let integrator = choice
         .last_form()
-        .map_or("none".into(), |f| format!("{f:?}").to_lowercase());
+        .map_or("none", raykin::render::Integrator::name)
+        .to_string();
     let auto_trial_ms = choice.decision().map(|d| [d.megakernel_ms, d.wavefront_ms]);
     let stats = app.bvh_stats();
     Ok(FrameRow {

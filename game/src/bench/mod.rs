@@ -228,9 +228,8 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     };
     // The charts say which integrator traced them when it is not the default.
     let integrator = match base.integrator {
-        raykin::render::Integrator::Auto => "",
-        raykin::render::Integrator::Megakernel => " | megakernel integrator",
-        raykin::render::Integrator::Wavefront => " | wavefront integrator",
+        raykin::render::Integrator::Auto => String::new(),
+        other => format!(" | {} integrator", other.name()),
     };
     let context = format!(
         "{} ({:?}) | {} suite{note}{integrator} | commit {commit} | {date}",

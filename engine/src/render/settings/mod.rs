@@ -50,6 +50,17 @@ pub enum Integrator {
     Wavefront,
 }
 
+impl Integrator {
+    /// The name `--integrator` takes, as the bench's records and the statistics panel print it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Auto => "auto",
+            Self::Megakernel => "megakernel",
+            Self::Wavefront => "wavefront",
+        }
+    }
+}
+
 /// A thin lens (pbrt-v4's perspective camera): depth of field around the plane at `focus_distance`.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ThinLens {
