@@ -54,8 +54,8 @@ pub struct IntegratorChoice {
     /// Trace ms of the trial's frames so far, in [`TRIAL`]'s order, warm-up frames included.
     frames: Vec<f64>,
     decision: Option<Decision>,
-    /// The form of the frame being traced while its time is still to be recorded.
-    timing: Option<Integrator>,
+    /// Whether the frame being traced is the trial's next (`TRIAL[frames.len()]`), its time still to record.
+    timing: bool,
     /// The form that traced the last frame.
     last: Option<Integrator>,
     /// The last view size found too large for the waves, so that the user is told once.
@@ -75,7 +75,7 @@ impl IntegratorChoice {
             workload: None,
             frames: Vec::new(),
             decision: None,
-            timing: None,
+            timing: false,
             last: None,
             too_large: None,
         }
@@ -96,7 +96,7 @@ impl IntegratorChoice {
         workload: Workload,
         waves_possible: bool,
     ) -> Integrator {
-        self.timing = None;
+        self.timing = false;
         let form = match requested {
             _ if !waves_possible => Integrator::Megakernel,
             Integrator::Megakernel | Integrator::Wavefront => requested,
@@ -110,9 +110,8 @@ impl IntegratorChoice {
                 match self.decision {
                     Some(d) => d.chosen,
                     None => {
-                        let form = TRIAL[self.frames.len()];
-                        self.timing = Some(form);
-                        form
+                        self.timing = true;
+                        TRIAL[self.frames.len()]
                     }
                 }
             }
@@ -123,21 +122,20 @@ impl IntegratorChoice {
 
     /// Whether the frame [`Self::form`] chose is part of a trial: its trace time goes to [`Self::record`].
     pub fn timing(&self) -> bool {
-        self.timing.is_some()
+        self.timing
     }
 
     /// The trace pass's GPU time of the frame in trial; `None` (no timestamp could be read) ends the trial with
     /// the megakernel.
     pub fn record(&mut self, trace_ms: Option<f64>) {
-        let Some(form) = self.timing.take() else {
+        if !std::mem::take(&mut self.timing) {
             return;
-        };
+        }
         let Some(ms) = trace_ms.filter(|ms| ms.is_finite()) else {
             self.trials = false;
             self.decision = None;
             return;
         };
-        debug_assert_eq!(form, TRIAL[self.frames.len()]);
         self.frames.push(ms);
         if self.frames.len() == TRIAL.len() {
             let [megakernel_ms, wavefront_ms] = [M, W].map(|form| {
