@@ -20,8 +20,8 @@ fn serial() -> MutexGuard<'static, ()> {
 }
 
 /// Runs `raykin ARGS` with the validation layer reporting errors, warnings and information (the information
-/// proves the layer ran); returns the layer's and raykin's output.
-fn validated(dir: &Path, args: &[&dyn AsRef<std::ffi::OsStr>]) -> String {
+/// proves the layer ran) and asserts that it succeeded and the layer reported no error or warning.
+fn assert_runs_valid(what: &str, dir: &Path, args: &[&dyn AsRef<std::ffi::OsStr>]) {
     assert!(
         Path::new(LAYER_MANIFEST).exists(),
         "Vulkan's validation layer is not installed ({LAYER_MANIFEST}): run scripts/setup.sh \
@@ -56,7 +56,13 @@ fn validated(dir: &Path, args: &[&dyn AsRef<std::ffi::OsStr>]) -> String {
         text.contains("khronos-validation-createinstance-status-message"),
         "the validation layer did not run: {text}"
     );
-    text
+    let found = complaints(&text);
+    assert!(
+        found.is_empty(),
+        "{what}: {} validation messages, the first: {}",
+        found.len(),
+        found[0]
+    );
 }
 
 /// The messages the layer reported as errors or warnings (performance warnings included), one line each.
@@ -65,16 +71,6 @@ fn complaints(text: &str) -> Vec<&str> {
         .filter(|l| l.contains("Validation Error") || l.contains("Validation Warning"))
         .filter(|l| !l.contains("createinstance-status-message"))
         .collect()
-}
-
-fn assert_valid(what: &str, text: &str) {
-    let found = complaints(text);
-    assert!(
-        found.is_empty(),
-        "{what}: {} validation messages, the first: {}",
-        found.len(),
-        found[0]
-    );
 }
 
 fn cornell() -> PathBuf {
@@ -105,7 +101,7 @@ fn both_integrators_and_the_denoiser_record_valid_commands() {
             &out,
         ];
         args.extend(options.iter().map(|o| o as &dyn AsRef<std::ffi::OsStr>));
-        assert_valid(name, &validated(&dir, &args));
+        assert_runs_valid(name, &dir, &args);
     }
 }
 
@@ -114,7 +110,8 @@ fn real_time_recording_of_a_skinned_scene_records_valid_commands() {
     let _serial = serial();
     let dir = fresh_dir("validation-record");
     let scene = shared_assets().join("CesiumMan/glTF-Binary/CesiumMan.glb");
-    let text = validated(
+    assert_runs_valid(
+        "real-time recording",
         &dir,
         &[
             &"record",
@@ -136,14 +133,14 @@ fn real_time_recording_of_a_skinned_scene_records_valid_commands() {
             &dir.join("frames"),
         ],
     );
-    assert_valid("real-time recording", &text);
 }
 
 #[test]
 fn bench_frame_loop_records_valid_commands() {
     let _serial = serial();
     let dir = fresh_dir("validation-bench");
-    let text = validated(
+    assert_runs_valid(
+        "bench frame loop",
         &dir,
         &[
             &"bench",
@@ -163,7 +160,6 @@ fn bench_frame_loop_records_valid_commands() {
             &dir.join("cache"),
         ],
     );
-    assert_valid("bench frame loop", &text);
 }
 
 #[test]
@@ -172,7 +168,8 @@ fn offscreen_viewer_records_valid_commands() {
     let dir = fresh_dir("validation-viewer");
     // The viewer's frame: the real-time mode while the skinned figure walks, and the editor's panels drawn by egui.
     let scene = shared_assets().join("CesiumMan/glTF-Binary/CesiumMan.glb");
-    let text = validated(
+    assert_runs_valid(
+        "offscreen viewer",
         &dir,
         &[
             &"view",
@@ -185,5 +182,4 @@ fn offscreen_viewer_records_valid_commands() {
             &"32x32",
         ],
     );
-    assert_valid("offscreen viewer", &text);
 }
