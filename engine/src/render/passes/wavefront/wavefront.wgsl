@@ -169,9 +169,13 @@ fn store_path(path: u32, p: WavePath) {
     path_normal[path] = vec4<f32>(p.last_vertex.n, 0.0);
 }
 
+// The sample a path traces: the sampler's index of its pixel's sample.
+fn path_sample(path: u32) -> u32 {
+    return frame.sample_base + wave_first_sample() + path / pixel_count();
+}
+
 fn wave_sampler(path: u32) -> Sampler {
-    let pixels = pixel_count();
-    return sampler_start(path % pixels, frame.sample_base + wave_first_sample() + path / pixels, frame.seed);
+    return sampler_start(path % pixel_count(), path_sample(path), frame.seed);
 }
 
 // Whether the path's ray, which met `hit`, passes through it: alpha blending as stochastic coverage, with
@@ -307,8 +311,7 @@ fn first_bounce(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_in
     let pixel = gid.y * frame.width + gid.x;
     let path = gid.z * pixel_count() + pixel;
     if gid.x < frame.width && gid.y < frame.height && gid.z < wave_samples() {
-        let index = frame.sample_base + wave_first_sample() + gid.z;
-        let sample = camera_sample(gid.xy, pixel, index);
+        let sample = camera_sample(gid.xy, pixel, path_sample(path));
         var p = WavePath(sample.ray, 0u, 0u, 0.0, vec3<f32>(1.0), NONE, LightSampleContext(sample.ray.origin, vec3<f32>(0.0)));
         var hit: Hit;
         loop {
