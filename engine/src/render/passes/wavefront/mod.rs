@@ -220,8 +220,8 @@ impl WavefrontPass {
     }
 
     /// Records the pass (after [`Self::prepare`] for this view and `spp`): `spp` samples per pixel in waves of
-    /// the prepared samples per pixel, each `max_depth + 1` bounces, in one compute pass. The view's frame uniform must hold this dispatch's
-    /// constants; its ray counter gets the rays traced.
+    /// the prepared samples per pixel, each `max_depth + 1` bounces, in one compute pass. The view's frame
+    /// uniform must hold this dispatch's constants; its ray counter gets the rays traced.
     pub fn encode(
         &self,
         encoder: &mut wgpu::CommandEncoder,
