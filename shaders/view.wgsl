@@ -10,7 +10,9 @@ struct Frame {
     // Lights at infinity (the environment, the sun): lights[infinite_light_first ..][.. infinite_light_count].
     infinite_light_first: u32, infinite_light_count: u32,
     // Lights in the light tree (the list's first ones); 0: the light sampler samples by power alone.
-    tree_light_count: u32, _pad0: u32,
+    tree_light_count: u32,
+    // Invocations sharing each pixel's samples in the trace pass (engine/src/render/passes/trace/mod.rs).
+    sample_lanes: u32,
 }
 
 @group(1) @binding(0) var<uniform> frame: Frame;

@@ -131,6 +131,15 @@ pub fn assert_forms_render_the_same_image(a: &[[f32; 3]], b: &[[f32; 3]], what: 
     );
 }
 
+/// The largest difference of a channel of `a` from `b`'s, relative to `b`'s (at least 1e-3): two forms of a
+/// kernel that add the same samples in another order differ by rounding only.
+pub fn worst_relative_difference(a: &[[f32; 3]], b: &[[f32; 3]]) -> f32 {
+    a.iter()
+        .zip(b)
+        .flat_map(|(a, b)| (0..3).map(move |c| (a[c] - b[c]).abs() / b[c].abs().max(1e-3)))
+        .fold(0.0f32, f32::max)
+}
+
 pub fn mean_rgb(img: &[[f32; 3]]) -> [f64; 3] {
     let mut m = [0.0; 3];
     for p in img {

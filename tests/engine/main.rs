@@ -30,6 +30,7 @@ mod realtime;
 mod record;
 mod refit_stability;
 mod reliability;
+mod sample_lanes;
 mod sampler;
 mod shaders;
 mod skinned_image;

@@ -62,12 +62,7 @@ fn waves_trace_the_megakernels_paths() {
         );
         // Several samples per dispatch: the megakernel sums a pixel's samples before adding them, the waves
         // (here 3 samples of each pixel in one wave) add a wave's at its end.
-        let worst = |a: &[[f32; 3]], b: &[[f32; 3]]| {
-            a.iter()
-                .zip(b)
-                .flat_map(|(a, b)| (0..3).map(move |c| (a[c] - b[c]).abs() / b[c].abs().max(1e-3)))
-                .fold(0.0f32, f32::max)
-        };
+        let worst = worst_relative_difference;
         let (waves3, _) = render(Integrator::Wavefront, 6, 3);
         let differ = worst(&waves3, &mega);
         assert!(

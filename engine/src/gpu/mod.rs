@@ -75,6 +75,13 @@ pub struct GpuContext {
     /// invocations as one masked vector and each lane otherwise waits for the longest path of the eight.
     /// `RAYKIN_PATH_REGENERATION=on|off` overrides (A/B runs).
     pub path_regeneration: bool,
+    /// The trace pass spreads a dispatch's samples of a pixel over up to 16 invocations of one workgroup and adds
+    /// their sums in workgroup memory (`passes::trace::sample_lanes`): set on GPUs. A pixel's samples looped in
+    /// one invocation leave a small view's last warps running long after the rest have finished (FlightHelmet at
+    /// 960x540 and 16 samples per dispatch took 2.3x the time per sample of 1080p at one). Never with
+    /// `path_regeneration`, whose loop takes all of a pixel's samples. `RAYKIN_SAMPLE_LANES=on|off` overrides
+    /// (A/B runs).
+    pub sample_lanes: bool,
     /// The trace kernels are compiled for the scene's shape ([`crate::render::material_lobes::KernelNeeds`]):
     /// traversal starts in the top level's one leaf where it has one (`SOLE_INSTANCE`) and holds only the BLAS
     /// layouts the leaves use (`BLAS_LAYOUTS`, both in `shaders/traversal/tlas.wgsl`), and the environment's
@@ -145,6 +152,10 @@ impl GpuContext {
             params_in_storage: info.device_type == wgpu::DeviceType::Cpu,
             scene_in_textures: scene_in_textures_on(&info, &limits),
             path_regeneration: path_regeneration_on(&info),
+            sample_lanes: switch_on(
+                "RAYKIN_SAMPLE_LANES",
+                info.device_type != wgpu::DeviceType::Cpu,
+            ),
             scene_shape_kernels: switch_on("RAYKIN_SCENE_SHAPE_KERNELS", true),
             readback_staging: Arc::default(),
             device,

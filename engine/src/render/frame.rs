@@ -37,7 +37,7 @@ use super::material_lobes::{KernelNeeds, MaterialNeeds};
 use super::passes::denoise::{DenoiseInputs, Denoiser};
 use super::passes::gradient::FILTERED;
 use super::passes::tonemap::{TonemapInput, TonemapPass};
-use super::passes::trace::TracePass;
+use super::passes::trace::{TracePass, sample_lanes};
 use super::passes::wavefront::{WavefrontPass, WavefrontSlot};
 use super::realtime::{
     Realtime, RealtimeImage, RealtimePasses, SceneGroups, Shown, runs as realtime_runs,
@@ -189,7 +189,13 @@ pub fn render_frame(
                 (spp, settings.max_depth),
                 timestamps,
             ),
-            None => trace.encode(&mut encoder, group, &view, timestamps),
+            None => trace.encode(
+                &mut encoder,
+                group,
+                &view,
+                sample_lanes(&ctx, spp),
+                timestamps,
+            ),
         }
         accumulation.samples += spp;
     }

@@ -2,6 +2,7 @@
 
 use super::gpu_scene::GpuScene;
 use super::layout::{FRAME_HIT_AOV, FRAME_NEE, GpuFrame};
+use super::passes::trace::sample_lanes;
 use super::settings::{LightSampler, RenderSettings};
 use super::view::ViewTargets;
 use crate::camera::CameraView;
@@ -54,7 +55,7 @@ pub fn write_frame_constants(
             LightSampler::Tree => scene.lights.tree_count,
             LightSampler::Power => 0,
         },
-        _pad: 0,
+        sample_lanes: sample_lanes(ctx, c.spp),
     };
     ctx.queue
         .write_buffer(&view.frame, 0, bytemuck::bytes_of(&frame));

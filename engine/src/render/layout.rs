@@ -424,7 +424,8 @@ pub struct GpuFrame {
     pub infinite_light_count: u32,
     /// Lights in the light tree, the list's first ones (0: the light sampler samples by power alone).
     pub tree_light_count: u32,
-    pub _pad: u32,
+    /// Invocations that share each pixel's samples in the trace pass (`passes::trace::sample_lanes`).
+    pub sample_lanes: u32,
 }
 
 pub const FRAME_NEE: u32 = 1;

@@ -1,5 +1,6 @@
 //! The trace pass: `spp` paths per pixel through the path integrator (`shaders/integrator/path.wgsl`), added to
-//! the view's accumulation targets with the first-hit AOVs and the denoiser's moments. Where
+//! the view's accumulation targets with the first-hit AOVs and the denoiser's moments. On GPUs a pixel's samples
+//! are spread over several invocations of a workgroup ([`sample_lanes`]). Where
 //! `RenderSettings::integrator` asks for waves and nothing but radiance is recorded, the frame runs the wavefront
 //! pass (`passes::wavefront`) in its place.
 
@@ -105,12 +106,13 @@ impl TracePass {
     }
 
     /// Records the pass (after [`Self::prepare`] for this view); the view's frame uniform must hold this
-    /// dispatch's constants and its ray counter is reset first.
+    /// dispatch's constants, `sample_lanes` among them, and its ray counter is reset first.
     pub fn encode(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         scene: &wgpu::BindGroup,
         view: &ViewTargets,
+        sample_lanes: u32,
         timestamp_writes: Option<wgpu::ComputePassTimestampWrites>,
     ) {
         let group = self
@@ -129,7 +131,41 @@ impl TracePass {
         );
         pass.set_bind_group(0, scene, &[]);
         pass.set_bind_group(1, group, &[]);
-        let (x, y) = view.workgroups();
-        pass.dispatch_workgroups(x, y, 1);
+        let tile = pixel_tile(sample_lanes);
+        pass.dispatch_workgroups(view.width.div_ceil(tile.0), view.height.div_ceil(tile.1), 1);
+    }
+}
+
+/// The most invocations that share a pixel's samples: a workgroup of 64 then holds 2x2 pixels.
+const MOST_SAMPLE_LANES: u32 = 16;
+
+/// How many invocations share each pixel's `spp` samples of a dispatch (written to the frame constants, read
+/// by `trace.wgsl`): the largest power of two up to `spp` and [`MOST_SAMPLE_LANES`] where the adapter spreads
+/// samples ([`GpuContext::sample_lanes`]), else 1 (one invocation loops over them all).
+pub fn sample_lanes(ctx: &GpuContext, spp: u32) -> u32 {
+    if !ctx.sample_lanes || ctx.path_regeneration || spp < 2 {
+        return 1;
+    }
+    let below = 1 << (u32::BITS - 1 - spp.leading_zeros());
+    below.min(MOST_SAMPLE_LANES)
+}
+
+/// The pixels of one workgroup of 64 invocations with `lanes` to a pixel, as `trace.wgsl`'s `pixel_tile` (8x8
+/// for one lane, 4x8 for two, 4x4, 2x4, 2x2 for sixteen).
+fn pixel_tile(lanes: u32) -> (u32, u32) {
+    let log2 = lanes.trailing_zeros();
+    (8 >> log2.div_ceil(2), 8 >> (log2 / 2))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_workgroup_holds_64_invocations_whatever_the_lanes() {
+        for lanes in [1, 2, 4, 8, 16] {
+            let (x, y) = pixel_tile(lanes);
+            assert_eq!(x * y * lanes, 64, "{lanes} lanes: {x}x{y} pixels");
+        }
     }
 }

@@ -1,4 +1,4 @@
-// The trace pass's kernel: one invocation per pixel runs `frame.spp` paths through the path integrator and adds
+// The trace pass's kernel: the invocations of a pixel run `frame.spp` paths through the path integrator and add
 // them to the view's accumulation targets (engine/src/render/view.rs), with the first-hit AOVs and the
 // denoiser's moments where the kernel is compiled with them (`PATH_AOVS`).
 
@@ -17,12 +17,36 @@
 @group(1) @binding(6) var<storage, read_write> moments: array<vec4<f32>>;
 
 var<workgroup> workgroup_rays: atomic<u32>;
+// Each invocation's sums of its samples, where several share a pixel (`frame.sample_lanes` > 1).
+var<workgroup> lane_sums: array<PixelSums, 64>;
 
-@compute @workgroup_size(8, 8)
-fn trace_pixels(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
+// A workgroup of 64 invocations covers a tile of pixels, `frame.sample_lanes` invocations to a pixel (a power of
+// two, at most 16; passes/trace/mod.rs `sample_lanes` says when): lane k of a pixel traces the dispatch's samples
+// k, k + lanes, ..., and lane 0 adds the other lanes' sums to its own and writes the pixel.
+@compute @workgroup_size(64)
+fn trace_pixels(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
     rays_traced = 0u;
-    if gid.x < frame.width && gid.y < frame.height {
-        trace_pixel(gid.xy);
+    let lanes = frame.sample_lanes;
+    let lane = lid & (lanes - 1u);
+    let tile = pixel_tile(lanes);
+    let in_tile = lid / lanes;
+    let gid = group.xy * tile + vec2<u32>(in_tile % tile.x, in_tile / tile.x);
+    let inside = gid.x < frame.width && gid.y < frame.height;
+    var sums = PixelSums(vec3<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0));
+    if inside {
+        sums = trace_samples(gid, lane, lanes);
+    }
+    if lanes > 1u {
+        lane_sums[lid] = sums;
+        workgroupBarrier();
+        if lane == 0u {
+            for (var k = 1u; k < lanes; k++) {
+                sums = add_sums(sums, lane_sums[lid + k]);
+            }
+        }
+    }
+    if inside && lane == 0u {
+        add_to_pixel(gid.y * frame.width + gid.x, sums);
     }
     // One global atomic per workgroup keeps the counter off the critical path.
     atomicAdd(&workgroup_rays, rays_traced);
@@ -32,11 +56,19 @@ fn trace_pixels(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_in
     }
 }
 
-fn trace_pixel(gid: vec2<u32>) {
+// The pixels of a workgroup with `lanes` invocations to a pixel: 8x8 for one, 4x8, 4x4, 2x4, 2x2 for sixteen
+// (passes/trace/mod.rs `pixel_tile` dispatches by the same tiles).
+fn pixel_tile(lanes: u32) -> vec2<u32> {
+    let log2 = countTrailingZeros(lanes);
+    return vec2<u32>(8u >> ((log2 + 1u) / 2u), 8u >> (log2 / 2u));
+}
+
+// This lane's samples of the pixel, summed.
+fn trace_samples(gid: vec2<u32>, lane: u32, lanes: u32) -> PixelSums {
     let pixel = gid.y * frame.width + gid.x;
     let origin = camera_origin();
     let forward = camera_forward();
-    if (frame.flags & FRAME_HIT_AOV) != 0u && frame.sample_base == 0u {
+    if (frame.flags & FRAME_HIT_AOV) != 0u && frame.sample_base == 0u && lane == 0u {
         rays_traced++;
         let hit = trace(Ray(origin, camera_ray_dir(gid, vec2<f32>(0.5))), MISS, false);
         aov_hit[pixel] = vec4<u32>(hit.instance, hit.triangle, bitcast<u32>(hit.bary.x), bitcast<u32>(hit.bary.y));
@@ -44,6 +76,7 @@ fn trace_pixel(gid: vec2<u32>) {
     var sums = PixelSums(vec3<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0));
     if PATH_REGENERATION {
         // One path loop over all the samples (integrator/path.wgsl): a lane whose path ends starts its next one.
+        // (Regeneration runs with one lane to a pixel.)
         if frame.spp > 0u {
             regeneration = Regeneration(gid, pixel, 1u, frame.spp, sums);
             let first = camera_sample(gid, pixel, frame.sample_base);
@@ -51,11 +84,24 @@ fn trace_pixel(gid: vec2<u32>) {
             sums = regeneration.sums;
         }
     } else {
-        for (var s = 0u; s < frame.spp; s++) {
+        for (var s = lane; s < frame.spp; s += lanes) {
             let sample = camera_sample(gid, pixel, frame.sample_base + s);
             sums = add_sample(sums, trace_path(sample.ray, forward, sample.sampler));
         }
     }
+    return sums;
+}
+
+fn add_sums(a: PixelSums, b: PixelSums) -> PixelSums {
+    return PixelSums(
+        a.radiance + b.radiance,
+        a.albedo_depth + b.albedo_depth,
+        a.normal_hits + b.normal_hits,
+        a.unscattered_m2 + b.unscattered_m2,
+    );
+}
+
+fn add_to_pixel(pixel: u32, sums: PixelSums) {
     accum[pixel] += vec4<f32>(sums.radiance, f32(frame.spp));
     if !PATH_AOVS { return; }
     aov_albedo_depth[pixel] += sums.albedo_depth;
