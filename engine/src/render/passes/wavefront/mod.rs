@@ -36,9 +36,21 @@ const MAX_SAMPLES_PER_WAVE: u64 = 16;
 /// Samples per pixel per wave for a view of `pixels` and a dispatch of `spp` samples per pixel, within the
 /// paths the adapter's bindings hold (`max_paths`, at least `pixels`).
 fn samples_per_wave(pixels: u64, spp: u32, max_paths: u64) -> u64 {
-    (WAVE_PATHS.min(max_paths) / pixels.max(1))
+    (wave_paths().min(max_paths) / pixels.max(1))
         .clamp(1, MAX_SAMPLES_PER_WAVE)
         .min(spp.max(1) as u64)
+}
+
+/// [`WAVE_PATHS`], or `RAYKIN_WAVE_PATHS` where set to a number (A/B runs).
+fn wave_paths() -> u64 {
+    static PATHS: std::sync::OnceLock<u64> = std::sync::OnceLock::new();
+    *PATHS.get_or_init(|| match std::env::var("RAYKIN_WAVE_PATHS") {
+        Ok(v) => v.parse().unwrap_or_else(|_| {
+            tracing::warn!("RAYKIN_WAVE_PATHS={v} is not a number of paths; ignored");
+            WAVE_PATHS
+        }),
+        Err(_) => WAVE_PATHS,
+    })
 }
 
 /// The paths one binding of each state array holds: the shadow rays' entries are the largest, and the queues
