@@ -193,7 +193,7 @@ pub fn render_frame(
                 &mut encoder,
                 group,
                 &view,
-                sample_lanes(&ctx, spp),
+                sample_lanes(&ctx, view.pixels(), spp),
                 timestamps,
             ),
         }

@@ -55,7 +55,7 @@ pub fn write_frame_constants(
             LightSampler::Tree => scene.lights.tree_count,
             LightSampler::Power => 0,
         },
-        sample_lanes: sample_lanes(ctx, c.spp),
+        sample_lanes: sample_lanes(ctx, view.pixels(), c.spp),
     };
     ctx.queue
         .write_buffer(&view.frame, 0, bytemuck::bytes_of(&frame));

@@ -17,8 +17,9 @@
 @group(1) @binding(6) var<storage, read_write> moments: array<vec4<f32>>;
 
 var<workgroup> workgroup_rays: atomic<u32>;
-// Each invocation's sums of its samples, where several share a pixel (`frame.sample_lanes` > 1).
-var<workgroup> lane_sums: array<PixelSums, 64>;
+// One of each invocation's sums of its samples, where several share a pixel (`frame.sample_lanes` > 1): a vec4
+// at a time keeps the workgroup's memory at 1 KB (an SM's shared memory comes out of its L1 cache).
+var<workgroup> lane_sums: array<vec4<f32>, 64>;
 
 // A workgroup of 64 invocations covers a tile of pixels, `frame.sample_lanes` invocations to a pixel (a power of
 // two, at most 16; passes/trace/mod.rs `sample_lanes` says when): lane k of a pixel traces the dispatch's samples
@@ -37,12 +38,11 @@ fn trace_pixels(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocati
         sums = trace_samples(gid, lane, lanes);
     }
     if lanes > 1u {
-        lane_sums[lid] = sums;
-        workgroupBarrier();
-        if lane == 0u {
-            for (var k = 1u; k < lanes; k++) {
-                sums = add_sums(sums, lane_sums[lid + k]);
-            }
+        sums.radiance = sum_over_lanes(vec4<f32>(sums.radiance, 0.0), lid, lane, lanes).rgb;
+        if PATH_AOVS {
+            sums.albedo_depth = sum_over_lanes(sums.albedo_depth, lid, lane, lanes);
+            sums.normal_hits = sum_over_lanes(sums.normal_hits, lid, lane, lanes);
+            sums.unscattered_m2 = sum_over_lanes(sums.unscattered_m2, lid, lane, lanes);
         }
     }
     if inside && lane == 0u {
@@ -92,13 +92,19 @@ fn trace_samples(gid: vec2<u32>, lane: u32, lanes: u32) -> PixelSums {
     return sums;
 }
 
-fn add_sums(a: PixelSums, b: PixelSums) -> PixelSums {
-    return PixelSums(
-        a.radiance + b.radiance,
-        a.albedo_depth + b.albedo_depth,
-        a.normal_hits + b.normal_hits,
-        a.unscattered_m2 + b.unscattered_m2,
-    );
+// In lane 0 of a pixel: `value` summed over the pixel's lanes (the other lanes get theirs back).
+fn sum_over_lanes(value: vec4<f32>, lid: u32, lane: u32, lanes: u32) -> vec4<f32> {
+    lane_sums[lid] = value;
+    workgroupBarrier();
+    var sum = value;
+    if lane == 0u {
+        for (var k = 1u; k < lanes; k++) {
+            sum += lane_sums[lid + k];
+        }
+    }
+    // Every lane has been read before the next sum writes the array again.
+    workgroupBarrier();
+    return sum;
 }
 
 fn add_to_pixel(pixel: u32, sums: PixelSums) {

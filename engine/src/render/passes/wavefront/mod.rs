@@ -26,10 +26,13 @@ const QUEUE_ENTRY: u64 = 4;
 const STATE_ENTRY: u64 = 16;
 /// `ShadowRay` in the WGSL: origin, direction, light.
 const SHADOW_ENTRY: u64 = 48;
-/// Paths a wave should hold when the view has fewer pixels: a wave of one sample per pixel leaves a GPU half idle
-/// below about 1080p (2.07 M pixels), since every bounce's dispatch waits for the one before it and each costs a
-/// drain; several samples of every pixel per wave fill it as a 1080p wave does.
-const WAVE_PATHS: u64 = 1 << 21;
+/// Paths a wave should hold when the view has fewer pixels: every bounce's dispatch waits for the one before it,
+/// and once most paths have ended a bounce's few survivors cost that wait alone, so a wave's fixed cost is paid
+/// per wave. At 960x540 and 16 samples per pixel a dispatch in one wave of 8.4 M paths took 0.54-0.95x the time
+/// of four waves of 2.1 M on an H100 (FlightHelmet 0.54x, the spheres 0.63x, the Cornell box 0.95x;
+/// docs/BENCHMARKS.md, "Sample lanes"), for 168 bytes of path state a path (1.4 GB at most, released when the
+/// megakernel traces the view).
+const WAVE_PATHS: u64 = 1 << 23;
 /// The most samples of a pixel one wave holds.
 const MAX_SAMPLES_PER_WAVE: u64 = 16;
 
