@@ -70,7 +70,7 @@ pub struct FrameRow {
     /// The form of the path integrator that traced the measured frames (`--integrator`, resolved by `auto`'s
     /// trial on the warm-up frames).
     pub integrator: String,
-    /// `auto`'s trial: the mean trace ms per timed frame of the megakernel and of the wavefront form.
+    /// `auto`'s trial: the fastest trace ms of a timed frame of the megakernel and of the wavefront form.
     pub auto_trial_ms: Option<[f64; 2]>,
     pub frames: usize,
     pub bvh_build_and_upload_ms: f64,
