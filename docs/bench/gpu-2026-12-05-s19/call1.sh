@@ -1,0 +1,48 @@
+#!/usr/bin/env bash
+# Nineteenth session, call 1 (relb/head.xz = 5af1c24's stripped release build): the trace pass's sample lanes
+# (a dispatch's samples of a pixel spread over up to 16 invocations) against the one-invocation sample loop
+# (RAYKIN_SAMPLE_LANES=off), the megakernel's frame loop at the error part's 960x540 and at 1080p, 16 spp per
+# frame, with the wavefront's time beside them in waves of 2^21 paths (the default) and 2^23 (RAYKIN_WAVE_PATHS:
+# one wave of 16 samples at 960x540), two rounds alternating -> frames.txt; then the Mitsuba 3 side by
+# side (scripts/gpu-mitsuba.sh) on all five static scenes with the default `--integrator auto`, one Mitsuba
+# render per count. Carry [".gl", "relb", ".whl"]; relb/assets holds CornellBox, FlightHelmet,
+# MetalRoughSpheresNoTextures; .whl Dr.Jit 1.5.0's cp312 wheel and `KEEP_DATA= bash
+# scripts/strip-mitsuba-wheel.sh mitsuba-3.9.1-*.whl .whl/mitsuba-strip.tar.xz`.
+set -u
+start=$(date +%s)
+elapsed() { echo $(( $(date +%s) - start )); }
+source scripts/gpu-unpack.sh
+(cd relb && xz -dkf head.xz && chmod +x head)
+export VK_DRIVER_FILES=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
+export RAYKIN_COMMIT=5af1c24
+nvidia-smi --query-gpu=name,driver_version,clocks.sm,clocks.max.sm --format=csv > "$OUT/gpu.txt"
+frames() {  # label, integrator, bench options... (the label's words are the environment: lanes-on, waves-N)
+  local w; w=$(mktemp -d); local label=$1 integrator=$2; shift 2
+  local lanes=on; [[ $label == *lanes-off* ]] && lanes=off
+  local waves=2097152; [[ $label =~ waves-([0-9]+) ]] && waves=${BASH_REMATCH[1]}
+  RAYKIN_SAMPLE_LANES=$lanes RAYKIN_WAVE_PATHS=$waves relb/head bench --suite full --parts frames --frames 30 \
+    --integrator "$integrator" "$@" --assets relb/assets --out "$w" --cache "$w/c" >> /tmp/frames.log 2>&1
+  python3 -c "
+import json; r=json.load(open('$w/results.json'))
+for row in r['rows']: print('$label', row['scene'], row['width'], row['spp_per_frame'], row['trace_ms_median'], row['integrator'])
+" >> "$OUT/frames.txt"
+}
+scenes=(--scene cornell --scene flight-helmet --scene spheres --scene env-lit)
+for round in 1 2; do
+  for form in "lanes-off megakernel" "lanes-on megakernel" "waves-2097152 wavefront" "waves-8388608 wavefront"; do
+    [ "$(elapsed)" -gt 190 ] && break 2
+    frames $form "${scenes[@]}" --width 960 --height 540 --spp-per-frame 16
+  done
+  for lanes in off on; do
+    [ "$(elapsed)" -gt 190 ] && break 2
+    frames "lanes-$lanes" megakernel "${scenes[@]}" --width 1920 --height 1080 --spp-per-frame 16
+  done
+done
+echo "frames: $(elapsed) s" | tee -a "$OUT/frames.txt"
+MITSUBA_REPEATS=1 ASSETS=relb/assets RAYKIN_BIN=relb/head RAYKIN_INTEGRATOR=auto \
+  timeout $(( 585 - $(elapsed) )) bash scripts/gpu-mitsuba.sh "$OUT" > /tmp/run.log 2>&1
+echo "side by side: $(elapsed) s"
+grep -v warning /tmp/run.log | tail -n 30 > "$OUT/run-tail.log"
+grep -h "traced by" /tmp/gpu-mitsuba/bench.log > "$OUT/traced-by.txt"
+cat "$OUT/frames.txt"
+grep -A12 "time to equal error" "$OUT/summary.md" | head -20
