@@ -162,7 +162,7 @@ pub fn render_frame(
             );
         }
         let waves_possible = !aovs && !view.hit_aov && waves_fit;
-        let in_waves =
+        let mut in_waves =
             choice.form(settings.integrator, workload, waves_possible) == Integrator::Wavefront;
         if settings.integrator == Integrator::Auto
             && choice.decision().map(|d| d.chosen) == Some(Integrator::Megakernel)
@@ -175,8 +175,10 @@ pub fn render_frame(
             let pass = wavefront
                 .0
                 .get_or_insert_with(|| WavefrontPass::new(&ctx, layout));
-            pass.prepare(&ctx, &view, needs, spp);
-        } else {
+            // Where the GPU's memory holds no wave's path state (the pass has said so), the megakernel traces.
+            in_waves = pass.prepare(&ctx, &view, needs, spp);
+        }
+        if !in_waves {
             trace.prepare(&ctx, &view, needs, aovs);
         }
         let group = bindings.group(&ctx, &mut scene, &mut encoder, deformed_on_gpu(&deform));

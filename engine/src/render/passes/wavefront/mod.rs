@@ -26,12 +26,14 @@ const QUEUE_ENTRY: u64 = 4;
 const STATE_ENTRY: u64 = 16;
 /// `ShadowRay` in the WGSL: origin, direction, light.
 const SHADOW_ENTRY: u64 = 48;
+/// Bytes of state a path holds: the six per-path arrays and the hits, its two queue entries, its shadow ray.
+const PATH_BYTES: u64 = 7 * STATE_ENTRY + 2 * QUEUE_ENTRY + SHADOW_ENTRY;
 /// Paths a wave should hold when the view has fewer pixels: every bounce's dispatch waits for the one before it,
 /// and once most paths have ended a bounce's few survivors cost that wait alone, so a wave's fixed cost is paid
 /// per wave. At 960x540 and 16 samples per pixel a dispatch in one wave of 8.4 M paths took 0.54-0.95x the time
 /// of four waves of 2.1 M on an H100 (FlightHelmet 0.54x, the spheres 0.63x, the Cornell box 0.95x;
-/// docs/BENCHMARKS.md, "Sample lanes"), for 168 bytes of path state a path (1.4 GB at most, released when the
-/// megakernel traces the view).
+/// docs/BENCHMARKS.md, "Sample lanes"), for [`PATH_BYTES`] of state a path (168: 1.4 GB at most, released when the
+/// megakernel traces the view; smaller waves where the GPU's memory cannot hold it).
 const WAVE_PATHS: u64 = 1 << 23;
 /// The most samples of a pixel one wave holds.
 const MAX_SAMPLES_PER_WAVE: u64 = 16;
@@ -42,6 +44,21 @@ fn samples_per_wave(pixels: u64, spp: u32, max_paths: u64) -> u64 {
     (wave_paths().min(max_paths) / pixels.max(1))
         .clamp(1, MAX_SAMPLES_PER_WAVE)
         .min(spp.max(1) as u64)
+}
+
+/// The first `make(samples)` that succeeds, for `first` samples per wave and then half as many each time down to
+/// one.
+fn halving_until<T>(first: u64, mut make: impl FnMut(u64) -> Option<T>) -> Option<T> {
+    let mut samples = first.max(1);
+    loop {
+        if let Some(made) = make(samples) {
+            return Some(made);
+        }
+        if samples == 1 {
+            return None;
+        }
+        samples /= 2;
+    }
 }
 
 /// [`WAVE_PATHS`], or `RAYKIN_WAVE_PATHS` where set to a number (A/B runs).
@@ -79,7 +96,9 @@ struct Kernels {
 struct PathBuffers {
     pixels: u64,
     samples_per_wave: u64,
-    generation: u64,
+    /// The view's generation and the samples per wave asked for (more than `samples_per_wave` where the GPU's
+    /// memory held fewer).
+    made_for: (u64, u64),
     view_group: wgpu::BindGroup,
     /// The counters, then the queues.
     queues: wgpu::Buffer,
@@ -99,6 +118,8 @@ pub struct WavefrontPass {
     view_layout: wgpu::BindGroupLayout,
     args_layout: wgpu::BindGroupLayout,
     buffers: Option<PathBuffers>,
+    /// The view generation and samples per wave for which no state fitted, so that it is not tried every frame.
+    no_room: Option<(u64, u64)>,
 }
 
 impl WavefrontPass {
@@ -158,13 +179,22 @@ impl WavefrontPass {
             view_layout,
             args_layout,
             buffers: None,
+            no_room: None,
         }
     }
 
     /// Compiles the kernels for `needs` (the first time; with the pass-throughs of alpha-blended surfaces where
     /// some material blends) and makes the paths' state for the view's size and dispatches of `spp` samples per
-    /// pixel (again only when the view's targets were replaced or a wave's samples per pixel change).
-    pub fn prepare(&mut self, ctx: &GpuContext, view: &ViewTargets, needs: KernelNeeds, spp: u32) {
+    /// pixel (again only when the view's targets were replaced or a wave's samples per pixel change). Where the
+    /// GPU's memory cannot hold the state, waves of half as many samples are tried, down to one; returns false
+    /// where even that does not fit (the megakernel must trace the frame).
+    pub fn prepare(
+        &mut self,
+        ctx: &GpuContext,
+        view: &ViewTargets,
+        needs: KernelNeeds,
+        spp: u32,
+    ) -> bool {
         let alpha_blend = needs.materials.alpha_blend;
         let k = &mut self.kernels;
         for kernels in [
@@ -179,15 +209,42 @@ impl WavefrontPass {
         }
         self.needs = needs;
         let pixels = view.pixels();
-        let samples_per_wave = samples_per_wave(pixels, spp, max_paths(ctx));
-        if self.buffers.as_ref().is_some_and(|b| {
-            b.generation == view.generation && b.samples_per_wave == samples_per_wave
-        }) {
-            return;
+        let wanted = samples_per_wave(pixels, spp, max_paths(ctx));
+        let key = (view.generation, wanted);
+        if self.buffers.as_ref().is_some_and(|b| b.made_for == key) {
+            return true;
+        }
+        if self.no_room == Some(key) {
+            return false;
         }
         // Release the old state before making the new one.
         self.buffers = None;
-        let paths = pixels * samples_per_wave;
+        self.buffers = halving_until(wanted, |samples| {
+            let made = self.make_buffers(ctx, view, samples, key);
+            if made.is_none() {
+                tracing::warn!(
+                    "the wavefront's path state for {samples} samples of {pixels} pixels a wave ({} MB) does not \
+                     fit the GPU's memory",
+                    (pixels * samples * PATH_BYTES) >> 20
+                );
+            }
+            made
+        });
+        self.no_room = self.buffers.is_none().then_some(key);
+        self.buffers.is_some()
+    }
+
+    /// The paths' state for waves of `samples` samples of each pixel, or `None` where the GPU's memory cannot
+    /// hold it.
+    fn make_buffers(
+        &self,
+        ctx: &GpuContext,
+        view: &ViewTargets,
+        samples_per_wave: u64,
+        made_for: (u64, u64),
+    ) -> Option<PathBuffers> {
+        let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+        let paths = view.pixels() * samples_per_wave;
         let arrays = |labels: &[&str]| -> Vec<wgpu::Buffer> {
             labels
                 .iter()
@@ -215,6 +272,10 @@ impl WavefrontPass {
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::INDIRECT,
             mapped_at_creation: false,
         });
+        // Before the bind groups, which would raise a validation error for a buffer that could not be made.
+        if pollster::block_on(scope.pop()).is_some() {
+            return None;
+        }
         let mut group: Vec<&wgpu::Buffer> = vec![&view.frame, &view.accum];
         group.extend(states.iter());
         group.push(&queues);
@@ -222,16 +283,16 @@ impl WavefrontPass {
         let view_group = bind_group(ctx, "wavefront view", &self.view_layout, &group);
         let args_group = bind_group(ctx, "wavefront dispatch sizes", &self.args_layout, &[&args]);
         let state = states.into_iter().chain([shadows]).collect();
-        self.buffers = Some(PathBuffers {
-            pixels,
+        Some(PathBuffers {
+            pixels: view.pixels(),
             samples_per_wave,
-            generation: view.generation,
+            made_for,
             view_group,
             queues,
             args_group,
             args,
             _state: state,
-        });
+        })
     }
 
     /// Records the pass (after [`Self::prepare`] for this view and `spp`): `spp` samples per pixel in waves of
@@ -295,5 +356,27 @@ impl WavefrontPass {
         }
         encoder.clear_buffer(&view.ray_counter, 0, None);
         encoder.copy_buffer_to_buffer(&buffers.queues, CONTROL_RAYS * 4, &view.ray_counter, 0, 4);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn waves_shrink_by_halves_until_their_state_fits() {
+        let mut tried = Vec::new();
+        let made = halving_until(16, |samples| {
+            tried.push(samples);
+            (samples <= 3).then_some(samples)
+        });
+        assert_eq!((made, tried), (Some(2), vec![16, 8, 4, 2]));
+        let mut tried = Vec::new();
+        let none: Option<u64> = halving_until(5, |samples| {
+            tried.push(samples);
+            None
+        });
+        assert_eq!((none, tried), (None, vec![5, 2, 1]));
+        assert_eq!(halving_until(0, Some), Some(1));
     }
 }
