@@ -131,6 +131,15 @@ pub fn assert_forms_render_the_same_image(a: &[[f32; 3]], b: &[[f32; 3]], what: 
     );
 }
 
+/// The asset at `file` under ../shared/assets, loaded (a failure names the file).
+pub fn shared_scene(file: &str) -> Arc<SceneAsset> {
+    let path = shared_assets().join(file);
+    Arc::new(
+        raykin::scene::load_gltf(&path, &Default::default())
+            .unwrap_or_else(|e| panic!("{}: {e}", path.display())),
+    )
+}
+
 /// The largest difference of a channel of `a` from `b`'s, relative to `b`'s (at least 1e-3): two forms of a
 /// kernel that add the same samples in another order differ by rounding only.
 pub fn worst_relative_difference(a: &[[f32; 3]], b: &[[f32; 3]]) -> f32 {

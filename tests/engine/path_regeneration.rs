@@ -7,7 +7,6 @@ use crate::common::*;
 use raykin::camera::CameraChoice;
 use raykin::headless::HeadlessApp;
 use raykin::render::{Environment, RenderSettings};
-use std::sync::Arc;
 
 #[test]
 fn regenerated_paths_give_the_sample_loops_image() {
@@ -24,11 +23,7 @@ fn regenerated_paths_give_the_sample_loops_image() {
         ),
         ("AttenuationTest/glTF/AttenuationTest.gltf", true),
     ] {
-        let path = shared_assets().join(file);
-        let scene = Arc::new(
-            raykin::scene::load_gltf(&path, &Default::default())
-                .unwrap_or_else(|e| panic!("{}: {e}", path.display())),
-        );
+        let scene = shared_scene(file);
         let render = |regenerate: bool| {
             let mut form = ctx.clone();
             form.path_regeneration = regenerate;

@@ -7,7 +7,6 @@ use crate::common::*;
 use raykin::camera::CameraChoice;
 use raykin::headless::HeadlessApp;
 use raykin::render::{Environment, RenderSettings};
-use std::sync::Arc;
 
 #[test]
 fn sample_lanes_give_the_sample_loops_image() {
@@ -18,11 +17,7 @@ fn sample_lanes_give_the_sample_loops_image() {
         "CornellBox/CornellBox.glb",
         "AlphaBlendModeTest/glTF-Binary/AlphaBlendModeTest.glb",
     ] {
-        let path = shared_assets().join(file);
-        let scene = Arc::new(
-            raykin::scene::load_gltf(&path, &Default::default())
-                .unwrap_or_else(|e| panic!("{}: {e}", path.display())),
-        );
+        let scene = shared_scene(file);
         let render = |lanes: bool| {
             let mut form = ctx.clone();
             form.path_regeneration = false;

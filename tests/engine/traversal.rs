@@ -10,14 +10,6 @@ use raykin::gpu_deform::DeformBackend;
 use raykin::render::RenderSettings;
 use std::sync::Arc;
 
-fn load(file: &str) -> Arc<raykin::scene::SceneAsset> {
-    let path = shared_assets().join(file);
-    Arc::new(
-        raykin::scene::load_gltf(&path, &Default::default())
-            .unwrap_or_else(|e| panic!("{}: {e}", path.display())),
-    )
-}
-
 fn settings(size: u32, layout: StaticLayout, merge_static: bool) -> RenderSettings {
     RenderSettings {
         width: size,
@@ -30,7 +22,7 @@ fn settings(size: u32, layout: StaticLayout, merge_static: bool) -> RenderSettin
 
 /// Per-mesh wide trees (no merge) and per-mesh BVH2s.
 fn render_both(file: &str, size: u32, spp: u32) -> (Vec<[f32; 3]>, Vec<[f32; 3]>) {
-    let scene = load(file);
+    let scene = shared_scene(file);
     let (ctx, _gpu) = gpu();
     let image = |layout| {
         render(
@@ -107,7 +99,7 @@ fn assert_same_image(file: &str, size: u32, spp: u32) {
 
 /// Renders `file` with the static instances merged and without; returns the merge's members (node, mesh).
 fn assert_merge_keeps_the_image(file: &str, size: u32, spp: u32) -> Vec<(u32, u32)> {
-    let scene = load(file);
+    let scene = shared_scene(file);
     let (ctx, _gpu) = gpu();
     let mut merged = raykin::headless::HeadlessApp::new(
         ctx.clone(),
@@ -173,7 +165,7 @@ fn merged_static_tree_gives_the_per_mesh_image() {
 fn alpha_masked_meshes_stay_out_of_the_merge() {
     let file = "AlphaBlendModeTest/glTF-Binary/AlphaBlendModeTest.glb";
     let members = assert_merge_keeps_the_image(file, 32, 4);
-    let scene = load(file);
+    let scene = shared_scene(file);
     let masked = |mesh: u32| {
         scene.meshes[mesh as usize]
             .triangle_materials
@@ -204,7 +196,7 @@ fn alpha_masked_meshes_stay_out_of_the_merge() {
 fn a_moved_member_leaves_the_merge_and_renders_where_it_went() {
     use raykin::scene::{SceneNode, Transform};
     let file = "CornellBox/CornellBox.glb";
-    let scene = load(file);
+    let scene = shared_scene(file);
     let (ctx, _gpu) = gpu();
     let mut app = raykin::headless::HeadlessApp::new(
         ctx.clone(),
@@ -318,8 +310,7 @@ fn inside_the_box() -> CameraChoice {
 
 #[test]
 fn raycast_pass_casts_one_camera_ray_per_pixel_and_one_bounce_per_hit() {
-    let path = shared_assets().join("CornellBox/CornellBox.glb");
-    let scene = Arc::new(raykin::scene::load_gltf(&path, &Default::default()).unwrap());
+    let scene = shared_scene("CornellBox/CornellBox.glb");
     let (ctx, _gpu) = gpu();
     if !ctx.supports_timestamps() {
         eprintln!("adapter has no timestamp queries: the ray-casting pass reports nothing");
@@ -345,7 +336,7 @@ fn raycast_pass_casts_one_camera_ray_per_pixel_and_one_bounce_per_hit() {
 /// same at the top level; looking away from the box, every ray stops at the top-level root's box.
 #[test]
 fn traversal_work_counts_what_the_rays_must_do() {
-    let scene = load("CornellBox/CornellBox.glb");
+    let scene = shared_scene("CornellBox/CornellBox.glb");
     let triangles = scene.triangle_count() as u64;
     let (ctx, _gpu) = gpu();
     let inside = inside_the_box();
@@ -439,7 +430,7 @@ fn the_scene_read_through_textures_renders_the_buffers_image() {
         (man, sky.clone(), DeformBackend::Cpu),
         (man, sky, DeformBackend::Gpu),
     ] {
-        let scene = load(file);
+        let scene = shared_scene(file);
         let image = |textures: bool| {
             let settings = RenderSettings {
                 environment: environment.clone(),
@@ -466,7 +457,7 @@ fn kernels_compiled_for_the_scene_shape_render_the_general_kernels_image() {
         ("CornellBox/CornellBox.glb", BLAS_LAYOUT_WIDE),
         ("CesiumMan/glTF-Binary/CesiumMan.glb", BLAS_LAYOUT_BINARY),
     ] {
-        let scene = load(file);
+        let scene = shared_scene(file);
         let image = |shaped: bool| {
             let app = four_samples(form(shaped), &scene, settings(24, StaticLayout::Wide, true));
             let shape = app.gpu_scene();
@@ -492,7 +483,8 @@ fn kernels_compiled_for_the_scene_shape_render_the_general_kernels_image() {
         rotation_degrees: 30.0,
         strength: 1.0,
     });
-    let spheres = load("MetalRoughSpheresNoTextures/glTF-Binary/MetalRoughSpheresNoTextures.glb");
+    let spheres =
+        shared_scene("MetalRoughSpheresNoTextures/glTF-Binary/MetalRoughSpheresNoTextures.glb");
     let image = |shaped: bool| {
         let app = four_samples(form(shaped), &spheres, sunny.clone());
         assert!(
@@ -509,7 +501,7 @@ fn kernels_compiled_for_the_scene_shape_render_the_general_kernels_image() {
     ] {
         let mut app = raykin::headless::HeadlessApp::new(
             form(true),
-            load("CornellBox/CornellBox.glb"),
+            shared_scene("CornellBox/CornellBox.glb"),
             settings(8, layout, false),
             &CameraChoice::Auto,
         )

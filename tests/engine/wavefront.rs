@@ -42,11 +42,7 @@ fn waves_trace_the_megakernels_paths() {
         "AlphaBlendModeTest/glTF-Binary/AlphaBlendModeTest.glb",
         "AttenuationTest/glTF/AttenuationTest.gltf",
     ] {
-        let path = shared_assets().join(file);
-        let scene = Arc::new(
-            raykin::scene::load_gltf(&path, &Default::default())
-                .unwrap_or_else(|e| panic!("{}: {e}", path.display())),
-        );
+        let scene = shared_scene(file);
         let render = |integrator: Integrator, spp: u32, chunk: u32| {
             let mut app = small_app(&ctx, &scene, integrator);
             app.accumulate(spp, chunk, |_| {});
@@ -114,8 +110,7 @@ fn cornell_box_in_waves_matches_mitsuba_within_noise() {
 fn auto_times_both_forms_and_keeps_the_image() {
     use raykin::render::integrator_choice::IntegratorChoice;
     let (ctx, _gpu) = gpu();
-    let path = shared_assets().join("CornellBox/CornellBox.glb");
-    let scene = Arc::new(raykin::scene::load_gltf(&path, &Default::default()).expect("loads"));
+    let scene = shared_scene("CornellBox/CornellBox.glb");
     // Four trials at most (a trial whose times spread is run again), then the chosen form.
     let frames = 44;
     let render = |integrator: Integrator, trial: bool| {

@@ -222,17 +222,31 @@ mod tests {
         }
     }
 
-    /// Runs `Auto` frames with `ms(form)` as each frame's trace time until a decision or `limit` frames.
-    fn trial(choice: &mut IntegratorChoice, ms: impl Fn(Integrator) -> f64, limit: usize) -> usize {
+    /// Runs `Auto` frames with `ms(form, frame)` as each frame's trace time (frames counted from 1) until a
+    /// decision or `limit` frames.
+    fn trial(
+        choice: &mut IntegratorChoice,
+        ms: impl Fn(Integrator, usize) -> f64,
+        limit: usize,
+    ) -> usize {
         for frame in 0..limit {
             if choice.decision().is_some() {
                 return frame;
             }
             let form = choice.form(Integrator::Auto, workload(8), true);
             assert!(choice.timing());
-            choice.record(Some(ms(form)));
+            choice.record(Some(ms(form, frame + 1)));
         }
         limit
+    }
+
+    /// The megakernel's and the wavefront's ms per frame of `(megakernel, wavefront)`.
+    fn speeds(form: Integrator, (megakernel, wavefront): (f64, f64)) -> f64 {
+        if form == Integrator::Wavefront {
+            wavefront
+        } else {
+            megakernel
+        }
     }
 
     #[test]
@@ -247,16 +261,11 @@ mod tests {
             let forms = std::cell::RefCell::new(Vec::new());
             let frames = trial(
                 &mut choice,
-                |form| {
+                |form, frame| {
                     forms.borrow_mut().push(form);
                     // The warm-up frame of each form is slow and must not count.
-                    let warm_up = forms.borrow().iter().filter(|f| **f == form).count() == 1;
-                    let ms = if form == Integrator::Wavefront {
-                        waves_ms
-                    } else {
-                        1.0
-                    };
-                    if warm_up { 50.0 } else { ms }
+                    let ms = speeds(form, (1.0, waves_ms));
+                    if frame <= WARM_UP_FRAMES { 50.0 } else { ms }
                 },
                 100,
             );
@@ -280,15 +289,7 @@ mod tests {
     #[test]
     fn a_drift_over_the_trial_favours_neither_form() {
         let mut choice = IntegratorChoice::new(true);
-        let frame = std::cell::Cell::new(0);
-        let frames = trial(
-            &mut choice,
-            |_| {
-                frame.set(frame.get() + 1);
-                10.0 - 0.05 * frame.get() as f64
-            },
-            100,
-        );
+        let frames = trial(&mut choice, |_, frame| 10.0 - 0.05 * frame as f64, 100);
         assert_eq!(frames, TRIAL.len(), "one trial");
         // The order alone decides this: alternating forms would have timed the wavefront 0.05 ms faster, and
         // each form's fastest frame is the wavefront's last.
@@ -301,18 +302,9 @@ mod tests {
     #[test]
     fn a_trial_timed_while_the_clocks_rose_runs_again() {
         let mut choice = IntegratorChoice::new(true);
-        let frame = std::cell::Cell::new(0);
         let frames = trial(
             &mut choice,
-            |form| {
-                frame.set(frame.get() + 1);
-                let ms = if form == Integrator::Wavefront {
-                    4.6
-                } else {
-                    4.0
-                };
-                if frame.get() <= 3 { 3.0 * ms } else { ms }
-            },
+            |form, frame| speeds(form, (4.0, 4.6)) * if frame <= 3 { 3.0 } else { 1.0 },
             100,
         );
         assert_eq!(frames, 2 * TRIAL.len(), "a second trial");
@@ -326,23 +318,12 @@ mod tests {
     #[test]
     fn an_unsteady_gpu_is_decided_by_the_median_pair() {
         let mut choice = IntegratorChoice::new(true);
-        let frame = std::cell::Cell::new(0);
+        // The fourth frame of every trial (the wavefront's in its first pair) three times slower: by their means
+        // the megakernel would be the faster form.
         let frames = trial(
             &mut choice,
-            |form| {
-                frame.set(frame.get() + 1);
-                let ms = if form == Integrator::Wavefront {
-                    4.0
-                } else {
-                    4.6
-                };
-                // The fourth frame of every trial (the wavefront's in its first pair) three times slower: by
-                // their means the megakernel would be the faster form.
-                if frame.get() % TRIAL.len() == 4 {
-                    3.0 * ms
-                } else {
-                    ms
-                }
+            |form, frame| {
+                speeds(form, (4.6, 4.0)) * if frame % TRIAL.len() == 4 { 3.0 } else { 1.0 }
             },
             100,
         );
@@ -353,11 +334,7 @@ mod tests {
     #[test]
     fn a_new_workload_times_both_forms_again() {
         let mut choice = IntegratorChoice::new(true);
-        trial(
-            &mut choice,
-            |f| if f == Integrator::Wavefront { 0.5 } else { 1.0 },
-            100,
-        );
+        trial(&mut choice, |form, _| speeds(form, (1.0, 0.5)), 100);
         assert_eq!(
             choice.decision().map(|d| d.chosen),
             Some(Integrator::Wavefront)
