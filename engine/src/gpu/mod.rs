@@ -351,7 +351,7 @@ fn path_regeneration_on(info: &wgpu::AdapterInfo) -> bool {
 }
 
 /// An `on|off` environment switch of a kernel form (A/B runs), else `default`.
-fn switch_on(name: &str, default: bool) -> bool {
+pub(crate) fn switch_on(name: &str, default: bool) -> bool {
     match std::env::var(name).as_deref() {
         Ok("on") => true,
         Ok("off") => false,

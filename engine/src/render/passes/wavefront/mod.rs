@@ -6,6 +6,7 @@
 //! [`Integrator::Wavefront`]: crate::render::settings::Integrator::Wavefront
 
 use crate::gpu::GpuContext;
+use crate::gpu::PassTimestamps;
 use crate::gpu::bind::{Binding, bind_group, compute_layout, storage_buffer};
 use crate::render::material_lobes::{KernelNeeds, LobeKernels};
 use crate::render::shaders::{ShaderModule, compose};
@@ -108,6 +109,59 @@ struct PathBuffers {
     _state: Vec<wgpu::Buffer>,
 }
 
+/// A dispatch's size: workgroups, or the offset of its sizes in the dispatch-sizes buffer.
+#[derive(Clone, Copy)]
+enum Step {
+    Direct(u32, u32, u32),
+    Indirect(u64),
+}
+
+/// `RAYKIN_WAVE_PROFILE=on` (kernel development): the first wave of each dispatch runs one compute pass per
+/// stage, each timed, and the times are logged (info level) when the pass is next prepared.
+struct WaveProfile {
+    timestamps: PassTimestamps,
+    pairs: u32,
+    /// Set by a profiled dispatch: its depth and waves, for the log line.
+    pending: std::sync::Mutex<Option<(u32, u32)>>,
+}
+
+impl WaveProfile {
+    /// Stages of a wave: the first bounce, a trace and a shade stage per bounce, the last shadow rays, finish.
+    const PAIRS: u32 = 1 + 2 * 32 + 2;
+
+    fn new(ctx: &GpuContext) -> Option<Self> {
+        if !crate::gpu::switch_on("RAYKIN_WAVE_PROFILE", false) {
+            return None;
+        }
+        Some(Self {
+            timestamps: PassTimestamps::new(ctx, "wavefront profile", Self::PAIRS)?,
+            pairs: Self::PAIRS,
+            pending: Default::default(),
+        })
+    }
+
+    /// Logs the last profiled dispatch's stage times (blocks until it finished).
+    fn log(&self, ctx: &GpuContext) {
+        let Some((depth, waves)) = self.pending.lock().ok().and_then(|mut p| p.take()) else {
+            return;
+        };
+        let ms = self.timestamps.read_ms(ctx);
+        let stages = 3 + 2 * depth as usize;
+        let bounces: Vec<String> = (0..depth as usize)
+            .map(|b| format!("{:.3}+{:.3}", ms[1 + 2 * b], ms[2 + 2 * b]))
+            .collect();
+        tracing::info!(
+            "wavefront profile, first of {waves} waves, ms: first bounce {:.3}; bounces (trace+shade) {}; \
+             last shadow rays {:.3}; finish {:.3}; total {:.3}",
+            ms[0],
+            bounces.join(" "),
+            ms[stages - 2],
+            ms[stages - 1],
+            ms[..stages].iter().sum::<f64>()
+        );
+    }
+}
+
 /// The pass, built the first time a frame runs in waves (its kernels and state cost nothing until then).
 #[derive(Resource, Default)]
 pub struct WavefrontSlot(pub Option<WavefrontPass>);
@@ -120,6 +174,7 @@ pub struct WavefrontPass {
     buffers: Option<PathBuffers>,
     /// The view generation and samples per wave for which no state fitted, so that it is not tried every frame.
     no_room: Option<(u64, u64)>,
+    profile: Option<WaveProfile>,
 }
 
 impl WavefrontPass {
@@ -180,6 +235,7 @@ impl WavefrontPass {
             args_layout,
             buffers: None,
             no_room: None,
+            profile: WaveProfile::new(ctx),
         }
     }
 
@@ -208,6 +264,9 @@ impl WavefrontPass {
             kernels.get(needs);
         }
         self.needs = needs;
+        if let Some(profile) = &self.profile {
+            profile.log(ctx);
+        }
         let pixels = view.pixels();
         let wanted = samples_per_wave(pixels, spp, max_paths(ctx));
         let key = (view.generation, wanted);
@@ -323,35 +382,68 @@ impl WavefrontPass {
         let passing = self.needs.materials.alpha_blend as usize;
         let extend = pipeline(&k.extend[passing]);
         let (x, y) = view.workgroups();
-        {
+        let samples_per_wave = buffers.samples_per_wave as u32;
+        let advance = (pipeline(&k.advance), Step::Direct(1, 1, 1));
+        // A wave's dispatches by stage (the stages `RAYKIN_WAVE_PROFILE` times apart).
+        let mut stages = vec![vec![
+            (pipeline(&k.begin_wave), Step::Direct(1, 1, 1)),
+            (
+                pipeline(&k.first_bounce[passing]),
+                Step::Direct(x, y, samples_per_wave),
+            ),
+            advance,
+        ]];
+        for _ in 1..=max_depth {
+            stages.push(vec![(extend, Step::Indirect(0))]);
+            stages.push(vec![(pipeline(&k.shade), Step::Indirect(12)), advance]);
+        }
+        // The last bounce's shadow rays, then the wave's radiance into the accumulation.
+        stages.push(vec![(extend, Step::Indirect(0))]);
+        stages.push(vec![(pipeline(&k.finish), Step::Direct(x, y, 1))]);
+        let waves = spp.div_ceil(samples_per_wave);
+        let profile = self
+            .profile
+            .as_ref()
+            .filter(|p| stages.len() as u32 <= p.pairs);
+        let mut timestamp_writes = timestamp_writes;
+        let mut run = |stages: &[Vec<(&wgpu::ComputePipeline, Step)>], writes| {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("wavefront trace"),
-                timestamp_writes,
+                timestamp_writes: writes,
             });
             pass.set_bind_group(0, scene, &[]);
             pass.set_bind_group(1, &buffers.view_group, &[]);
             pass.set_bind_group(2, &buffers.args_group, &[]);
-            let samples_per_wave = buffers.samples_per_wave as u32;
-            for _ in 0..spp.div_ceil(samples_per_wave) {
-                pass.set_pipeline(pipeline(&k.begin_wave));
-                pass.dispatch_workgroups(1, 1, 1);
-                pass.set_pipeline(pipeline(&k.first_bounce[passing]));
-                pass.dispatch_workgroups(x, y, samples_per_wave);
-                pass.set_pipeline(pipeline(&k.advance));
-                pass.dispatch_workgroups(1, 1, 1);
-                for _ in 1..=max_depth {
-                    pass.set_pipeline(extend);
-                    pass.dispatch_workgroups_indirect(&buffers.args, 0);
-                    pass.set_pipeline(pipeline(&k.shade));
-                    pass.dispatch_workgroups_indirect(&buffers.args, 12);
-                    pass.set_pipeline(pipeline(&k.advance));
-                    pass.dispatch_workgroups(1, 1, 1);
+            for &(kernel, step) in stages.iter().flatten() {
+                pass.set_pipeline(kernel);
+                match step {
+                    Step::Direct(x, y, z) => pass.dispatch_workgroups(x, y, z),
+                    Step::Indirect(offset) => {
+                        pass.dispatch_workgroups_indirect(&buffers.args, offset)
+                    }
                 }
-                // The last bounce's shadow rays.
-                pass.set_pipeline(extend);
-                pass.dispatch_workgroups_indirect(&buffers.args, 0);
-                pass.set_pipeline(pipeline(&k.finish));
-                pass.dispatch_workgroups(x, y, 1);
+            }
+        };
+        match profile {
+            // The first wave one pass per stage, each timed; the trace pass's own timestamps are left out.
+            Some(p) => {
+                for (i, stage) in stages.iter().enumerate() {
+                    run(
+                        std::slice::from_ref(stage),
+                        Some(p.timestamps.pass_writes(i as u32)),
+                    );
+                }
+                for _ in 1..waves {
+                    run(&stages, None);
+                }
+                p.timestamps.resolve(encoder, stages.len() as u32);
+                if let Ok(mut pending) = p.pending.lock() {
+                    *pending = Some((max_depth, waves));
+                }
+            }
+            None => {
+                let all: Vec<_> = (0..waves).flat_map(|_| stages.iter().cloned()).collect();
+                run(&all, timestamp_writes.take());
             }
         }
         encoder.clear_buffer(&view.ray_counter, 0, None);
