@@ -350,6 +350,17 @@ fn path_regeneration_on(info: &wgpu::AdapterInfo) -> bool {
     )
 }
 
+/// A number from the environment variable `name` (A/B runs of a tuning constant), else `default`.
+pub(crate) fn number_from_env(name: &str, default: u64) -> u64 {
+    match std::env::var(name) {
+        Ok(v) => v.parse().unwrap_or_else(|_| {
+            tracing::warn!("{name}={v} is not a number; ignored");
+            default
+        }),
+        Err(_) => default,
+    }
+}
+
 /// An `on|off` environment switch of a kernel form (A/B runs), else `default`.
 pub(crate) fn switch_on(name: &str, default: bool) -> bool {
     match std::env::var(name).as_deref() {

@@ -138,10 +138,10 @@ impl TracePass {
 
 /// The most invocations that share a pixel's samples: a workgroup of 64 then holds 2x2 pixels.
 const MOST_SAMPLE_LANES: u32 = 16;
-/// Invocations a dispatch should have where its pixels' samples allow: enough for every thread slot of a large GPU
-/// many times over (an H100 holds 270 k; 2^22 is 15 times that), so that no warp still running long paths leaves the rest idle at the
-/// end. At 960x540 and 16 samples per pixel, sixteen lanes took 0.36x (FlightHelmet) and 0.60x (the spheres) of the
-/// loop's time on an H100 (docs/BENCHMARKS.md, "Sample lanes").
+/// Invocations a dispatch should have where its pixels' samples allow: enough for every thread slot of a large
+/// GPU many times over (an H100 holds 270 k; 2^22 is 15 times that), so that no warp still running long paths
+/// leaves the rest idle at the end. At 960x540 and 16 samples per pixel, sixteen lanes took 0.34x (FlightHelmet)
+/// and 0.58x (the spheres) of the loop's time on an H100 (docs/BENCHMARKS.md, "Sample lanes").
 const LANE_INVOCATIONS: u64 = 1 << 22;
 
 /// How many invocations share each pixel's `spp` samples of a dispatch of `pixels` (written to the frame
@@ -152,13 +152,21 @@ pub fn sample_lanes(ctx: &GpuContext, pixels: u64, spp: u32) -> u32 {
     if !ctx.sample_lanes || ctx.path_regeneration {
         return 1;
     }
-    lanes_for(pixels, spp)
+    lanes_for(pixels, spp, lane_invocations())
 }
 
-fn lanes_for(pixels: u64, spp: u32) -> u32 {
-    let wanted = LANE_INVOCATIONS.div_ceil(pixels.max(1)).next_power_of_two();
+/// The fewest lanes that give `invocations` for `pixels`, at most `spp` (a power of two) and 16.
+fn lanes_for(pixels: u64, spp: u32, invocations: u64) -> u32 {
+    let wanted = invocations.div_ceil(pixels.max(1)).next_power_of_two();
     let below_spp = 1 << (u32::BITS - 1 - spp.max(1).leading_zeros());
     (wanted.min(MOST_SAMPLE_LANES as u64) as u32).min(below_spp)
+}
+
+/// [`LANE_INVOCATIONS`], or `RAYKIN_LANE_INVOCATIONS` where set to a number (A/B runs).
+fn lane_invocations() -> u64 {
+    static INVOCATIONS: std::sync::OnceLock<u64> = std::sync::OnceLock::new();
+    *INVOCATIONS
+        .get_or_init(|| crate::gpu::number_from_env("RAYKIN_LANE_INVOCATIONS", LANE_INVOCATIONS))
 }
 
 /// The pixels of one workgroup of 64 invocations with `lanes` to a pixel, as `trace.wgsl`'s `pixel_tile` (8x8
@@ -175,15 +183,15 @@ mod tests {
     #[test]
     fn lanes_fill_small_views_within_the_samples() {
         // 960x540 (518 k pixels) wants 16 lanes, 1080p 4, 1440p 2, 4K one.
-        assert_eq!(lanes_for(960 * 540, 16), 16);
-        assert_eq!(lanes_for(1920 * 1080, 16), 4);
-        assert_eq!(lanes_for(2560 * 1440, 16), 2);
-        assert_eq!(lanes_for(3840 * 2160, 16), 1);
+        assert_eq!(lanes_for(960 * 540, 16, LANE_INVOCATIONS), 16);
+        assert_eq!(lanes_for(1920 * 1080, 16, LANE_INVOCATIONS), 4);
+        assert_eq!(lanes_for(2560 * 1440, 16, LANE_INVOCATIONS), 2);
+        assert_eq!(lanes_for(3840 * 2160, 16, LANE_INVOCATIONS), 1);
         // Never more lanes than samples (a power of two at most), nor more than sixteen.
-        assert_eq!(lanes_for(960 * 540, 7), 4);
-        assert_eq!(lanes_for(960 * 540, 1), 1);
-        assert_eq!(lanes_for(16, 64), 16);
-        assert_eq!(lanes_for(0, 0), 1);
+        assert_eq!(lanes_for(960 * 540, 7, LANE_INVOCATIONS), 4);
+        assert_eq!(lanes_for(960 * 540, 1, LANE_INVOCATIONS), 1);
+        assert_eq!(lanes_for(16, 64, LANE_INVOCATIONS), 16);
+        assert_eq!(lanes_for(0, 0, LANE_INVOCATIONS), 1);
     }
 
     #[test]

@@ -65,13 +65,7 @@ fn halving_until<T>(first: u64, mut make: impl FnMut(u64) -> Option<T>) -> Optio
 /// [`WAVE_PATHS`], or `RAYKIN_WAVE_PATHS` where set to a number (A/B runs).
 fn wave_paths() -> u64 {
     static PATHS: std::sync::OnceLock<u64> = std::sync::OnceLock::new();
-    *PATHS.get_or_init(|| match std::env::var("RAYKIN_WAVE_PATHS") {
-        Ok(v) => v.parse().unwrap_or_else(|_| {
-            tracing::warn!("RAYKIN_WAVE_PATHS={v} is not a number of paths; ignored");
-            WAVE_PATHS
-        }),
-        Err(_) => WAVE_PATHS,
-    })
+    *PATHS.get_or_init(|| crate::gpu::number_from_env("RAYKIN_WAVE_PATHS", WAVE_PATHS))
 }
 
 /// The paths one binding of each state array holds: the shadow rays' entries are the largest, and the queues
