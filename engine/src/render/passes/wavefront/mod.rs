@@ -114,7 +114,6 @@ enum Step {
 /// stage, each timed, and the times are logged (info level) when the pass is next prepared.
 struct WaveProfile {
     timestamps: PassTimestamps,
-    pairs: u32,
     /// Set by a profiled dispatch: its depth and waves, for the log line.
     pending: std::sync::Mutex<Option<(u32, u32)>>,
 }
@@ -129,7 +128,6 @@ impl WaveProfile {
         }
         Some(Self {
             timestamps: PassTimestamps::new(ctx, "wavefront profile", Self::PAIRS)?,
-            pairs: Self::PAIRS,
             pending: Default::default(),
         })
     }
@@ -297,7 +295,8 @@ impl WavefrontPass {
         made_for: (u64, u64),
     ) -> Option<PathBuffers> {
         let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
-        let paths = view.pixels() * samples_per_wave;
+        let pixels = view.pixels();
+        let paths = pixels * samples_per_wave;
         let arrays = |labels: &[&str]| -> Vec<wgpu::Buffer> {
             labels
                 .iter()
@@ -337,7 +336,7 @@ impl WavefrontPass {
         let args_group = bind_group(ctx, "wavefront dispatch sizes", &self.args_layout, &[&args]);
         let state = states.into_iter().chain([shadows]).collect();
         Some(PathBuffers {
-            pixels: view.pixels(),
+            pixels,
             samples_per_wave,
             made_for,
             view_group,
@@ -398,9 +397,9 @@ impl WavefrontPass {
         let profile = self
             .profile
             .as_ref()
-            .filter(|p| stages.len() as u32 <= p.pairs);
-        let mut timestamp_writes = timestamp_writes;
-        let mut run = |stages: &[Vec<(&wgpu::ComputePipeline, Step)>], writes| {
+            .filter(|_| stages.len() as u32 <= WaveProfile::PAIRS);
+        // One compute pass running `stages` `waves` times over.
+        let mut run = |stages: &[Vec<(&wgpu::ComputePipeline, Step)>], waves: u32, writes| {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("wavefront trace"),
                 timestamp_writes: writes,
@@ -408,7 +407,7 @@ impl WavefrontPass {
             pass.set_bind_group(0, scene, &[]);
             pass.set_bind_group(1, &buffers.view_group, &[]);
             pass.set_bind_group(2, &buffers.args_group, &[]);
-            for &(kernel, step) in stages.iter().flatten() {
+            for &(kernel, step) in (0..waves).flat_map(|_| stages.iter().flatten()) {
                 pass.set_pipeline(kernel);
                 match step {
                     Step::Direct(x, y, z) => pass.dispatch_workgroups(x, y, z),
@@ -424,21 +423,19 @@ impl WavefrontPass {
                 for (i, stage) in stages.iter().enumerate() {
                     run(
                         std::slice::from_ref(stage),
+                        1,
                         Some(p.timestamps.pass_writes(i as u32)),
                     );
                 }
-                for _ in 1..waves {
-                    run(&stages, None);
+                if waves > 1 {
+                    run(&stages, waves - 1, None);
                 }
                 p.timestamps.resolve(encoder, stages.len() as u32);
                 if let Ok(mut pending) = p.pending.lock() {
                     *pending = Some((max_depth, waves));
                 }
             }
-            None => {
-                let all: Vec<_> = (0..waves).flat_map(|_| stages.iter().cloned()).collect();
-                run(&all, timestamp_writes.take());
-            }
+            None => run(&stages, waves, timestamp_writes),
         }
         encoder.clear_buffer(&view.ray_counter, 0, None);
         encoder.copy_buffer_to_buffer(&buffers.queues, CONTROL_RAYS * 4, &view.ray_counter, 0, 4);
