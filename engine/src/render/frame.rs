@@ -37,7 +37,7 @@ use super::material_lobes::{KernelNeeds, MaterialNeeds};
 use super::passes::denoise::{DenoiseInputs, Denoiser};
 use super::passes::gradient::FILTERED;
 use super::passes::tonemap::{TonemapInput, TonemapPass};
-use super::passes::trace::{TracePass, sample_lanes};
+use super::passes::trace::TracePass;
 use super::passes::wavefront::{WavefrontPass, WavefrontSlot};
 use super::realtime::{
     Realtime, RealtimeImage, RealtimePasses, SceneGroups, Shown, runs as realtime_runs,
@@ -127,7 +127,7 @@ pub fn render_frame(
     let mut encoder = ctx.device.create_command_encoder(&Default::default());
     if traces {
         let spp = settings.spp_per_frame;
-        write_frame_constants(
+        let frame = write_frame_constants(
             &ctx,
             &view,
             &scene,
@@ -191,13 +191,7 @@ pub fn render_frame(
                 (spp, settings.max_depth),
                 timestamps,
             ),
-            None => trace.encode(
-                &mut encoder,
-                group,
-                &view,
-                sample_lanes(&ctx, view.pixels(), spp),
-                timestamps,
-            ),
+            None => trace.encode(&mut encoder, group, &view, frame.sample_lanes, timestamps),
         }
         accumulation.samples += spp;
     }

@@ -16,7 +16,8 @@ pub struct FrameConstants {
     pub max_depth: u32,
 }
 
-/// Writes the view's per-dispatch constants (`shaders/view.wgsl` `Frame`).
+/// Writes the view's per-dispatch constants (`shaders/view.wgsl` `Frame`) and returns them (the trace pass
+/// dispatches by their `sample_lanes`).
 pub fn write_frame_constants(
     ctx: &GpuContext,
     view: &ViewTargets,
@@ -24,7 +25,7 @@ pub fn write_frame_constants(
     settings: &RenderSettings,
     camera: &CameraView,
     c: FrameConstants,
-) {
+) -> GpuFrame {
     let frame = GpuFrame {
         world_from_camera: camera.world_from_camera.to_cols_array_2d(),
         tan_half_fov: (camera.yfov * 0.5).tan(),
@@ -59,4 +60,5 @@ pub fn write_frame_constants(
     };
     ctx.queue
         .write_buffer(&view.frame, 0, bytemuck::bytes_of(&frame));
+    frame
 }
