@@ -31,6 +31,18 @@ impl WideBvh {
         triangles: &[[u32; 3]],
         quality: BvhQuality,
     ) -> Result<Self, WideBvhError> {
+        Self::build_with_splits(positions, triangles, quality, false)
+    }
+
+    /// As [`Self::build`]; with `spatial_splits`, large triangles are first cut into several boxes (obvhs's
+    /// pre-splits), so one triangle may sit in several leaves and `order` repeats it: only for trees whose
+    /// slots map back to their triangles (the static merge's origin pairs) and that are never refit.
+    pub fn build_with_splits(
+        positions: &[Vec3],
+        triangles: &[[u32; 3]],
+        quality: BvhQuality,
+        spatial_splits: bool,
+    ) -> Result<Self, WideBvhError> {
         if triangles.is_empty() {
             // A node without children: every ray misses it.
             return Ok(Self {
@@ -45,6 +57,7 @@ impl WideBvh {
             return Err(WideBvhError::TooLarge);
         }
         let mut params = quality.params();
+        params.pre_split = spatial_splits;
         // A wide leaf holds at most 3 triangles (the unary count in a child's meta byte).
         params.max_prims_per_leaf = 3;
         let mut core = std::time::Duration::ZERO;
