@@ -58,6 +58,12 @@ impl WideBvh {
         }
         let mut params = quality.params();
         params.pre_split = spatial_splits;
+        if let Some(r) = std::env::var("RAYKIN_STATIC_REINSERTION").ok().and_then(|v| v.parse().ok()) {
+            params.reinsertion_batch_ratio = r;
+        }
+        if let Some(d) = std::env::var("RAYKIN_STATIC_SEARCH").ok().and_then(|v| v.parse::<u32>().ok()) {
+            params.ploc_search_distance = d.into();
+        }
         // A wide leaf holds at most 3 triangles (the unary count in a child's meta byte).
         params.max_prims_per_leaf = 3;
         let mut core = std::time::Duration::ZERO;
