@@ -97,8 +97,9 @@ fn assert_same_image(file: &str, size: u32, spp: u32) {
     assert_agree(file, ["wide", "binary"], &wide, &binary, SAME_TRIANGLES);
 }
 
-/// Renders `file` with the static instances merged and without; returns the merge's members (node, mesh).
-fn assert_merge_keeps_the_image(file: &str, size: u32, spp: u32) -> Vec<(u32, u32)> {
+/// Renders `file` with the static instances merged and without; returns the merge's members (node, mesh) and
+/// how many leaf slots its tree has beyond the members' triangles (the spatial splits' repeats).
+fn assert_merge_keeps_the_image(file: &str, size: u32, spp: u32) -> (Vec<(u32, u32)>, i64) {
     let scene = shared_scene(file);
     let (ctx, _gpu) = gpu();
     let mut merged = raykin::headless::HeadlessApp::new(
@@ -109,12 +110,15 @@ fn assert_merge_keeps_the_image(file: &str, size: u32, spp: u32) -> Vec<(u32, u3
     )
     .expect("scene uploads");
     merged.accumulate(spp, 64, |_| {});
-    let members = merged
-        .gpu_scene()
-        .merge
-        .as_ref()
+    let merge = merged.gpu_scene().merge.as_ref();
+    let members: Vec<(u32, u32)> = merge
         .map(|m| m.members.iter().map(|m| (m.node, m.mesh)).collect())
         .unwrap_or_default();
+    let member_triangles: usize = members
+        .iter()
+        .map(|&(_, mesh)| scene.meshes[mesh as usize].triangles.len())
+        .sum();
+    let repeats = merge.map_or(0, |m| m.triangles as i64 - member_triangles as i64);
     let per_mesh = render(
         &ctx,
         &scene,
@@ -129,7 +133,7 @@ fn assert_merge_keeps_the_image(file: &str, size: u32, spp: u32) -> Vec<(u32, u3
         &per_mesh,
         WORLD_SPACE_COPIES,
     );
-    members
+    (members, repeats)
 }
 
 #[test]
@@ -149,13 +153,16 @@ fn alpha_blend_test_wide_equals_binary() {
 
 /// FlightHelmet's six meshes overlap (shell, straps, lenses, stand): all six are merged, and the image is the
 /// per-mesh trees' (same paths: the merge maps every hit back to the member's own triangle slot, so shading,
-/// textures and the light list see what they saw).
+/// textures and the light list see what they saw). The merged tree's default preset cuts large triangles into
+/// several leaves (spatial splits): a hit on any copy maps back to the same slot.
 #[test]
 fn merged_static_tree_gives_the_per_mesh_image() {
-    let members = assert_merge_keeps_the_image("FlightHelmet/glTF/FlightHelmet.gltf", 32, 4);
+    let (members, repeats) =
+        assert_merge_keeps_the_image("FlightHelmet/glTF/FlightHelmet.gltf", 32, 4);
     assert_eq!(members.len(), 6, "{members:?}");
+    assert!(repeats > 0, "no triangle was split: {repeats}");
     // The Cornell box's light is a member: next-event estimation and MIS find it through the mapped hits.
-    let members = assert_merge_keeps_the_image("CornellBox/CornellBox.glb", 32, 8);
+    let (members, _) = assert_merge_keeps_the_image("CornellBox/CornellBox.glb", 32, 8);
     assert!(members.len() >= 2, "{members:?}");
 }
 
@@ -164,7 +171,7 @@ fn merged_static_tree_gives_the_per_mesh_image() {
 #[test]
 fn alpha_masked_meshes_stay_out_of_the_merge() {
     let file = "AlphaBlendModeTest/glTF-Binary/AlphaBlendModeTest.glb";
-    let members = assert_merge_keeps_the_image(file, 32, 4);
+    let (members, _) = assert_merge_keeps_the_image(file, 32, 4);
     let scene = shared_scene(file);
     let masked = |mesh: u32| {
         scene.meshes[mesh as usize]

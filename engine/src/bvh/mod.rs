@@ -105,7 +105,16 @@ impl BvhQuality {
         Self::VerySlow,
     ];
 
+    /// The preset for a tree that may be refit: no spatial splits.
     fn params(self) -> BvhBuildParams {
+        BvhBuildParams {
+            pre_split: false,
+            ..self.static_params()
+        }
+    }
+
+    /// The preset as obvhs defines it (spatial splits in `Slow` and `VerySlow`), for trees never refit.
+    fn static_params(self) -> BvhBuildParams {
         let mut p = match self {
             Self::Fastest => BvhBuildParams::fastest_build(),
             Self::VeryFast => BvhBuildParams::very_fast_build(),
@@ -114,9 +123,8 @@ impl BvhQuality {
             Self::Slow => BvhBuildParams::slow_build(),
             Self::VerySlow => BvhBuildParams::very_slow_build(),
         };
-        // Spatial splits duplicate triangles across leaves, which refit cannot maintain; leaves of at most 4
-        // triangles keep the GPU's per-leaf loop short.
-        p.pre_split = false;
+        // Spatial splits duplicate triangles across leaves, which refit cannot maintain (`params` turns them
+        // off); leaves of at most 4 triangles keep the GPU's per-leaf loop short.
         p.max_prims_per_leaf = p.max_prims_per_leaf.min(4);
         p
     }

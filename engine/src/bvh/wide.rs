@@ -31,17 +31,25 @@ impl WideBvh {
         triangles: &[[u32; 3]],
         quality: BvhQuality,
     ) -> Result<Self, WideBvhError> {
-        Self::build_with_splits(positions, triangles, quality, false)
+        Self::build_with(positions, triangles, quality.params())
     }
 
-    /// As [`Self::build`]; with `spatial_splits`, large triangles are first cut into several boxes (obvhs's
-    /// pre-splits), so one triangle may sit in several leaves and `order` repeats it: only for trees whose
-    /// slots map back to their triangles (the static merge's origin pairs) and that are never refit.
-    pub fn build_with_splits(
+    /// As [`Self::build`] with the preset's spatial splits (obvhs's pre-splits: large triangles first cut into
+    /// several boxes, in the slower presets), so one triangle may sit in several leaves and `order` repeats it.
+    /// Only for trees that are never refit and whose slots map back to their triangles (the static merge's
+    /// origin pairs).
+    pub fn build_static(
         positions: &[Vec3],
         triangles: &[[u32; 3]],
         quality: BvhQuality,
-        spatial_splits: bool,
+    ) -> Result<Self, WideBvhError> {
+        Self::build_with(positions, triangles, quality.static_params())
+    }
+
+    fn build_with(
+        positions: &[Vec3],
+        triangles: &[[u32; 3]],
+        mut params: obvhs::BvhBuildParams,
     ) -> Result<Self, WideBvhError> {
         if triangles.is_empty() {
             // A node without children: every ray misses it.
@@ -55,14 +63,6 @@ impl WideBvh {
         let tris = super::obvhs_triangles(positions, triangles);
         if !sah_costs_stay_finite(&tris) {
             return Err(WideBvhError::TooLarge);
-        }
-        let mut params = quality.params();
-        params.pre_split = spatial_splits;
-        if let Some(r) = std::env::var("RAYKIN_STATIC_REINSERTION").ok().and_then(|v| v.parse().ok()) {
-            params.reinsertion_batch_ratio = r;
-        }
-        if let Some(d) = std::env::var("RAYKIN_STATIC_SEARCH").ok().and_then(|v| v.parse::<u32>().ok()) {
-            params.ploc_search_distance = d.into();
         }
         // A wide leaf holds at most 3 triangles (the unary count in a child's meta byte).
         params.max_prims_per_leaf = 3;
@@ -148,6 +148,24 @@ mod tests {
         }
         let bvh = WideBvh::build(&positions, &triangles, BvhQuality::Medium).unwrap();
         let mut seen = vec![0u32; triangles.len()];
+        for_each_leaf_slot(&bvh, |slot, lo, hi| {
+            let t = bvh.order[slot as usize] as usize;
+            seen[t] += 1;
+            for v in triangles[t] {
+                let p = positions[v as usize];
+                let eps = 1e-4 * (1.0 + p.abs().max_element());
+                assert!(
+                    p.cmpge(lo - eps).all() && p.cmple(hi + eps).all(),
+                    "vertex {p} outside its leaf box {lo}..{hi}"
+                );
+            }
+        });
+        assert!(seen.iter().all(|&n| n == 1), "each triangle in one leaf");
+        assert!(bvh.depth >= 2 && bvh.depth <= MAX_WIDE_DEPTH);
+    }
+
+    /// Calls `visit` with each leaf slot of the tree and its leaf's (dequantised) box.
+    fn for_each_leaf_slot(bvh: &WideBvh, mut visit: impl FnMut(u32, Vec3, Vec3)) {
         let mut stack = vec![0u32];
         while let Some(index) = stack.pop() {
             let node = &bvh.nodes[index as usize];
@@ -155,29 +173,68 @@ mod tests {
                 if node.is_child_empty(child) {
                     continue;
                 }
-                let aabb = node.child_aabb(child);
-                let (lo, hi) = (Vec3::from(aabb.min), Vec3::from(aabb.max));
                 if node.imask & (1 << child) != 0 {
                     stack.push(node.child_node_index(child));
                     continue;
                 }
+                let aabb = node.child_aabb(child);
                 let (first, count) = node.child_primitives(child);
                 for slot in first..first + count {
-                    let t = bvh.order[slot as usize] as usize;
-                    seen[t] += 1;
-                    for v in triangles[t] {
-                        let p = positions[v as usize];
-                        let eps = 1e-4 * (1.0 + p.abs().max_element());
-                        assert!(
-                            p.cmpge(lo - eps).all() && p.cmple(hi + eps).all(),
-                            "vertex {p} outside its leaf box {lo}..{hi}"
-                        );
-                    }
+                    visit(slot, Vec3::from(aabb.min), Vec3::from(aabb.max));
                 }
             }
         }
-        assert!(seen.iter().all(|&n| n == 1), "each triangle in one leaf");
-        assert!(bvh.depth >= 2 && bvh.depth <= MAX_WIDE_DEPTH);
+    }
+
+    /// The static build's spatial splits: long triangles across a grid of small ones sit in several leaves
+    /// (`order` repeats them), every triangle in at least one, every slot reached from the root once, and each
+    /// leaf box overlaps its triangle's box (a split box is a part of it).
+    #[test]
+    fn static_trees_split_long_triangles_across_leaves() {
+        let mut positions = Vec::new();
+        let mut triangles = Vec::new();
+        for i in 0..32u32 {
+            for j in 0..32u32 {
+                let base = positions.len() as u32;
+                let p = Vec3::new(i as f32, 0.0, j as f32);
+                positions.extend([p, p + Vec3::X * 0.9, p + Vec3::Z * 0.9]);
+                triangles.push([base, base + 1, base + 2]);
+            }
+        }
+        for k in 0..4u32 {
+            let base = positions.len() as u32;
+            let y = 0.5 + k as f32;
+            positions.extend([
+                Vec3::new(0.0, y, 0.0),
+                Vec3::new(32.0, y, 31.0),
+                Vec3::new(31.0, y + 0.2, 32.0),
+            ]);
+            triangles.push([base, base + 1, base + 2]);
+        }
+        let bvh = WideBvh::build_static(&positions, &triangles, BvhQuality::VerySlow).unwrap();
+        assert!(bvh.order.len() > triangles.len(), "nothing was split");
+        let mut seen = vec![0u32; triangles.len()];
+        let mut slots = vec![0u32; bvh.order.len()];
+        for_each_leaf_slot(&bvh, |slot, lo, hi| {
+            slots[slot as usize] += 1;
+            let t = bvh.order[slot as usize] as usize;
+            seen[t] += 1;
+            let ps = triangles[t].map(|v| positions[v as usize]);
+            let (tlo, thi) = (ps[0].min(ps[1]).min(ps[2]), ps[0].max(ps[1]).max(ps[2]));
+            assert!(
+                lo.cmple(thi + 1e-3).all() && hi.cmpge(tlo - 1e-3).all(),
+                "leaf box misses its triangle"
+            );
+        });
+        assert!(slots.iter().all(|&n| n == 1), "each slot in one leaf");
+        assert!(seen.iter().all(|&n| n >= 1), "every triangle in a leaf");
+        assert!(
+            seen[triangles.len() - 4..].iter().any(|&n| n > 1),
+            "the long triangles were not split"
+        );
+        // The refittable build of the same mesh never repeats a triangle.
+        let plain = WideBvh::build(&positions, &triangles, BvhQuality::VerySlow).unwrap();
+        assert_eq!(plain.order.len(), triangles.len());
     }
 
     /// obvhs 0.4 panics converting a BVH over geometry whose SAH costs overflow f32. Build coordinates are

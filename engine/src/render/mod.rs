@@ -77,7 +77,7 @@ pub fn insert_resources(
         scene,
         settings.bvh_quality,
         settings.static_bvh,
-        settings.merge_static,
+        settings.merge_static.then_some(settings.merged_bvh_quality),
         binding_limit,
     )?;
     let baked = environment::bake(&settings.environment, gpu_scene.binding_limit)

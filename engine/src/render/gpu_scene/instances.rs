@@ -125,7 +125,7 @@ impl GpuScene {
         let opaque = (self.material_data.len() - 1) as u32;
         let rebuilt = (members.len() >= 2)
             .then(|| {
-                static_merge::build(scene, &self.mesh_slots, members, self.bvh_quality, opaque)
+                static_merge::build(scene, &self.mesh_slots, members, self.merge_quality, opaque)
             })
             .flatten()
             .and_then(|geometry| {

@@ -227,6 +227,8 @@ pub struct GpuScene {
     pub written: SceneWrites,
     /// Build quality of the upload (rebuilds of the upload tree use it).
     bvh_quality: crate::bvh::BvhQuality,
+    /// Build quality of the merged static tree (its rebuilds use it too).
+    merge_quality: crate::bvh::BvhQuality,
     /// The static instances traced through one tree, while at least two are.
     pub merge: Option<static_merge::StaticMerge>,
     /// A material edit or variant switch may have given a member an alpha-masked material.
@@ -242,7 +244,7 @@ impl GpuScene {
         scene: &SceneAsset,
         quality: crate::bvh::BvhQuality,
         layout: StaticLayout,
-        merge_static: bool,
+        merge_static: Option<crate::bvh::BvhQuality>,
         binding_limit: Option<u64>,
     ) -> Result<(Self, Vec<String>), UploadError> {
         let start = std::time::Instant::now();
@@ -357,11 +359,12 @@ impl GpuScene {
         }
 
         let mut merge = None;
-        if merge_static && layout == StaticLayout::Wide {
+        let merge_quality = merge_static.unwrap_or_default();
+        if merge_static.is_some() && layout == StaticLayout::Wide {
             let members = static_merge::plan(scene, scene.active_variant, &materials);
             let opaque = (materials.len() - 1) as u32;
             let geometry = (!members.is_empty())
-                .then(|| static_merge::build(scene, &slots, members, quality, opaque))
+                .then(|| static_merge::build(scene, &slots, members, merge_quality, opaque))
                 .flatten();
             // Only where every buffer still binds: the merge is a speed-up, never a reason to refuse a scene.
             if let Some(g) = geometry.filter(|g| {
@@ -436,6 +439,7 @@ impl GpuScene {
             written: SceneWrites::ALL,
             binding_limit: limit,
             bvh_quality: quality,
+            merge_quality,
             merge,
             merge_materials_changed: false,
             build_seconds: start.elapsed().as_secs_f64(),

@@ -196,16 +196,14 @@ pub fn build(
             origins.push([i as u32, slot.gpu.triangle_offset + local as u32]);
         }
     }
-    let (quality, spatial_splits) = static_tree_build(quality);
     let start = std::time::Instant::now();
-    let tree = WideBvh::build_with_splits(&positions, &triangles, quality, spatial_splits).ok()?;
+    let tree = WideBvh::build_static(&positions, &triangles, quality).ok()?;
     tracing::info!(
-        "static merge: {} members, {} triangles in {} leaf slots, {} wide nodes ({quality:?}{}), built in {:.1} ms",
+        "static merge: {} members, {} triangles in {} leaf slots, {} wide nodes ({quality:?}), built in {:.1} ms",
         members.len(),
         triangles.len(),
         tree.order.len(),
         tree.nodes.len(),
-        if spatial_splits { ", spatial splits" } else { "" },
         start.elapsed().as_secs_f64() * 1e3
     );
     let mut entries: Vec<[u32; 4]> = tree
@@ -230,25 +228,6 @@ pub fn build(
         nodes: tree.nodes,
         bounds: tree.bounds,
     })
-}
-
-/// The merged tree's preset and whether it takes spatial splits: `RAYKIN_STATIC_BVH` = `PRESET[-split]`
-/// (`medium`, `slow-split`, ...) for A/B runs, else `quality` without splits.
-fn static_tree_build(quality: BvhQuality) -> (BvhQuality, bool) {
-    let Ok(v) = std::env::var("RAYKIN_STATIC_BVH") else {
-        return (quality, false);
-    };
-    let (preset, split) = v.strip_suffix("-split").map_or((v.as_str(), false), |p| (p, true));
-    let found = BvhQuality::ALL
-        .into_iter()
-        .find(|q| format!("{q:?}").eq_ignore_ascii_case(&preset.replace('-', "")));
-    match found {
-        Some(q) => (q, split),
-        None => {
-            tracing::warn!("RAYKIN_STATIC_BVH={v} names no preset; ignored");
-            (quality, false)
-        }
-    }
 }
 
 impl StaticMerge {

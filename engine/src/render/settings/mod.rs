@@ -166,6 +166,11 @@ pub struct RenderSettings {
     /// (`render::gpu_scene::static_merge`). Settings saved before it existed load with it on.
     #[serde(default = "merge_static_default")]
     pub merge_static: bool,
+    /// Build quality of the merged static tree: built once and never refit, so it takes the slowest preset and
+    /// its spatial splits by default (`bvh::WideBvh::build_static`); `bvh_quality` is for the trees rebuilt
+    /// while the scene plays.
+    #[serde(default = "merged_bvh_quality_default")]
+    pub merged_bvh_quality: crate::bvh::BvhQuality,
     /// Where deformable meshes are skinned, morphed and refit (`Auto`: GPU on real GPUs).
     pub deform: DeformBackend,
     /// Accumulate, or the real-time path while anything moves.
@@ -180,6 +185,10 @@ pub struct RenderSettings {
 
 fn merge_static_default() -> bool {
     true
+}
+
+fn merged_bvh_quality_default() -> crate::bvh::BvhQuality {
+    crate::bvh::BvhQuality::VerySlow
 }
 
 impl Default for RenderSettings {
@@ -207,6 +216,7 @@ impl Default for RenderSettings {
             oidn: Default::default(),
             static_bvh: crate::bvh::StaticLayout::Wide,
             merge_static: true,
+            merged_bvh_quality: merged_bvh_quality_default(),
             deform: DeformBackend::Auto,
             mode: RenderMode::Accumulate,
             realtime: RealtimeSettings::default(),

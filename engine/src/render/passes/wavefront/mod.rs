@@ -82,9 +82,6 @@ struct Kernels {
     first_bounce: [LobeKernels; 2],
     extend: [LobeKernels; 2],
     shade: LobeKernels,
-    /// The fused form's (`WAVE_FUSED`): its first bounce and its bounces.
-    fused_first_bounce: [LobeKernels; 2],
-    bounce: [LobeKernels; 2],
     advance: LobeKernels,
     finish: LobeKernels,
 }
@@ -117,8 +114,8 @@ enum Step {
 /// stage, each timed, and the times are logged (info level) when the pass is next prepared.
 struct WaveProfile {
     timestamps: PassTimestamps,
-    /// Set by a profiled dispatch: its depth, waves and whether fused, for the log line.
-    pending: std::sync::Mutex<Option<(u32, u32, bool)>>,
+    /// Set by a profiled dispatch: its depth and waves, for the log line.
+    pending: std::sync::Mutex<Option<(u32, u32)>>,
 }
 
 impl WaveProfile {
@@ -137,22 +134,10 @@ impl WaveProfile {
 
     /// Logs the last profiled dispatch's stage times (blocks until it finished).
     fn log(&self, ctx: &GpuContext) {
-        let Some((depth, waves, fused)) = self.pending.lock().ok().and_then(|mut p| p.take()) else {
+        let Some((depth, waves)) = self.pending.lock().ok().and_then(|mut p| p.take()) else {
             return;
         };
         let ms = self.timestamps.read_ms(ctx);
-        if fused {
-            let stages = 2 + depth as usize;
-            tracing::info!(
-                "wavefront profile (fused), first of {waves} waves, ms: first bounce {:.3}; bounces {:.3?}; \
-                 finish {:.3}; total {:.3}",
-                ms[0],
-                &ms[1..stages - 1],
-                ms[stages - 1],
-                ms[..stages].iter().sum::<f64>()
-            );
-            return;
-        }
         let stages = 3 + 2 * depth as usize;
         let bounces: Vec<String> = (0..depth as usize)
             .map(|b| format!("{:.3}+{:.3}", ms[1 + 2 * b], ms[2 + 2 * b]))
@@ -176,8 +161,6 @@ pub struct WavefrontSlot(pub Option<WavefrontPass>);
 pub struct WavefrontPass {
     kernels: Kernels,
     needs: KernelNeeds,
-    /// Whether the waves run in the fused form (`RAYKIN_WAVE_FUSED=on`, A/B runs).
-    fused: bool,
     view_layout: wgpu::BindGroupLayout,
     args_layout: wgpu::BindGroupLayout,
     buffers: Option<PathBuffers>,
@@ -230,41 +213,16 @@ impl WavefrontPass {
                 ),
             ]
         };
-        let fused = |entry| {
-            [
-                kernel_with(
-                    entry,
-                    &queue,
-                    &[
-                        ("PATH_AOVS", 0.0),
-                        ("WAVE_PASS_THROUGHS", 0.0),
-                        ("WAVE_FUSED", 1.0),
-                    ],
-                ),
-                kernel_with(
-                    entry,
-                    &queue,
-                    &[
-                        ("PATH_AOVS", 0.0),
-                        ("WAVE_PASS_THROUGHS", 1.0),
-                        ("WAVE_FUSED", 1.0),
-                    ],
-                ),
-            ]
-        };
         Self {
             kernels: Kernels {
                 begin_wave: kernel("begin_wave", &sizing),
                 first_bounce: passing("first_bounce"),
                 extend: passing("extend"),
                 shade: kernel("shade", &queue),
-                fused_first_bounce: fused("first_bounce"),
-                bounce: fused("bounce"),
                 advance: kernel("advance", &sizing),
                 finish: kernel("finish", &queue),
             },
             needs: KernelNeeds::default(),
-            fused: crate::gpu::switch_on("RAYKIN_WAVE_FUSED", false),
             view_layout,
             args_layout,
             buffers: None,
@@ -285,19 +243,16 @@ impl WavefrontPass {
         needs: KernelNeeds,
         spp: u32,
     ) -> bool {
-        let alpha_blend = needs.materials.alpha_blend as usize;
+        let alpha_blend = needs.materials.alpha_blend;
         let k = &mut self.kernels;
-        let mut used = vec![&mut k.begin_wave, &mut k.advance, &mut k.finish];
-        if self.fused {
-            used.extend([&mut k.fused_first_bounce[alpha_blend], &mut k.bounce[alpha_blend]]);
-        } else {
-            used.extend([
-                &mut k.first_bounce[alpha_blend],
-                &mut k.extend[alpha_blend],
-                &mut k.shade,
-            ]);
-        }
-        for kernels in used {
+        for kernels in [
+            &mut k.begin_wave,
+            &mut k.first_bounce[alpha_blend as usize],
+            &mut k.extend[alpha_blend as usize],
+            &mut k.shade,
+            &mut k.advance,
+            &mut k.finish,
+        ] {
             kernels.get(needs);
         }
         self.needs = needs;
@@ -418,33 +373,25 @@ impl WavefrontPass {
         encoder.clear_buffer(&buffers.queues, 0, Some(CONTROL_BYTES));
         // The kernels with or without the pass-throughs of alpha-blended surfaces.
         let passing = self.needs.materials.alpha_blend as usize;
+        let extend = pipeline(&k.extend[passing]);
         let (x, y) = view.workgroups();
         let samples_per_wave = buffers.samples_per_wave as u32;
         let advance = (pipeline(&k.advance), Step::Direct(1, 1, 1));
         // A wave's dispatches by stage (the stages `RAYKIN_WAVE_PROFILE` times apart).
-        let first_bounce = match self.fused {
-            true => &k.fused_first_bounce[passing],
-            false => &k.first_bounce[passing],
-        };
         let mut stages = vec![vec![
             (pipeline(&k.begin_wave), Step::Direct(1, 1, 1)),
-            (pipeline(first_bounce), Step::Direct(x, y, samples_per_wave)),
+            (
+                pipeline(&k.first_bounce[passing]),
+                Step::Direct(x, y, samples_per_wave),
+            ),
             advance,
         ]];
         for _ in 1..=max_depth {
-            if self.fused {
-                // The shade stage's size: the live paths.
-                stages.push(vec![(pipeline(&k.bounce[passing]), Step::Indirect(12)), advance]);
-            } else {
-                stages.push(vec![(pipeline(&k.extend[passing]), Step::Indirect(0))]);
-                stages.push(vec![(pipeline(&k.shade), Step::Indirect(12)), advance]);
-            }
+            stages.push(vec![(extend, Step::Indirect(0))]);
+            stages.push(vec![(pipeline(&k.shade), Step::Indirect(12)), advance]);
         }
-        if !self.fused {
-            // The last bounce's shadow rays.
-            stages.push(vec![(pipeline(&k.extend[passing]), Step::Indirect(0))]);
-        }
-        // The wave's radiance into the accumulation.
+        // The last bounce's shadow rays, then the wave's radiance into the accumulation.
+        stages.push(vec![(extend, Step::Indirect(0))]);
         stages.push(vec![(pipeline(&k.finish), Step::Direct(x, y, 1))]);
         let waves = spp.div_ceil(samples_per_wave);
         let profile = self
@@ -485,7 +432,7 @@ impl WavefrontPass {
                 }
                 p.timestamps.resolve(encoder, stages.len() as u32);
                 if let Ok(mut pending) = p.pending.lock() {
-                    *pending = Some((max_depth, waves, self.fused));
+                    *pending = Some((max_depth, waves));
                 }
             }
             None => run(&stages, waves, timestamp_writes),

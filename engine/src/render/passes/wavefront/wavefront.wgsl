@@ -72,12 +72,6 @@ const CONTROL_RAYS: u32 = 7u;
 // pass-through does not take a bounce of the wave; compiled in only for scenes with such materials.
 override WAVE_PASS_THROUGHS: bool = true;
 
-// The fused form (Laine et al.'s "megakernel with compaction"): the first bounce and each `bounce` kernel trace
-// the path ray, shade what it met and trace the shadow ray there, so no hit or shadow ray goes through memory and
-// a bounce reads and writes a path's state once; `extend` and `shade` are then not run. Fewer bytes a bounce, but
-// a bounce's shadow rays run beside its path rays instead of compacted into their own invocations.
-override WAVE_FUSED: bool = false;
-
 // Queue kernels run 128 paths a workgroup over a 2D grid of workgroups (65535 per side at most).
 const QUEUE_GROUP: u32 = 128u;
 const MAX_GROUPS_X: u32 = 32768u;
@@ -200,24 +194,22 @@ fn pass_through(path: u32, p: ptr<function, WavePath>, hit: Hit) -> bool {
     return true;
 }
 
-// What shading a bounce's surface decided: whether the path goes on (with `path`, its next ray) and the shadow
-// ray next-event estimation asks for.
+// One bounce of trace_path_from's loop (integrator/path.wgsl) from the surface (or the sky) the path's ray met:
+// emission, next-event estimation's shadow ray, BSDF sampling and Russian roulette. The radiance goes to the
+// path's sum; a path that goes on is stored for the next bounce.
 struct BounceStep {
     continues: bool,
     shadow: bool,
     direct: DirectLight,
-    path: WavePath,
 }
 
-// One bounce of trace_path_from's loop (integrator/path.wgsl) from the surface (or the sky) the path's ray met:
-// emission (added to `radiance`), next-event estimation's shadow ray, BSDF sampling and Russian roulette.
-fn shade_bounce(path: u32, state: WavePath, hit: Hit, radiance: ptr<function, vec3<f32>>) -> BounceStep {
+fn shade_bounce(path: u32, state: WavePath, hit: Hit) -> BounceStep {
     var step = no_step();
     var p = state;
     let nee = (frame.flags & FRAME_NEE) != 0u && light_count() > 0u;
     if p.medium != NONE { p.throughput *= transmittance(p.medium, hit.t); }
     if hit.instance == NONE {
-        *radiance += p.throughput * escaped_radiance(p.ray.dir, p.last_bsdf_pdf, nee);
+        path_radiance[path] += vec4<f32>(p.throughput * escaped_radiance(p.ray.dir, p.last_bsdf_pdf, nee), 0.0);
         return step;
     }
     let s = resolve_hit(hit, p.ray);
@@ -226,7 +218,7 @@ fn shade_bounce(path: u32, state: WavePath, hit: Hit, radiance: ptr<function, ve
         if nee && p.last_bsdf_pdf > 0.0 {
             weight = power_heuristic(p.last_bsdf_pdf, direct_pdf_of_hit(hit, s.p, p.last_vertex, p.ray.dir));
         }
-        *radiance += p.throughput * s.emission * weight;
+        path_radiance[path] += vec4<f32>(p.throughput * s.emission * weight, 0.0);
     }
     // An unlit surface scatters nothing.
     if MATERIAL_LOBES != 0u && (s.flags & MATERIAL_UNLIT) != 0u { return step; }
@@ -257,37 +249,8 @@ fn shade_bounce(path: u32, state: WavePath, hit: Hit, radiance: ptr<function, ve
     p.ray = Ray(offset_ray_origin(s.p, select(s.ng, -s.ng, transmitted)), dir);
     if transmitted { p.medium = medium_after_transmission(s, p.medium); }
     p.last_vertex = LightSampleContext(s.p, s.ng);
-    step.path = p;
+    store_path(path, p);
     step.continues = true;
-    return step;
-}
-
-// The path's bounce from its ray: the ray traced (passing through alpha-blended surfaces) and what it met shaded;
-// in the fused form also the shadow ray traced there, through the same call of the traversal (a second call
-// site would inline it twice), its light added and the step left without one to queue.
-fn run_bounce(path: u32, state: WavePath, radiance: ptr<function, vec3<f32>>) -> BounceStep {
-    var p = state;
-    var step = no_step();
-    var shadow_next = false;
-    loop {
-        var ray = p.ray;
-        var t_max = MISS;
-        if shadow_next {
-            ray = step.direct.ray;
-            t_max = step.direct.t_max;
-        }
-        rays_traced++;
-        let hit = trace(ray, t_max, shadow_next);
-        if shadow_next {
-            if hit.instance == NONE { *radiance += step.direct.contribution; }
-            step.shadow = false;
-            break;
-        }
-        if pass_through(path, &p, hit) { continue; }
-        step = shade_bounce(path, p, hit, radiance);
-        if !WAVE_FUSED || !step.shadow { break; }
-        shadow_next = true;
-    }
     return step;
 }
 
@@ -335,9 +298,7 @@ fn queue_step(step: BounceStep, path: u32, lid: u32) {
 }
 
 fn no_step() -> BounceStep {
-    var step: BounceStep;
-    step.direct = no_direct_light();
-    return step;
+    return BounceStep(false, false, no_direct_light());
 }
 
 // Depth 0, per 8x8 tile and sample of the wave (z): the camera ray, what it meets, and the next ray and shadow ray
@@ -351,12 +312,15 @@ fn first_bounce(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_in
     let path = gid.z * pixel_count() + pixel;
     if gid.x < frame.width && gid.y < frame.height && gid.z < wave_samples() {
         let sample = camera_sample(gid.xy, pixel, path_sample(path));
-        let camera = WavePath(sample.ray, 0u, 0u, 0.0, vec3<f32>(1.0), NONE,
-            LightSampleContext(sample.ray.origin, vec3<f32>(0.0)));
-        var radiance = vec3<f32>(0.0);
-        step = run_bounce(path, camera, &radiance);
-        path_radiance[path] = vec4<f32>(radiance, 0.0);
-        if step.continues { store_path(path, step.path); }
+        var p = WavePath(sample.ray, 0u, 0u, 0.0, vec3<f32>(1.0), NONE, LightSampleContext(sample.ray.origin, vec3<f32>(0.0)));
+        var hit: Hit;
+        loop {
+            rays_traced++;
+            hit = trace(p.ray, MISS, false);
+            if !pass_through(path, &p, hit) { break; }
+        }
+        path_radiance[path] = vec4<f32>(0.0);
+        step = shade_bounce(path, p, hit);
     }
     queue_step(step, path, lid);
 }
@@ -427,29 +391,7 @@ fn shade(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgroups) group
         path = live_path(i);
         let h = path_hit[path];
         let hit = Hit(bitcast<f32>(h.x), h.y, h.z, vec2<f32>(bitcast<f32>(h.w), path_vertex[path].w));
-        var radiance = vec3<f32>(0.0);
-        step = shade_bounce(path, load_path(path), hit, &radiance);
-        if any(radiance != vec3<f32>(0.0)) { path_radiance[path] += vec4<f32>(radiance, 0.0); }
-        if step.continues { store_path(path, step.path); }
-    }
-    queue_step(step, path, lid);
-}
-
-// The fused form's bounces from depth 1 on: the queue's paths, a bounce each (run_bounce).
-@compute @workgroup_size(128)
-fn bounce(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
-          @builtin(local_invocation_index) lid: u32) {
-    clear_workgroup_counts(lid);
-    rays_traced = 0u;
-    let i = queue_index(group, groups, lid);
-    var step = no_step();
-    var path = 0u;
-    if i < atomicLoad(&queues.control[CONTROL_LIVE]) {
-        path = live_path(i);
-        var radiance = path_radiance[path].xyz;
-        step = run_bounce(path, load_path(path), &radiance);
-        path_radiance[path] = vec4<f32>(radiance, 0.0);
-        if step.continues { store_path(path, step.path); }
+        step = shade_bounce(path, load_path(path), hit);
     }
     queue_step(step, path, lid);
 }
