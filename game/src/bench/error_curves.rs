@@ -90,7 +90,7 @@ pub struct CurveResult {
     /// Trace ms of every frame, per repeat, in order: where the time of a curve went (runs of slow frames).
     pub frame_trace_ms: Vec<Vec<f64>>,
     /// The form of the path integrator that traced the curve's last frame (`auto` resolved by its trial in the
-    /// warm-up frames).
+    /// warm-up frames); where repeats ended in different forms, each repeat's, in order, joined by `, `.
     pub integrator: String,
 }
 
@@ -153,7 +153,7 @@ pub fn measure(
         // runs[r][k] = (time, relMSE, FLIP, linear relMSE, wall time) at checkpoint k of repeat r.
         let mut runs: Vec<Vec<[f64; 5]>> = Vec::new();
         let mut frame_trace_ms = Vec::new();
-        let mut integrator = String::from("none");
+        let mut forms = Vec::new();
         let oidn = settings.denoise && settings.denoiser == DenoiserKind::Oidn;
         for repeat in 0..suite.error_repeats {
             settings.seed = 1000 + 100 * index as u32 + repeat as u32;
@@ -212,7 +212,7 @@ pub fn measure(
                 images.push((elapsed_ms, wall_ms, image));
             }
             if let Some(form) = app.integrator_choice().last_form() {
-                integrator = form.name().to_string();
+                forms.push(form.name());
             }
             drop(app);
             frame_trace_ms.push(frame_times);
@@ -273,7 +273,7 @@ pub fn measure(
             ms_to_rel_mse_0_01: time_to_reach(&reached, 0.01),
             points,
             frame_trace_ms,
-            integrator,
+            integrator: forms_of_repeats(&forms),
         });
         let curve = curves.last().expect("pushed");
         eprintln!(
@@ -492,4 +492,29 @@ pub(super) fn cached_reference(
         key,
         from_cache,
     })
+}
+
+/// The integrator forms of a curve's repeats as the curve records them: one name where all agree (or `none`),
+/// else every repeat's in order, so that a curve whose repeats chose differently does not read as one form.
+fn forms_of_repeats(forms: &[&str]) -> String {
+    match forms {
+        [] => "none".to_string(),
+        [first, rest @ ..] if rest.iter().all(|f| f == first) => first.to_string(),
+        _ => forms.join(", "),
+    }
+}
+
+#[cfg(test)]
+mod repeat_form_tests {
+    use super::forms_of_repeats;
+
+    #[test]
+    fn repeats_that_chose_differently_are_all_named() {
+        assert_eq!(forms_of_repeats(&[]), "none");
+        assert_eq!(forms_of_repeats(&["wavefront", "wavefront"]), "wavefront");
+        assert_eq!(
+            forms_of_repeats(&["megakernel", "wavefront"]),
+            "megakernel, wavefront"
+        );
+    }
 }
