@@ -69,9 +69,10 @@ struct Targets {
 
 #[derive(Resource)]
 pub struct Denoiser {
-    prepare: wgpu::ComputePipeline,
-    variance: wgpu::ComputePipeline,
-    atrous: wgpu::ComputePipeline,
+    module: crate::gpu::ComputeModule,
+    /// prepare, variance, atrous: compiled at the first run, so that views that never denoise (a `raykin
+    /// render`) do not compile them.
+    pipelines: OnceLock<[wgpu::ComputePipeline; 3]>,
     layout: wgpu::BindGroupLayout,
     /// One [`DenoisePassParams`] per pass, `params_stride` apart (bound with a dynamic offset).
     params: wgpu::Buffer,
@@ -100,7 +101,6 @@ impl Denoiser {
         ));
         let layout = ctx.pipelines.bind_group_layout("denoise", &entries);
         let module = crate::gpu::ComputeModule::new(ctx, compose(&KERNEL), &[Some(&layout)]);
-        let pipeline = |entry: &str| module.pipeline(entry, entry, &[]);
         let params_stride = (std::mem::size_of::<DenoisePassParams>() as u64)
             .next_multiple_of(ctx.params_offset_alignment());
         let params = params_buffer(
@@ -109,9 +109,8 @@ impl Denoiser {
             (params_stride * (2 + DenoiseParams::MAX_ITERATIONS as u64)) as usize,
         );
         Self {
-            prepare: pipeline("prepare"),
-            variance: pipeline("variance"),
-            atrous: pipeline("atrous"),
+            module,
+            pipelines: OnceLock::new(),
             layout,
             params,
             params_stride,
@@ -237,10 +236,13 @@ impl Denoiser {
             pass.set_bind_group(0, &targets.groups[group], &[(slot * stride) as u32]);
             pass.dispatch_workgroups(workgroups.0, workgroups.1, 1);
         };
-        run(0, &self.prepare, 1);
-        run(1, &self.variance, 0);
+        let [prepare, variance, atrous] = self.pipelines.get_or_init(|| {
+            ["prepare", "variance", "atrous"].map(|e| self.module.pipeline(e, e, &[]))
+        });
+        run(0, prepare, 1);
+        run(1, variance, 0);
         for k in 0..p.iterations as usize {
-            run(2 + k, &self.atrous, if k % 2 == 0 { 1 } else { 0 });
+            run(2 + k, atrous, if k % 2 == 0 { 1 } else { 0 });
         }
         &targets.output
     }
