@@ -1,9 +1,11 @@
 #!/usr/bin/env bash
-# Twentieth session, call 6 (relb/head.xz = 07cae21's code): where FlightHelmet's megakernel time goes, by
-# ablation (the nineteenth session's "next" item 3), and the Cornell box's waves without next-event estimation.
-# Variants through RAYKIN_SHADER_DIR (relb/ablate/, made by the session from the tree's shaders): `notex`
-# (sample_texture returns a constant: no texel reads), `nonee` (sample_direct returns no light: no light sampling,
-# no shadow rays); and the head at --max-depth 1, 2, 3. Images differ (ablations), only the times mean anything.
+# Twentieth session, call 6, scripted but not run (no machine was lent) (relb/head.xz = 07cae21's code or
+# later): where FlightHelmet's megakernel time goes, by ablation (the nineteenth session's "next" item 3), and the
+# Cornell box's waves without next-event estimation.
+# Variants through RAYKIN_SHADER_DIR (relb/ablate/, made below from the tree's shaders, each an early return behind
+# a condition the compiler cannot fold): `notex` (sample_texture returns a constant: no texel reads), `nonee`
+# (sample_direct returns no light: no light sampling, no shadow rays); and the head at --max-depth 1, 2, 3.
+# Images differ (ablations), only the times mean anything.
 # The bench's frame loop, 960x540, 16 spp per frame, 24 frames, two rounds -> frames.txt. Carry [".gl", "relb"].
 set -u
 start=$(date +%s)
@@ -12,6 +14,11 @@ source scripts/gpu-unpack.sh
 (cd relb && xz -dkf head.xz && chmod +x head)
 export VK_DRIVER_FILES=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
 nvidia-smi --query-gpu=name,driver_version,clocks.sm,clocks.max.sm --format=csv > "$OUT/gpu.txt"
+mkdir -p relb/ablate/notex/scene relb/ablate/nonee/integrator
+sed 's/^fn sample_texture(texture: u32, uv_in: vec2<f32>) -> vec4<f32> {$/&\n    if texture != 0xfffffffeu { return vec4<f32>(0.5, 0.5, 1.0, 1.0); }/' \
+  shaders/scene/texture.wgsl > relb/ablate/notex/scene/texture.wgsl
+sed 's/^    let none = no_direct_light();$/&\n    if dims != 0xfffffffeu { return none; }/' \
+  shaders/integrator/path.wgsl > relb/ablate/nonee/integrator/path.wgsl
 frames() {  # label, shader dir (or -), integrator, bench options...
   local w; w=$(mktemp -d); local label=$1 dir=$2 integrator=$3; shift 3
   local envs=RAYKIN_NONE=1; [ "$dir" != - ] && envs=RAYKIN_SHADER_DIR=$PWD/relb/ablate/$dir
