@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# Twentieth session, call 7: call5.sh (the side by side, Mitsuba's median of three renders per count) on whichever
-# card the last of the budget got (the status offered an H200), the side by side cut at 230 s.
+# Twentieth session, call 7, scripted but not run (too little device time was left): call5.sh (the side by side,
+# Mitsuba's median of three renders per count) on whichever card the status offers (it offered an H200), the
+# side by side cut at 230 s.
 set -u
 start=$(date +%s)
 elapsed() { echo $(( $(date +%s) - start )); }
