@@ -505,7 +505,7 @@ fn forms_of_repeats(forms: &[&str]) -> String {
 }
 
 #[cfg(test)]
-mod repeat_form_tests {
+mod tests {
     use super::forms_of_repeats;
 
     #[test]

@@ -124,9 +124,7 @@ impl GpuScene {
             .collect();
         let opaque = (self.material_data.len() - 1) as u32;
         let rebuilt = (members.len() >= 2)
-            .then(|| {
-                static_merge::build(scene, &self.mesh_slots, members, self.merge_quality, opaque)
-            })
+            .then(|| static_merge::build(scene, &self.mesh_slots, members, merge.quality, opaque))
             .flatten()
             .and_then(|geometry| {
                 merge.rebuilt(

@@ -227,8 +227,6 @@ pub struct GpuScene {
     pub written: SceneWrites,
     /// Build quality of the upload (rebuilds of the upload tree use it).
     bvh_quality: crate::bvh::BvhQuality,
-    /// Build quality of the merged static tree (its rebuilds use it too).
-    merge_quality: crate::bvh::BvhQuality,
     /// The static instances traced through one tree, while at least two are.
     pub merge: Option<static_merge::StaticMerge>,
     /// A material edit or variant switch may have given a member an alpha-masked material.
@@ -237,14 +235,15 @@ pub struct GpuScene {
 }
 
 impl GpuScene {
-    /// Builds every mesh's BVH and uploads the static data. `binding_limit` overrides the adapter's storage
-    /// binding limit (tests use it to exercise the over-limit path).
+    /// Builds every mesh's BVH and uploads the static data; with `merge_quality`, the static instances' merged
+    /// tree too, of that preset. `binding_limit` overrides the adapter's storage binding limit (tests use it to
+    /// exercise the over-limit path).
     pub fn new(
         ctx: &GpuContext,
         scene: &SceneAsset,
         quality: crate::bvh::BvhQuality,
         layout: StaticLayout,
-        merge_static: Option<crate::bvh::BvhQuality>,
+        merge_quality: Option<crate::bvh::BvhQuality>,
         binding_limit: Option<u64>,
     ) -> Result<(Self, Vec<String>), UploadError> {
         let start = std::time::Instant::now();
@@ -359,12 +358,11 @@ impl GpuScene {
         }
 
         let mut merge = None;
-        let merge_quality = merge_static.unwrap_or_default();
-        if merge_static.is_some() && layout == StaticLayout::Wide {
+        if let (Some(merged_quality), StaticLayout::Wide) = (merge_quality, layout) {
             let members = static_merge::plan(scene, scene.active_variant, &materials);
             let opaque = (materials.len() - 1) as u32;
             let geometry = (!members.is_empty())
-                .then(|| static_merge::build(scene, &slots, members, merge_quality, opaque))
+                .then(|| static_merge::build(scene, &slots, members, merged_quality, opaque))
                 .flatten();
             // Only where every buffer still binds: the merge is a speed-up, never a reason to refuse a scene.
             if let Some(g) = geometry.filter(|g| {
@@ -439,7 +437,6 @@ impl GpuScene {
             written: SceneWrites::ALL,
             binding_limit: limit,
             bvh_quality: quality,
-            merge_quality,
             merge,
             merge_materials_changed: false,
             build_seconds: start.elapsed().as_secs_f64(),

@@ -57,6 +57,8 @@ pub struct StaticMerge {
     pub bounds: (Vec3, Vec3),
     /// Bytes of the merged data (positions, triangles, pairs, nodes).
     pub bytes: u64,
+    /// The preset its tree was built with, which rebuilds keep.
+    pub quality: BvhQuality,
     start: Room,
     room: Room,
 }
@@ -70,6 +72,7 @@ pub struct MergedGeometry {
     triangles: u32,
     nodes: Vec<CwBvhNode>,
     bounds: (Vec3, Vec3),
+    quality: BvhQuality,
 }
 
 impl MergedGeometry {
@@ -227,6 +230,7 @@ pub fn build(
         triangles: count,
         nodes: tree.nodes,
         bounds: tree.bounds,
+        quality,
     })
 }
 
@@ -274,6 +278,7 @@ impl StaticMerge {
             triangles: geometry.triangles,
             bounds: geometry.bounds,
             bytes: geometry.bytes(),
+            quality: geometry.quality,
             start,
             room,
         }
