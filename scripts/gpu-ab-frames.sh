@@ -14,7 +14,6 @@ for s in ${SCENES:-cornell flight-helmet spheres crowd}; do scenes+=(--scene "$s
 binaries=()
 for v in "$@"; do spec=${v%%,*}; binaries+=("${spec%%:*}"); done
 source "$(dirname "$0")/gpu-unpack.sh" "${binaries[@]}"
-export VK_DRIVER_FILES=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
 for round in $(seq "$rounds"); do
   for v in "$@"; do
     spec=${v%%,*}; own=()

@@ -1,7 +1,11 @@
 # Sourced first by a device call's script, from the repository root: unpacks what the call carried. The Vulkan
 # loader packages in .gl/ (the device README's recipe), the Mitsuba side by side's wheels in .whl/ when carried
 # (Dr.Jit's cp312 wheel and mitsuba-strip.tar.xz from scripts/strip-mitsuba-wheel.sh, onto PYTHONPATH), and the
-# binaries named as arguments, rel/NAME.xz -> rel/NAME.
+# binaries named as arguments, rel/NAME.xz -> rel/NAME, and relb/head.xz -> relb/head when carried. Then what every
+# call needs next: the NVIDIA Vulkan driver for the loader, the card in $OUT/gpu.txt, and `elapsed` (seconds since
+# this ran) for the scripts' time budgets.
+start=$(date +%s)
+elapsed() { echo $(( $(date +%s) - start )); }
 for f in .gl/*.deb; do dpkg -x "$f" / ; done
 ldconfig
 if ls .whl/drjit-*.whl >/dev/null 2>&1; then
@@ -11,3 +15,8 @@ if ls .whl/drjit-*.whl >/dev/null 2>&1; then
   export PYTHONPATH=/tmp/site
 fi
 for b in "$@"; do (cd rel && xz -dkf "$b.xz" && chmod +x "$b"); done
+if [ -f relb/head.xz ]; then (cd relb && xz -dkf head.xz && chmod +x head); fi
+export VK_DRIVER_FILES=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
+if [ -n "${OUT:-}" ]; then
+  nvidia-smi --query-gpu=name,driver_version,clocks.sm,clocks.max.sm --format=csv > "$OUT/gpu.txt"
+fi

@@ -7,13 +7,8 @@
 # two rounds, variants alternating -> frames.txt; the merge's build lines -> merge.txt. Carry [".gl", "relb"];
 # relb/assets holds CornellBox, FlightHelmet, MetalRoughSpheresNoTextures, CesiumMan, Fox.
 set -u
-start=$(date +%s)
-elapsed() { echo $(( $(date +%s) - start )); }
 source scripts/gpu-unpack.sh
-(cd relb && xz -dkf head.xz && chmod +x head)
-export VK_DRIVER_FILES=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
 export RAYKIN_COMMIT=${RAYKIN_COMMIT:-unknown}
-nvidia-smi --query-gpu=name,driver_version,clocks.sm,clocks.max.sm --format=csv > "$OUT/gpu.txt"
 frames() {  # label, environment assignment (or -), integrator, bench options...
   local w; w=$(mktemp -d); local label=$1 env=$2 integrator=$3; shift 3
   [ "$env" = - ] && env=RAYKIN_NONE=1

@@ -6,13 +6,8 @@
 # box and env-lit (waves) for the default against VerySlow with splits. The bench's frame loop, two rounds,
 # variants alternating -> frames.txt; the merge's build lines -> merge.txt. Carry [".gl", "relb"].
 set -u
-start=$(date +%s)
-elapsed() { echo $(( $(date +%s) - start )); }
 source scripts/gpu-unpack.sh
-(cd relb && xz -dkf head.xz && chmod +x head)
-export VK_DRIVER_FILES=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
 export RAYKIN_COMMIT=${RAYKIN_COMMIT:-unknown}
-nvidia-smi --query-gpu=name,driver_version,clocks.sm,clocks.max.sm --format=csv > "$OUT/gpu.txt"
 frames() {  # label, environment assignments (comma-separated, or -), integrator, bench options...
   local w; w=$(mktemp -d); local label=$1 envs=$2 integrator=$3; shift 3
   [ "$envs" = - ] && envs=RAYKIN_NONE=1

@@ -8,13 +8,8 @@
 # .whl/mitsuba-strip.tar.xz`. Calls 4, 5 and 7 run this script with: MITSUBA_REPEATS (Mitsuba renders per count,
 # default 1), SIDE_BY_SIDE_SECONDS (the side by side's limit, default 420), FRAMES=off (no frame loop).
 set -u
-start=$(date +%s)
-elapsed() { echo $(( $(date +%s) - start )); }
 source scripts/gpu-unpack.sh
-(cd relb && xz -dkf head.xz && chmod +x head)
-export VK_DRIVER_FILES=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
 export RAYKIN_COMMIT=07cae21
-nvidia-smi --query-gpu=name,driver_version,clocks.sm,clocks.max.sm --format=csv > "$OUT/gpu.txt"
 MITSUBA_REPEATS=${MITSUBA_REPEATS:-1} ASSETS=relb/assets RAYKIN_BIN=relb/head RAYKIN_INTEGRATOR=auto \
   timeout "${SIDE_BY_SIDE_SECONDS:-420}" bash scripts/gpu-mitsuba.sh "$OUT" > /tmp/run.log 2>&1
 echo "side by side: $(elapsed) s"

@@ -8,12 +8,7 @@
 # Images differ (ablations), only the times mean anything.
 # The bench's frame loop, 960x540, 16 spp per frame, 24 frames, two rounds -> frames.txt. Carry [".gl", "relb"].
 set -u
-start=$(date +%s)
-elapsed() { echo $(( $(date +%s) - start )); }
 source scripts/gpu-unpack.sh
-(cd relb && xz -dkf head.xz && chmod +x head)
-export VK_DRIVER_FILES=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
-nvidia-smi --query-gpu=name,driver_version,clocks.sm,clocks.max.sm --format=csv > "$OUT/gpu.txt"
 mkdir -p relb/ablate/notex/scene relb/ablate/nonee/integrator
 sed 's/^fn sample_texture(texture: u32, uv_in: vec2<f32>) -> vec4<f32> {$/&\n    if texture != 0xfffffffeu { return vec4<f32>(0.5, 0.5, 1.0, 1.0); }/' \
   shaders/scene/texture.wgsl > relb/ablate/notex/scene/texture.wgsl

@@ -8,13 +8,10 @@
 # scripts/strip-mitsuba-wheel.sh mitsuba-3.9.1-*.whl .whl/mitsuba-strip.tar.xz` (without srgb.coeff, which the rgb
 # variants never open, the tree fits the 64 MiB limit). Carry [".gl", "relb", ".whl"]; set RAYKIN_COMMIT.
 set -u
-start=$(date +%s)
 source scripts/gpu-unpack.sh
-(cd relb && xz -dkf head.xz && chmod +x head)
-nvidia-smi --query-gpu=name,driver_version,clocks.sm,clocks.max.sm --format=csv > "$OUT/gpu.txt"
 MITSUBA_REPEATS=${MITSUBA_REPEATS:-1} ASSETS=relb/assets RAYKIN_BIN=relb/head RAYKIN_INTEGRATOR=auto \
   bash scripts/gpu-mitsuba.sh "$OUT" > /tmp/run.log 2>&1
-echo "side by side: $(( $(date +%s) - start )) s"
+echo "side by side: $(elapsed) s"
 grep -v warning /tmp/run.log | tail -n 30 > "$OUT/run-tail.log"
 grep -h "traced by" /tmp/gpu-mitsuba/bench.log > "$OUT/traced-by.txt"
 grep -A12 "time to equal error" "$OUT/summary.md" | head -20
