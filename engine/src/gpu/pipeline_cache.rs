@@ -49,6 +49,30 @@ struct CompiledModule {
     layout: wgpu::PipelineLayout,
 }
 
+/// The runtime checks naga writes into the engine's kernels: bounds checks stay (an index read from a buffer is
+/// clamped or left to the driver's robust access, as wgpu does by default); the loop bounding and the integer
+/// division guards go. Loop bounding wraps every loop in a 64-bit iteration counter that cannot end a real hang,
+/// only keeps the driver from assuming termination, at a counter update per iteration of the traversal loops;
+/// the division guards select around each integer `/` and `%`.
+///
+/// # Safety
+/// Every loop of the engine's WGSL terminates (traversals over trees the engine built, binary searches, loops
+/// with a constant bound) and no integer division has a zero divisor or overflows (divisors are image sizes,
+/// counts checked beforehand, or constants): the two conditions `wgpu::ShaderRuntimeChecks` states for these
+/// fields. For measurements, `RAYKIN_SHADER_CHECKS=all` compiles with every check (wgpu's default) and
+/// `RAYKIN_SHADER_CHECKS=none` without bounds checks too (not safe: a probe of what they cost).
+fn engine_shader_checks() -> wgpu::ShaderRuntimeChecks {
+    match std::env::var("RAYKIN_SHADER_CHECKS").as_deref() {
+        Ok("all") => wgpu::ShaderRuntimeChecks::checked(),
+        Ok("none") => wgpu::ShaderRuntimeChecks::unchecked(),
+        _ => wgpu::ShaderRuntimeChecks {
+            force_loop_bounding: false,
+            int_div_checks: false,
+            ..wgpu::ShaderRuntimeChecks::checked()
+        },
+    }
+}
+
 impl PipelineCache {
     pub fn new(device: wgpu::Device) -> Self {
         Self {
@@ -132,13 +156,17 @@ impl PipelineCache {
             .modules
             .entry(module_key)
             .or_insert_with(|| {
+                let descriptor = wgpu::ShaderModuleDescriptor {
+                    label: Some(label),
+                    source: wgpu::ShaderSource::Wgsl(source.as_ref().into()),
+                };
+                // SAFETY: see `engine_shader_checks`.
+                let module = unsafe {
+                    self.device
+                        .create_shader_module_trusted(descriptor, engine_shader_checks())
+                };
                 Arc::new(CompiledModule {
-                    module: self
-                        .device
-                        .create_shader_module(wgpu::ShaderModuleDescriptor {
-                            label: Some(label),
-                            source: wgpu::ShaderSource::Wgsl(source.as_ref().into()),
-                        }),
+                    module,
                     layout: self
                         .device
                         .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
