@@ -20,9 +20,8 @@ use bevy_ecs::prelude::Resource;
 /// that a drift of the GPU's clocks over the trial (they rise during the first fraction of a second of work:
 /// docs/BENCHMARKS.md, "Clocks after idle") leaves each form's fastest frame beside the other's. Each form's
 /// fastest frame decides: the clocks only ever make a frame slower than the steady state, so a frame that follows
-/// an idle GPU (the bench reads images back and measures their error between frames) cannot decide it. The median
-/// of the pairs' ratios, used before, could: with gaps before the first and third pairs' megakernel frames, the
-/// bench's error curves chose the wavefront at 1.12-1.22x the megakernel's time (H100, 2026-12-05).
+/// an idle GPU (the bench reads images back between frames) cannot decide it. The median of the pairs' ratios,
+/// used before, could, where such frames fell on one form in two of the four pairs.
 const TRIAL: [Integrator; 10] = [M, W, M, W, W, M, W, M, M, W];
 const WARM_UP_FRAMES: usize = 2;
 /// The wavefront form must be at least this much faster to be chosen: on a tie the megakernel, which holds no
@@ -35,8 +34,9 @@ const WAVES_MUST_SAVE: f64 = 0.02;
 const STEADY_SPREAD: f64 = 0.10;
 /// Unsteady trials run again until [`LEAST_TRIALS`] trials and [`CLOCK_RAMP_MS`] of trace time have passed, or
 /// [`MOST_TRIALS`]: a count alone ended small frames' trials inside the clocks' ramp (40 frames of the Cornell
-/// box at 960x540 and one sample are 20-25 ms of a ramp that lasts about 0.3 s on the H200), where the bench's
-/// error curves chose the wavefront at 1.22x the megakernel's time (H100, 2026-12-05).
+/// box at 960x540 and one sample are 20-25 ms of a ramp that lasts about 0.3 s on the H200): the likely reason
+/// why the bench's error curves chose the wavefront at 1.22x the megakernel's time (H100, 2026-12-05; the trial's
+/// frame times were not recorded).
 const LEAST_TRIALS: u32 = 4;
 const CLOCK_RAMP_MS: f64 = 500.0;
 const MOST_TRIALS: u32 = 100;
