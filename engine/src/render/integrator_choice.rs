@@ -59,6 +59,8 @@ pub struct Decision {
     /// Each form's fastest trace ms per frame among the deciding trial's timed frames.
     pub megakernel_ms: f64,
     pub wavefront_ms: f64,
+    /// Trials run before this one decided (more than one where the first were timed while the clocks moved).
+    pub trials: u32,
 }
 
 #[derive(Resource, Debug)]
@@ -191,6 +193,7 @@ impl IntegratorChoice {
             chosen,
             megakernel_ms: min(&megakernel),
             wavefront_ms: min(&wavefront),
+            trials: self.trials_run,
         });
     }
 
@@ -315,6 +318,7 @@ mod tests {
         );
         assert_eq!(frames, 2 * TRIAL.len(), "a second trial");
         let d = choice.decision().unwrap();
+        assert_eq!(d.trials, 2);
         assert_eq!(d.chosen, Integrator::Megakernel);
         assert_eq!((d.megakernel_ms, d.wavefront_ms), (4.0, 4.6));
     }
@@ -340,6 +344,10 @@ mod tests {
     /// Trials that never settle end with the first trial after [`LEAST_TRIALS`] and [`CLOCK_RAMP_MS`].
     fn assert_ramp_passed(choice: &IntegratorChoice, frames: usize) {
         assert_eq!(frames % TRIAL.len(), 0, "whole trials");
+        assert_eq!(
+            choice.decision().map(|d| d.trials as usize),
+            Some(frames / TRIAL.len())
+        );
         assert!(choice.trials_run >= LEAST_TRIALS);
         let per_trial = choice.trial_ms / choice.trials_run as f64;
         assert!(

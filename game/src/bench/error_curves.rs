@@ -92,6 +92,16 @@ pub struct CurveResult {
     /// The form of the path integrator that traced the curve's last frame (`auto` resolved by its trial in the
     /// warm-up frames); where repeats ended in different forms, each repeat's, in order, joined by `, `.
     pub integrator: String,
+    /// Per repeat, what auto's trial measured where it decided the form (`None`: no trial ran).
+    pub auto_trials: Vec<Option<AutoTrial>>,
+}
+
+/// Auto's trial as a curve records it: each form's fastest trace ms a frame, and the trials it took.
+#[derive(Clone, Copy, Debug, serde::Serialize)]
+pub struct AutoTrial {
+    pub megakernel_ms: f64,
+    pub wavefront_ms: f64,
+    pub trials: u32,
 }
 
 #[derive(Clone, Debug, serde::Serialize)]
@@ -154,6 +164,7 @@ pub fn measure(
         let mut runs: Vec<Vec<[f64; 5]>> = Vec::new();
         let mut frame_trace_ms = Vec::new();
         let mut forms = Vec::new();
+        let mut auto_trials = Vec::new();
         let oidn = settings.denoise && settings.denoiser == DenoiserKind::Oidn;
         for repeat in 0..suite.error_repeats {
             settings.seed = 1000 + 100 * index as u32 + repeat as u32;
@@ -214,6 +225,11 @@ pub fn measure(
             if let Some(form) = app.integrator_choice().last_form() {
                 forms.push(form.name());
             }
+            auto_trials.push(app.integrator_choice().decision().map(|d| AutoTrial {
+                megakernel_ms: d.megakernel_ms,
+                wavefront_ms: d.wavefront_ms,
+                trials: d.trials,
+            }));
             drop(app);
             frame_trace_ms.push(frame_times);
             let mut run: Vec<[f64; 5]> = images
@@ -274,11 +290,30 @@ pub fn measure(
             points,
             frame_trace_ms,
             integrator: forms_of_repeats(&forms),
+            auto_trials,
         });
         let curve = curves.last().expect("pushed");
+        let trials: Vec<String> = curve
+            .auto_trials
+            .iter()
+            .flatten()
+            .map(|t| {
+                format!(
+                    "megakernel {:.3} ms, wavefront {:.3} ms after {} trials",
+                    t.megakernel_ms, t.wavefront_ms, t.trials
+                )
+            })
+            .collect();
         eprintln!(
-            "raykin bench: {}: curve `{}` traced by the {} integrator",
-            scene.name, curve.name, curve.integrator
+            "raykin bench: {}: curve `{}` traced by the {} integrator{}",
+            scene.name,
+            curve.name,
+            curve.integrator,
+            if trials.is_empty() {
+                String::new()
+            } else {
+                format!(" (auto's trials: {})", trials.join("; "))
+            }
         );
     }
     // Fits on the default curve, reference noise subtracted; the first two points (1-2 spp) are left out of

@@ -252,6 +252,7 @@ pub fn compare(
         points,
         frame_trace_ms: Vec::new(),
         integrator: format!("Mitsuba's path ({})", run.variant),
+        auto_trials: Vec::new(),
     });
     Ok(Some(result))
 }
