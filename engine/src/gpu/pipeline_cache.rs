@@ -177,6 +177,7 @@ impl PipelineCache {
                 })
             })
             .clone();
+        let start = std::time::Instant::now();
         let pipeline = self
             .device
             .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
@@ -190,6 +191,10 @@ impl PipelineCache {
                 },
                 cache: None,
             });
+        tracing::debug!(
+            "pipeline {label} `{entry}` compiled in {:.1} ms",
+            start.elapsed().as_secs_f64() * 1e3
+        );
         entries.compiled += 1;
         let storage = layouts
             .iter()
