@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Twenty-first session, call 3, scripted but not run (no machine could be started; the device time ran out).
-# relb/head.xz = 2b2cad0: the kernels without naga's loop bounding and integer-division guards, and auto's trial
-# decided by each form's fastest frame, re-run while unsteady for half a second. Parts,
+# relb/head.xz = 2b2cad0 or later (0e7c148 also prints auto's trials beside each curve): the kernels without
+# naga's loop bounding and integer-division guards, and auto's trial decided by each form's fastest frame, re-run
+# while unsteady for half a second. Parts,
 # run in the order 2, 3, 1, 4 (the quick ones first: less device time was left than planned):
 # 1. the Mitsuba 3 side by side (scripts/gpu-mitsuba.sh), all five static scenes, `--integrator auto`, the median of
 #    three Mitsuba renders per count -> side-by-side.tgz, summary.md;
