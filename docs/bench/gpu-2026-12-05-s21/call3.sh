@@ -13,7 +13,8 @@
 #    against the head, the frame loop as in 2 with `--integrator wavefront`, two rounds -> lazy.txt;
 # 4. the seed-like interior (2560x1440, 1 spp, 30 frames, auto and the megakernel) with the default checks
 #    and with wgpu's (`RAYKIN_SHADER_CHECKS=all`), alternating, two rounds -> seed.txt.
-# SIDE_BY_SIDE=off skips part 1, SEED_UNTIL (s, default 520) bounds part 4. Carry [".gl", "relb", ".whl"].
+# SIDE_BY_SIDE=off skips part 1, SEED_UNTIL (s, default 520) bounds part 4. Made by `bash scripts/gpu-pack.sh
+# --mitsuba`; carry [".gl", "relb", ".whl"].
 set -u
 source scripts/gpu-unpack.sh
 export RAYKIN_COMMIT=2b2cad0
