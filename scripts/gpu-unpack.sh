@@ -1,9 +1,9 @@
 # Sourced first by a device call's script, from the repository root: unpacks what the call carried (made here by
 # scripts/gpu-pack.sh). The Vulkan loader packages in .gl/ (the device README's recipe), the Mitsuba side by
 # side's wheels in .whl/ when carried (Dr.Jit's cp312 wheel and mitsuba-strip.tar.xz from
-# scripts/strip-mitsuba-wheel.sh, onto PYTHONPATH), and the binaries named as arguments, rel/NAME.xz -> rel/NAME, and relb/head.xz -> relb/head when carried. Then what every
-# call needs next: the NVIDIA Vulkan driver for the loader, the card in $OUT/gpu.txt, and `elapsed` (seconds since
-# this ran) for the scripts' time budgets.
+# scripts/strip-mitsuba-wheel.sh, onto PYTHONPATH), the binaries named as arguments, rel/NAME.xz -> rel/NAME, and
+# relb/head.xz -> relb/head when carried. Then what every call needs next: the NVIDIA Vulkan driver for the loader,
+# the card in $OUT/gpu.txt, and `elapsed` (seconds since this ran) for the scripts' time budgets.
 start=$(date +%s)
 elapsed() { echo $(( $(date +%s) - start )); }
 for f in .gl/*.deb; do dpkg -x "$f" / ; done
