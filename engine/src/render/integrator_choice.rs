@@ -53,7 +53,7 @@ pub struct Workload {
 }
 
 /// The outcome of a trial, for display and the bench's records.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct Decision {
     pub chosen: Integrator,
     /// Each form's fastest trace ms per frame among the deciding trial's timed frames.

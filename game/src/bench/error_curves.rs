@@ -12,6 +12,7 @@ use crate::stats::{log_log_fit, time_to_reach};
 use anyhow::{Context, Result};
 use raykin::gpu::GpuContext;
 use raykin::oidn::Quality;
+use raykin::render::integrator_choice::Decision;
 use raykin::render::{DenoiserKind, RenderSettings};
 use sha2::Digest;
 use std::path::Path;
@@ -92,16 +93,9 @@ pub struct CurveResult {
     /// The form of the path integrator that traced the curve's last frame (`auto` resolved by its trial in the
     /// warm-up frames); where repeats ended in different forms, each repeat's, in order, joined by `, `.
     pub integrator: String,
-    /// Per repeat, what auto's trial measured where it decided the form (`None`: no trial ran).
-    pub auto_trials: Vec<Option<AutoTrial>>,
-}
-
-/// Auto's trial as a curve records it: each form's fastest trace ms a frame, and the trials it took.
-#[derive(Clone, Copy, Debug, serde::Serialize)]
-pub struct AutoTrial {
-    pub megakernel_ms: f64,
-    pub wavefront_ms: f64,
-    pub trials: u32,
+    /// Per repeat, auto's decision: each form's fastest trace ms a frame and the trials it took (`None`: no
+    /// trial ran).
+    pub auto_trials: Vec<Option<Decision>>,
 }
 
 #[derive(Clone, Debug, serde::Serialize)]
@@ -225,11 +219,7 @@ pub fn measure(
             if let Some(form) = app.integrator_choice().last_form() {
                 forms.push(form.name());
             }
-            auto_trials.push(app.integrator_choice().decision().map(|d| AutoTrial {
-                megakernel_ms: d.megakernel_ms,
-                wavefront_ms: d.wavefront_ms,
-                trials: d.trials,
-            }));
+            auto_trials.push(app.integrator_choice().decision());
             drop(app);
             frame_trace_ms.push(frame_times);
             let mut run: Vec<[f64; 5]> = images
