@@ -7,7 +7,7 @@
 //   chance that a uniform u lands between them, so sampling and MIS weights agree to the last bit.
 // - `light_sampler_sample_at(ctx, u)` / `light_sampler_pmf_at(ctx, light)`: what next-event estimation uses,
 //   from its own CDF (`light_cdf`'s second half): the same powers, less the lights it leaves to BSDF sampling
-//   (a uniform environment: engine/src/render/gpu_scene/lights.rs), which get probability 0. With the light
+//   (a smooth environment: engine/src/environment/sampling.rs), which get probability 0. With the light
 //   tree on (frame.tree_light_count > 0) the lights at finite distance (the list's first tree_light_count)
 //   share their probability by the tree's spatial importance (lights/light_tree.wgsl); directional lights, the
 //   environment and the sun keep their power share.

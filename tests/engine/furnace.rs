@@ -1,7 +1,8 @@
 //! White furnace: a sphere with baseColor 1 under a constant environment of 1, max depth 1. Each pixel must
 //! equal the glTF BRDF's directional albedo for its view angle, computed here by independent deterministic
 //! quadrature of the specification's formulas (not by the renderer's code). The glTF BRDF does not conserve
-//! energy, so the expected values are not 1.
+//! energy, so the expected values are not 1. The gradient furnace does the same under the sky gradient, whose
+//! radiance is linear in the direction's height, so each pixel is the BRDF's albedo and first moment.
 
 use crate::common::*;
 use raykin::camera::CameraChoice;
@@ -47,12 +48,13 @@ pub(crate) fn albedo(mu: f64, metallic: f64, roughness: f64) -> f64 {
     albedo_weighted(mu, metallic, roughness, &|_| 1.0)
 }
 
-/// [`albedo`] of the BRDF multiplied by `weight(cos(l))` (a layer above that dims it per direction).
+/// [`albedo`] of the BRDF multiplied by `weight(l)`, l in the frame where the normal is +z and the view
+/// direction (sin, 0, mu) (a layer above that dims it per direction, or the light arriving from l).
 pub(crate) fn albedo_weighted(
     mu: f64,
     metallic: f64,
     roughness: f64,
-    weight: &dyn Fn(f64) -> f64,
+    weight: &dyn Fn([f64; 3]) -> f64,
 ) -> f64 {
     let alpha = (roughness * roughness).max(1e-4);
     let a2 = alpha * alpha;
@@ -83,7 +85,7 @@ pub(crate) fn albedo_weighted(
                 ];
                 if l[2] > 0.0 {
                     let (p1, p2) = (ndf_pdf_l(l), cos_pdf(l));
-                    total += brdf_cos(v, l, metallic, alpha) * weight(l[2]) / (p1 + p2);
+                    total += brdf_cos(v, l, metallic, alpha) * weight(l) / (p1 + p2);
                 }
             }
             // Cosine substitution.
@@ -93,7 +95,7 @@ pub(crate) fn albedo_weighted(
                 (1.0 - xi).sqrt(),
             ];
             let (p1, p2) = (ndf_pdf_l(l), cos_pdf(l));
-            total += brdf_cos(v, l, metallic, alpha) * weight(l[2]) / (p1 + p2);
+            total += brdf_cos(v, l, metallic, alpha) * weight(l) / (p1 + p2);
         }
     }
     total / (n_theta * n_phi) as f64
@@ -117,9 +119,10 @@ const SIZE: u32 = 16;
 const EYE_Z: f64 = 4.0;
 const YFOV_DEG: f64 = 32.0;
 
-/// Expected pixel value: the mean albedo over a 4x4 grid of sub-pixel rays (the renderer's box filter), or
-/// `None` where some ray misses the sphere or meets it at a grazing angle (the tessellation's silhouette).
-fn expected_pixel(x: u32, y: u32, table: &[(f64, f64)]) -> Option<f64> {
+/// Expected pixel value: the mean of `radiance(normal, towards the eye)` over a 4x4 grid of sub-pixel rays (the
+/// renderer's box filter), or `None` where some ray misses the sphere or meets it at a grazing angle (the
+/// tessellation's silhouette).
+fn expected_pixel(x: u32, y: u32, radiance: &dyn Fn([f64; 3], [f64; 3]) -> f64) -> Option<f64> {
     let tan = (YFOV_DEG.to_radians() * 0.5).tan();
     let mut sum = 0.0;
     for sy in 0..4 {
@@ -135,18 +138,30 @@ fn expected_pixel(x: u32, y: u32, table: &[(f64, f64)]) -> Option<f64> {
             }
             let t = -b - disc.sqrt();
             let n = [o[0] + t * d[0], o[1] + t * d[1], o[2] + t * d[2]];
-            let mu = -dot(n, d);
-            if mu < 0.3 {
+            if -dot(n, d) < 0.3 {
                 return None;
             }
-            let i = table
-                .partition_point(|(m, _)| *m < mu)
-                .clamp(1, table.len() - 1);
-            let ((m0, a0), (m1, a1)) = (table[i - 1], table[i]);
-            sum += a0 + (a1 - a0) * (mu - m0) / (m1 - m0);
+            sum += radiance(n, [-d[0], -d[1], -d[2]]);
         }
     }
     Some(sum / 16.0)
+}
+
+/// `f` on 57 cosines from 0.2 to 1, linear in between.
+fn table_of_cosines(f: impl Fn(f64) -> f64) -> impl Fn(f64) -> f64 {
+    let table: Vec<(f64, f64)> = (0..=56)
+        .map(|i| {
+            let mu = 0.2 + 0.8 * i as f64 / 56.0;
+            (mu, f(mu))
+        })
+        .collect();
+    move |mu| {
+        let i = table
+            .partition_point(|(m, _)| *m < mu)
+            .clamp(1, table.len() - 1);
+        let ((m0, a0), (m1, a1)) = (table[i - 1], table[i]);
+        a0 + (a1 - a0) * (mu - m0) / (m1 - m0)
+    }
 }
 
 fn furnace_case(metallic: f32, roughness: f32) {
@@ -173,6 +188,28 @@ pub(crate) fn furnace_check(
     albedo: impl Fn(f64) -> f64,
     max_spp: u32,
 ) {
+    let albedo = table_of_cosines(albedo);
+    let radiance = |n: [f64; 3], v: [f64; 3]| albedo(dot(n, v));
+    sphere_check(
+        what,
+        material,
+        Environment::Constant([1.0; 3]),
+        1,
+        &radiance,
+        max_spp,
+    );
+}
+
+/// Renders a unit sphere of `material` lit by `environment` alone (max depth 1) and checks channel `channel` of
+/// every interior pixel against `radiance(normal, towards the eye)`, as [`furnace_check`] describes.
+fn sphere_check(
+    what: &str,
+    material: Material,
+    environment: Environment,
+    channel: usize,
+    radiance: &dyn Fn([f64; 3], [f64; 3]) -> f64,
+    max_spp: u32,
+) {
     let (ctx, _gpu) = gpu();
     let sphere = procedural::uv_sphere(1.0, 128, 64, 0);
     let scene = Arc::new(procedural::scene_from_meshes(
@@ -184,7 +221,7 @@ pub(crate) fn furnace_check(
         width: SIZE,
         height: SIZE,
         max_depth: 1,
-        environment: Environment::Constant([1.0; 3]),
+        environment: environment.clone(),
         russian_roulette: false,
         seed,
         ..Default::default()
@@ -194,12 +231,6 @@ pub(crate) fn furnace_check(
         target: glam::Vec3::ZERO,
         yfov: (YFOV_DEG as f32).to_radians(),
     };
-    let table: Vec<(f64, f64)> = (0..=56)
-        .map(|i| {
-            let mu = 0.2 + 0.8 * i as f64 / 56.0;
-            (mu, albedo(mu))
-        })
-        .collect();
 
     // Two independent halves; more samples until the estimated per-pixel noise is a quarter of the tolerance.
     // Each round adds as many samples as the halves hold (new seeds), so the total doubles without re-rendering.
@@ -227,11 +258,11 @@ pub(crate) fn furnace_check(
         let mut checked = 0;
         for y in 0..SIZE {
             for x in 0..SIZE {
-                let Some(expected) = expected_pixel(x, y, &table) else {
+                let Some(expected) = expected_pixel(x, y, radiance) else {
                     continue;
                 };
                 let i = (y * SIZE + x) as usize;
-                let (va, vb) = (a[i][1] as f64, b[i][1] as f64);
+                let (va, vb) = (a[i][channel] as f64, b[i][channel] as f64);
                 let value = 0.5 * (va + vb);
                 // Var(mean of two halves) = E[(a - b)^2] / 4, relative to the expected value.
                 sigma2_sum += ((va - vb) / 2.0 / expected).powi(2);
@@ -305,4 +336,47 @@ fn furnace_metal_medium() {
 #[test]
 fn furnace_metal_smooth() {
     furnace_case(1.0, 0.05);
+}
+
+/// The sphere under the sky gradient (`Environment::Sky`: radiance (0.75, 0.85, 1) - (0.25, 0.15, 0) y along a
+/// direction of height y, written here from its definition), which next-event estimation leaves to BSDF
+/// sampling. For radiance linear in the direction, a pixel is A albedo(mu) + B (m_x(mu) e_x.y + m_z(mu) n.y):
+/// the BRDF's first moment (the integral of f cos(l) l) lies in the plane of the normal n and the view, along
+/// e_x (the view's part across n) and n. Red, whose gradient is a third of its mean.
+#[test]
+fn gradient_furnace_dielectric_medium() {
+    let (metallic, roughness) = (0.0, 0.5);
+    let (a, b) = (0.75, -0.25);
+    let moment = |axis: usize| {
+        table_of_cosines(move |mu| albedo_weighted(mu, metallic, roughness, &|l| l[axis]))
+    };
+    let (albedo, m_x, m_z) = (
+        table_of_cosines(|mu| albedo(mu, metallic, roughness)),
+        moment(0),
+        moment(2),
+    );
+    let radiance = |n: [f64; 3], v: [f64; 3]| {
+        let mu = dot(n, v);
+        let across = [v[0] - mu * n[0], v[1] - mu * n[1], v[2] - mu * n[2]];
+        let e_x_y = if dot(across, across) > 1e-12 {
+            normalize(across)[1]
+        } else {
+            0.0
+        };
+        a * albedo(mu) + b * (m_x(mu) * e_x_y + m_z(mu) * n[1])
+    };
+    let material = Material {
+        name: "white".into(),
+        metallic: metallic as f32,
+        roughness: roughness as f32,
+        ..Default::default()
+    };
+    sphere_check(
+        "gradient sky, metallic 0 roughness 0.5",
+        material,
+        Environment::Sky,
+        0,
+        &radiance,
+        16384,
+    );
 }

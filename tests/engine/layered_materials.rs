@@ -518,8 +518,8 @@ fn furnace_sheen() {
     let c = color as f64;
     let expected = |mu: f64| {
         let scale_v = 1.0 - c * e(mu);
-        let base = albedo_weighted(mu, 0.0, base_roughness as f64, &|cos_l| {
-            scale_v.min(1.0 - c * e(cos_l)).max(0.0)
+        let base = albedo_weighted(mu, 0.0, base_roughness as f64, &|l| {
+            scale_v.min(1.0 - c * e(l[2])).max(0.0)
         });
         c * e(mu) + base
     };

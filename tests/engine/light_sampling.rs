@@ -544,15 +544,15 @@ fn light_tree_probabilities_sum_to_one_and_match_its_choices() {
         });
         asset.roots.push(asset.nodes.len() - 1);
     }
-    // The sky: a light at infinity that next-event estimation samples (a constant one it leaves to BSDF
+    // A sunny map: a light at infinity that next-event estimation samples (a smooth one it leaves to BSDF
     // sampling), so that escaped rays' shortcut to its probability is checked against a non-zero one.
-    let app = app_with(&ctx, Arc::new(asset), Environment::Sky);
+    let app = app_with(&ctx, Arc::new(asset), sunny_environment());
     let lights = &app.gpu_scene().lights;
     assert_eq!(lights.triangle_count, 288);
     assert_eq!(
         lights.count,
         lights.infinite_first + 1,
-        "the sky after the lamps"
+        "the map after the lamps"
     );
     assert_eq!(
         lights.tree_count, 290,
@@ -576,7 +576,7 @@ fn light_tree_probabilities_sum_to_one_and_match_its_choices() {
         };
         let pmfs = run_probe(&app, probe, "pmf_all", count, count as usize);
         for (light, p) in pmfs.iter().enumerate().skip(lights.infinite_first as usize) {
-            assert!(p[0] > 0.0, "{label}: the sky has no probability");
+            assert!(p[0] > 0.0, "{label}: the map has no probability");
             assert_eq!(
                 p[2], p[0],
                 "{label}: light {light} at infinity: infinite_light_pmf_at differs from light_sampler_pmf_at"

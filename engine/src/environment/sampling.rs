@@ -24,9 +24,11 @@
 //! whose light is concentrated (the env-lit bench scene's one-texel sun: 0.57x the time to equal error on the
 //! H200) and costs on smooth ones, where two samples (light and BSDF) of the dim part beat one (the sky
 //! gradient: 1.12x on FlightHelmet), so [`next_event_sampling`] compensates only maps with at least
-//! [`COMPENSATION_MIN_SHARE`] of their light above the mean. A uniform map is left to BSDF sampling entirely
-//! (pbrt-v4's `UniformInfiniteLight`). ReSTIR's candidates, which no BSDF sample completes, always use the full
-//! distribution. Figures: docs/BENCHMARKS.md.
+//! [`COMPENSATION_MIN_SHARE`] of their light above the mean. A smooth map, whose brightest texel is at most
+//! [`SMOOTH_PEAK_TO_MEAN`] times its mean (a uniform one: pbrt-v4's `UniformInfiniteLight`; the sky gradient),
+//! is left to BSDF sampling entirely, as Cycles leaves a plain world: cosine and glossy-lobe directions sample
+//! its light nearly as well, and the path saves the shadow ray. ReSTIR's candidates, which no BSDF sample
+//! completes, always use the full distribution. Figures: docs/BENCHMARKS.md.
 
 use super::map::{EnvironmentMap, direction_to_uv, uv_to_direction};
 use glam::Vec3;
@@ -61,10 +63,17 @@ pub const BILINEAR_CONTRAST: f32 = 2.0;
 /// (the sky gradient has 0.05, the env-lit scene's sunny map 0.70).
 pub const COMPENSATION_MIN_SHARE: f64 = 0.25;
 
+/// The peak-to-mean luminance ratio up to which a map is left to BSDF sampling. Without next-event estimation
+/// a path's variance grew about as this ratio on FlightHelmet (1.27x under the sky gradient, whose ratio is
+/// 1.19; 1.9x at 1.86, 4.8x at 4.8), while its shadow rays and light samples cost 20-40% of a sample's time
+/// (the H100 ablations of docs/BENCHMARKS.md): skipping them pays below 1/(1 - 0.2) = 1.25 wherever they cost
+/// at least a fifth.
+pub const SMOOTH_PEAK_TO_MEAN: f64 = 1.25;
+
 /// How next-event estimation samples an environment map.
 #[derive(Clone, Debug, PartialEq)]
 pub enum NextEventSampling {
-    /// Not at all: the map is uniform, BSDF sampling covers it (next-event estimation never picks it).
+    /// Not at all: the map is smooth, BSDF sampling covers it (next-event estimation never picks it).
     None,
     /// From the full distribution, as ReSTIR's candidates.
     Full,
@@ -72,12 +81,18 @@ pub enum NextEventSampling {
     Compensated(EnvironmentDistribution),
 }
 
-/// [`NextEventSampling`] for `map`, whose full distribution is `full`: none for a uniform map (less than 1e-4
-/// of its light above the mean), compensated from [`COMPENSATION_MIN_SHARE`] of it, else full.
+/// [`NextEventSampling`] for `map`, whose full distribution is `full`: none for a smooth map (peak at most
+/// [`SMOOTH_PEAK_TO_MEAN`] times the mean, or less than 1e-4 of its light above the mean), compensated from
+/// [`COMPENSATION_MIN_SHARE`] of it, else full.
 pub fn next_event_sampling(
     map: &EnvironmentMap,
     full: &EnvironmentDistribution,
 ) -> NextEventSampling {
+    let mean = full.luminance_integral / (4.0 * PI);
+    let peak = full.texel_luminance.iter().fold(0.0f32, |m, &l| m.max(l));
+    if peak as f64 <= SMOOTH_PEAK_TO_MEAN * mean {
+        return NextEventSampling::None;
+    }
     match EnvironmentDistribution::compensated(map, full) {
         None => NextEventSampling::None,
         Some(c) if c.luminance_integral >= COMPENSATION_MIN_SHARE * full.luminance_integral => {
@@ -445,8 +460,8 @@ mod tests {
         }
     }
 
-    /// Compensation where the light is concentrated (a sun), the full distribution for a smooth sky, none for
-    /// a uniform map.
+    /// Compensation where the light is concentrated (a sun), the full distribution where it varies, none for a
+    /// uniform map or the smooth sky gradient.
     #[test]
     fn next_event_sampling_follows_how_concentrated_the_light_is() {
         let rule = |map: EnvironmentMap| {
@@ -461,17 +476,20 @@ mod tests {
             rule(EnvironmentMap::constant([1.0, 2.0, 3.0])),
             NextEventSampling::None
         );
-        // The sky gradient (render::environment): white at the nadir to (0.5, 0.7, 1) at the zenith.
-        let sky = (0..65)
-            .map(|j| {
-                let t = 0.5 * ((std::f32::consts::PI * j as f32 / 64.0).cos() + 1.0);
-                [1.0 - 0.5 * t, 1.0 - 0.3 * t, 1.0]
-            })
-            .collect();
+        // Gradients along the height: t = 0 at the nadir, 1 at the zenith.
+        let gradient = |texel: fn(f32) -> [f32; 3]| {
+            let column = (0..65)
+                .map(|j| texel(0.5 * ((std::f32::consts::PI * j as f32 / 64.0).cos() + 1.0)))
+                .collect();
+            rule(EnvironmentMap::new(1, 65, column))
+        };
+        // The sky gradient (render::environment), white to (0.5, 0.7, 1): peak 1.19 times the mean.
         assert_eq!(
-            rule(EnvironmentMap::new(1, 65, sky)),
-            NextEventSampling::Full
+            gradient(|t| [1.0 - 0.5 * t, 1.0 - 0.3 * t, 1.0]),
+            NextEventSampling::None
         );
+        // Grey 0.2 to white: peak 1.67 times the mean, a sixth of the light above it.
+        assert_eq!(gradient(|t| [0.2 + 0.8 * t; 3]), NextEventSampling::Full);
     }
 
     #[test]
