@@ -17,7 +17,7 @@
 # --mitsuba`; carry [".gl", "relb", ".whl"].
 set -u
 source scripts/gpu-unpack.sh
-export RAYKIN_COMMIT=2b2cad0
+export RAYKIN_COMMIT=${RAYKIN_COMMIT:-c74d310}
 bench_rows() {  # label, file, env assignment, bench options...
   local w; w=$(mktemp -d); local label=$1 file=$2 envs=$3; shift 3
   env "$envs" relb/head bench --suite full --parts frames "$@" --assets relb/assets --out "$w" --cache "$w/c" \
