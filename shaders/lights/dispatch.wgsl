@@ -12,13 +12,29 @@
 //   candidates, which nothing completes, pass false.
 // Lights at infinity are lights[frame.infinite_light_first ..]; emissive triangles are seen through `resolve_hit`.
 
+// The kinds of light (bit 1 << LIGHT_*) this kernel's light samples can pick: the path-tracing kernels set the
+// kinds next-event estimation samples on CPU adapters (engine/src/render/material_lobes.rs `KernelNeeds`), and
+// the other kinds' sampling compiles away, which lavapipe, running every `if` body masked, would pay for each
+// sample. An environment outside it (a smooth map, left to BSDF sampling) keeps its radiance lookup, its
+// density 0; a sun outside it is absent (every sun is sampled).
+override NEXT_EVENT_LIGHT_KINDS: u32 = 0xffffffffu;
+
+fn next_event_samples(kind: u32) -> bool {
+    return ((NEXT_EVENT_LIGHT_KINDS >> kind) & 1u) != 0u;
+}
+
 fn light_sample_li(index: u32, ctx: LightSampleContext, u: vec2<f32>, allow_incomplete_pdf: bool) -> LightLiSample {
     let light = read_light(index);
-    if light.kind == LIGHT_TRIANGLE { return triangle_light_sample_li(light, ctx, u); }
-    if light.kind == LIGHT_POINT || light.kind == LIGHT_SPOT { return point_light_sample_li(light, ctx); }
-    if light.kind == LIGHT_DIRECTIONAL { return directional_light_sample_li(light); }
-    if light.kind == LIGHT_ENVIRONMENT { return environment_sample_li(light, u, allow_incomplete_pdf); }
-    if light.kind == LIGHT_SUN { return sun_sample_li(light, u); }
+    if next_event_samples(LIGHT_TRIANGLE) && light.kind == LIGHT_TRIANGLE { return triangle_light_sample_li(light, ctx, u); }
+    if (next_event_samples(LIGHT_POINT) || next_event_samples(LIGHT_SPOT))
+        && (light.kind == LIGHT_POINT || light.kind == LIGHT_SPOT) {
+        return point_light_sample_li(light, ctx);
+    }
+    if next_event_samples(LIGHT_DIRECTIONAL) && light.kind == LIGHT_DIRECTIONAL { return directional_light_sample_li(light); }
+    if next_event_samples(LIGHT_ENVIRONMENT) && light.kind == LIGHT_ENVIRONMENT {
+        return environment_sample_li(light, u, allow_incomplete_pdf);
+    }
+    if next_event_samples(LIGHT_SUN) && light.kind == LIGHT_SUN { return sun_sample_li(light, u); }
     return no_light_sample();
 }
 
@@ -31,7 +47,12 @@ fn emitter_pdf_li(index: u32, ctx: LightSampleContext, wi: vec3<f32>, distance: 
 // `light_sample_li` gives `dir`.
 fn infinite_light_li(index: u32, dir: vec3<f32>, allow_incomplete_pdf: bool) -> InfiniteLightLi {
     let light = read_light(index);
-    if light.kind == LIGHT_ENVIRONMENT { return environment_li(light, dir, allow_incomplete_pdf); }
-    if light.kind == LIGHT_SUN { return InfiniteLightLi(sun_le(light, dir), sun_pdf(light, dir)); }
+    if light.kind == LIGHT_ENVIRONMENT {
+        if !next_event_samples(LIGHT_ENVIRONMENT) { return InfiniteLightLi(environment_le(light, dir), 0.0); }
+        return environment_li(light, dir, allow_incomplete_pdf);
+    }
+    if next_event_samples(LIGHT_SUN) && light.kind == LIGHT_SUN {
+        return InfiniteLightLi(sun_le(light, dir), sun_pdf(light, dir));
+    }
     return InfiniteLightLi(vec3<f32>(0.0), 0.0);
 }

@@ -61,6 +61,11 @@ fn environment_li(light: Light, dir: vec3<f32>, compensated: bool) -> InfiniteLi
     return InfiniteLightLi(environment_le_at(light, uv), environment_pdf_at(light, d, uv, compensated));
 }
 
+// Radiance arriving from world direction `dir`.
+fn environment_le(light: Light, dir: vec3<f32>) -> vec3<f32> {
+    return environment_le_at(light, environment_uv(environment_to_map(light, dir)));
+}
+
 // Radiance arriving from the direction at map coordinates `uv` (environment_uv): texel column i sits at
 // u = (i + 1/2) / W (wrapping), row j at v = j / (H - 1).
 fn environment_le_at(light: Light, uv: vec2<f32>) -> vec3<f32> {

@@ -246,7 +246,8 @@ fn deformed_on_gpu(deform: &[wgpu::CommandBuffer]) -> SceneWrites {
 
 /// What the path-tracing kernels are compiled for this frame: the materials' needs and, where the adapter
 /// compiles for the scene's shape ([`GpuContext::scene_shape_kernels`]), the top level's one leaf, the BLAS
-/// layouts of its leaves and whether the environment maps sample their cells uniformly.
+/// layouts of its leaves, whether the environment maps sample their cells uniformly and the light kinds
+/// next-event estimation can pick.
 fn kernel_needs(ctx: &GpuContext, scene: &GpuScene) -> KernelNeeds {
     let materials = MaterialNeeds::of(&scene.material_data);
     if !ctx.scene_shape_kernels {
@@ -260,6 +261,7 @@ fn kernel_needs(ctx: &GpuContext, scene: &GpuScene) -> KernelNeeds {
         sole_instance: scene.sole_instance,
         blas_layouts: scene.blas_layouts,
         environment_cells_uniform: scene.lights.environment_cells_uniform(),
+        next_event_light_kinds: Some(scene.lights.next_event_kinds),
     }
 }
 
@@ -378,7 +380,11 @@ pub fn encode_realtime_frame(
     }
     passes.trace.encode(
         ctx,
-        kernel_needs(ctx, scene),
+        // Its gradient estimates sample lights by power, whatever next-event estimation leaves out.
+        KernelNeeds {
+            next_event_light_kinds: None,
+            ..kernel_needs(ctx, scene)
+        },
         &mut encoder,
         &groups,
         view,

@@ -168,7 +168,10 @@ pub fn core_textures(materials: &[GpuMaterial]) -> u32 {
 /// lavapipe the child-pair BVH2's loop ran for every instance visited of a scene that has none (8% of the Cornell
 /// box's render). Where no environment map samples the bilinear density inside its cells
 /// (`LightList::environment_cells_uniform`, `ENVIRONMENT_BILINEAR` of `shaders/lights/environment.wgsl`), that
-/// code compiles away (9% of the Cornell box's render under the sky gradient).
+/// code compiles away (9% of the Cornell box's render under the sky gradient). The light kinds next-event
+/// estimation can pick (`LightList::next_event_kinds`, `NEXT_EVENT_LIGHT_KINDS` of `shaders/lights/dispatch.wgsl`)
+/// keep their sampling code and the others lose it (an environment left to BSDF sampling keeps only its
+/// radiance lookup); lavapipe runs every kind's code for every light sample otherwise.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub struct KernelNeeds {
     pub materials: MaterialNeeds,
@@ -177,6 +180,9 @@ pub struct KernelNeeds {
     pub blas_layouts: u32,
     /// Every environment map samples its cells uniformly (false: not known, or some map is bilinear).
     pub environment_cells_uniform: bool,
+    /// `1 << LIGHT_*` bits of the kinds next-event estimation can pick; `None`: not known, or the kernel also
+    /// samples lights otherwise (the real-time kernel's gradient estimates sample by power), every kind.
+    pub next_event_light_kinds: Option<u32>,
 }
 
 impl KernelNeeds {
@@ -191,6 +197,9 @@ impl KernelNeeds {
         }
         if self.environment_cells_uniform {
             constants.push(("ENVIRONMENT_BILINEAR", 0.0));
+        }
+        if let Some(kinds) = self.next_event_light_kinds {
+            constants.push(("NEXT_EVENT_LIGHT_KINDS", f64::from(kinds)));
         }
         constants
     }

@@ -76,6 +76,9 @@ pub struct LightList {
     pub triangle_count: u32,
     /// Lights in the light tree (the list's first ones); 0 when there is no tree.
     pub tree_count: u32,
+    /// The kinds of light next-event estimation can pick, as uploaded: bit `1 << kind` for each kind with a
+    /// light it samples (the trace kernels leave the others' sampling code out: `KernelNeeds`).
+    pub next_event_kinds: u32,
     /// The list as last uploaded (the real-time path keys its reservoirs' lights by it).
     pub uploaded: Vec<GpuLight>,
 }
@@ -356,6 +359,10 @@ impl GpuScene {
         self.lights.infinite_count = infinite_count;
         self.lights.triangle_count = self.lights.triangles.len() as u32;
         self.lights.tree_count = tree_count;
+        self.lights.next_event_kinds = all
+            .iter()
+            .filter(|w| w.next_event_power.is_some())
+            .fold(0, |kinds, w| kinds | 1 << w.light.kind);
         self.memory.lights = ((gpu.len() * 64 + cdf.len() * 4) as u64)
             + tree.map_or(0, |(nodes, _)| nodes.len() as u64 * 64)
             + self.environment_map.size();
