@@ -32,9 +32,11 @@ pub struct WeightedLight {
     pub bounds: Option<LightBounds>,
     /// The power next-event estimation's choice follows: `power`, except for an environment map that it
     /// samples MIS-compensated (`environment::NextEventSampling`: then the power of its light above the
-    /// map's mean), and `None` for a smooth environment (a uniform one, the sky gradient), left to BSDF sampling
-    /// alone (pbrt-v4's `UniformInfiniteLight` with `allowIncompletePDF`; `environment::sampling::SMOOTH_PEAK_TO_MEAN`:
-    /// cosine or glossy-lobe directions sample its light nearly as well, and the path saves the shadow ray). The power CDF (ReSTIR's candidates) keeps every light at its full power.
+    /// map's mean), and `None` for a smooth environment (a uniform one, the sky gradient), left to BSDF
+    /// sampling alone (pbrt-v4's `UniformInfiniteLight` with `allowIncompletePDF`;
+    /// `environment::sampling::SMOOTH_PEAK_TO_MEAN`: cosine or glossy-lobe directions sample its light nearly
+    /// as well, and the path saves the shadow ray). The power CDF (ReSTIR's candidates) keeps every light at
+    /// its full power.
     pub next_event_power: Option<f64>,
 }
 
