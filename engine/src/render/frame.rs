@@ -380,11 +380,7 @@ pub fn encode_realtime_frame(
     }
     passes.trace.encode(
         ctx,
-        // Its gradient estimates sample lights by power, whatever next-event estimation leaves out.
-        KernelNeeds {
-            next_event_light_kinds: None,
-            ..kernel_needs(ctx, scene)
-        },
+        kernel_needs(ctx, scene),
         &mut encoder,
         &groups,
         view,

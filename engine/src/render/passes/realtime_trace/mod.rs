@@ -87,6 +87,11 @@ impl RealtimeTracePass {
                 )
             });
         let mut pass = groups.begin_pass(encoder, "realtime trace", group, timestamp_writes);
+        // Its gradient estimates sample lights by power, whatever next-event estimation leaves out: every kind.
+        let needs = KernelNeeds {
+            next_event_light_kinds: None,
+            ..needs
+        };
         pass.set_pipeline(self.kernels.get(needs));
         let (x, y) = view.workgroups();
         pass.dispatch_workgroups(x, y, 1);
