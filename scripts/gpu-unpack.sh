@@ -3,9 +3,21 @@
 # side's wheels in .whl/ when carried (Dr.Jit's cp312 wheel and mitsuba-strip.tar.xz from
 # scripts/strip-mitsuba-wheel.sh, onto PYTHONPATH), the binaries named as arguments, rel/NAME.xz -> rel/NAME, and
 # relb/head.xz -> relb/head when carried. Then what every call needs next: the NVIDIA Vulkan driver for the loader,
-# the card in $OUT/gpu.txt, and `elapsed` (seconds since this ran) for the scripts' time budgets.
+# the card in $OUT/gpu.txt, `elapsed` (seconds since this ran) for the scripts' time budgets, and `frame_rows`.
 start=$(date +%s)
 elapsed() { echo $(( $(date +%s) - start )); }
+# The bench's frame loop for one variant: frame_rows LABEL FILE BINARY ENV=VALUE BENCH-OPTIONS... appends a row per
+# scene to $OUT/FILE (label, scene, width, spp per frame, trace ms median, form, auto's trial ms), or the log's
+# tail to $OUT/errors.txt. Assets from relb/assets.
+frame_rows() {
+  local w; w=$(mktemp -d); local label=$1 file=$2 bin=$3 envs=$4; shift 4
+  env "$envs" "$bin" bench --suite full --parts frames "$@" --assets relb/assets --out "$w" --cache "$w/c" \
+    > "$w/log" 2>&1
+  python3 -c "
+import json; r=json.load(open('$w/results.json'))
+for row in r['rows']: print('$label', row['scene'], row['width'], row['spp_per_frame'], row['trace_ms_median'], row['integrator'], row.get('auto_trial_ms'))
+" >> "$OUT/$file" || tail -5 "$w/log" >> "$OUT/errors.txt"
+}
 for f in .gl/*.deb; do dpkg -x "$f" / ; done
 ldconfig
 if ls .whl/drjit-*.whl >/dev/null 2>&1; then

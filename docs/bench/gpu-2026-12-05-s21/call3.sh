@@ -18,16 +18,7 @@
 set -u
 source scripts/gpu-unpack.sh
 export RAYKIN_COMMIT=${RAYKIN_COMMIT:-c74d310}
-bench_rows() {  # label, file, env assignment, bench options...
-  local w; w=$(mktemp -d); local label=$1 file=$2 envs=$3; shift 3
-  env "$envs" relb/head bench --suite full --parts frames "$@" --assets relb/assets --out "$w" --cache "$w/c" \
-    > "$w/log" 2>&1
-  python3 -c "
-import json; r=json.load(open('$w/results.json'))
-for row in r['rows']: print('$label', row['scene'], row['width'], row['spp_per_frame'], row['trace_ms_median'], row['integrator'], row.get('auto_trial_ms'))
-" >> "$OUT/$file" || tail -5 "$w/log" >> "$OUT/errors.txt"
-}
-bench_rows auto frames.txt RAYKIN_NONE=1 --frames 24 --width 960 --height 540 --spp-per-frame 16 \
+frame_rows auto frames.txt relb/head RAYKIN_NONE=1 --frames 24 --width 960 --height 540 --spp-per-frame 16 \
   --scene cornell --scene flight-helmet --scene spheres --scene env-lit --scene many-lights
 echo "frames: $(elapsed) s" | tee -a "$OUT/frames.txt"
 mkdir -p relb/lazy
@@ -39,8 +30,8 @@ for round in 1 2; do
   [ "${LAZY:-on}" = on ] || break
   for v in head lazy; do
     envs=RAYKIN_NONE=1; [ $v = lazy ] && envs=RAYKIN_SHADER_DIR=$PWD/relb/lazy
-    bench_rows $v lazy.txt "$envs" --frames 24 --width 960 --height 540 --spp-per-frame 16 --integrator wavefront \
-      --scene cornell --scene spheres --scene env-lit --scene many-lights
+    frame_rows $v lazy.txt relb/head "$envs" --frames 24 --width 960 --height 540 --spp-per-frame 16 \
+      --integrator wavefront --scene cornell --scene spheres --scene env-lit --scene many-lights
   done
 done
 echo "lazy: $(elapsed) s" | tee -a "$OUT/lazy.txt"
@@ -53,9 +44,9 @@ fi
 for round in 1 2; do
   for v in fewer all; do
     [ "$(elapsed)" -gt "${SEED_UNTIL:-520}" ] && break 2
-    bench_rows "$v" seed.txt RAYKIN_SHADER_CHECKS=$v --frames 30 --scene seed-interior --width 2560 --height 1440
-    bench_rows "$v" seed.txt RAYKIN_SHADER_CHECKS=$v --frames 30 --scene seed-interior --width 2560 --height 1440 \
-      --integrator megakernel
+    seed=(--frames 30 --scene seed-interior --width 2560 --height 1440)
+    frame_rows "$v" seed.txt relb/head RAYKIN_SHADER_CHECKS=$v "${seed[@]}"
+    frame_rows "$v" seed.txt relb/head RAYKIN_SHADER_CHECKS=$v "${seed[@]}" --integrator megakernel
   done
 done
 echo "total: $(elapsed) s" | tee -a "$OUT/seed.txt"

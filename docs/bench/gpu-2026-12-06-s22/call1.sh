@@ -20,14 +20,6 @@
 set -u
 source scripts/gpu-unpack.sh
 tar -C relb -xJf relb/bins.tar.xz
-ab_rows() {  # label, binary, bench options...
-  local w; w=$(mktemp -d); local label=$1 bin=$2; shift 2
-  "relb/$bin" bench --suite full --parts frames "$@" --assets relb/assets --out "$w" --cache "$w/c" > "$w/log" 2>&1
-  python3 -c "
-import json; r=json.load(open('$w/results.json'))
-for row in r['rows']: print('$label', row['scene'], row['width'], row['spp_per_frame'], row['trace_ms_median'], row['integrator'])
-" >> "$OUT/smooth.txt" || tail -5 "$w/log" >> "$OUT/errors.txt"
-}
 side_by_side() {
   MITSUBA_SCENES="${SIDE_BY_SIDE_SCENES:-flight-helmet spheres}" MITSUBA_REPEATS=3 ASSETS=relb/assets \
     RAYKIN_BIN=relb/smooth RAYKIN_INTEGRATOR=auto RAYKIN_COMMIT=1d84f06 timeout "${SIDE_BY_SIDE_SECONDS:-200}" \
@@ -41,8 +33,8 @@ a_b() {
     for bin in head smooth; do
       for form in ${AB_FORMS:-megakernel wavefront}; do
         [ "$(elapsed)" -gt "${CALL_UNTIL:-270}" ] && break 3
-        ab_rows "$bin" "$bin" --frames 24 --width 960 --height 540 --spp-per-frame 16 --integrator $form \
-          --scene flight-helmet --scene spheres
+        frame_rows "$bin" smooth.txt "relb/$bin" RAYKIN_NONE=1 --frames 24 --width 960 --height 540 \
+          --spp-per-frame 16 --integrator $form --scene flight-helmet --scene spheres
       done
     done
   done
