@@ -26,10 +26,12 @@ pub const KERNEL: ShaderModule = ShaderModule {
 
 #[derive(Resource)]
 pub struct TracePass {
-    /// Per lobe choice: the kernels without the denoisers' inputs (`PATH_AOVS` off), then with them.
-    kernels: [LobeKernels; 2],
+    /// Per lobe choice, indexed by [`kernel_index`]: with or without the denoisers' inputs (`PATH_AOVS`) and
+    /// the primary-hit AOV (`PATH_HIT_AOV`); each compiled when a view first needs it.
+    kernels: [LobeKernels; 4],
     needs: KernelNeeds,
     aovs: bool,
+    hit_aov: bool,
     view_layout: wgpu::BindGroupLayout,
     view_group: CachedGroup<u64>,
 }
@@ -55,19 +57,16 @@ impl TracePass {
             )
             .with_constants(aovs)
         };
-        let [without_aovs, with_aovs]: [&'static [(&'static str, f64)]; 2] =
-            if ctx.path_regeneration {
-                [
-                    &[("PATH_AOVS", 0.0), ("PATH_REGENERATION", 1.0)],
-                    &[("PATH_AOVS", 1.0), ("PATH_REGENERATION", 1.0)],
-                ]
-            } else {
-                [&[("PATH_AOVS", 0.0)], &[("PATH_AOVS", 1.0)]]
-            };
+        let constants = if ctx.path_regeneration {
+            &REGENERATING_CONSTANTS
+        } else {
+            &CONSTANTS
+        };
         Self {
-            kernels: [kernels(without_aovs), kernels(with_aovs)],
+            kernels: constants.map(kernels),
             needs: KernelNeeds::default(),
             aovs: true,
+            hit_aov: false,
             view_layout,
             view_group: CachedGroup::default(),
         }
@@ -83,9 +82,10 @@ impl TracePass {
         needs: KernelNeeds,
         aovs: bool,
     ) {
-        self.kernels[aovs as usize].get(needs);
+        self.kernels[kernel_index(aovs, view.hit_aov)].get(needs);
         self.needs = needs;
         self.aovs = aovs;
+        self.hit_aov = view.hit_aov;
         let layout = &self.view_layout;
         self.view_group.get_or_make(view.generation, || {
             bind_group(
@@ -125,7 +125,7 @@ impl TracePass {
             timestamp_writes,
         });
         pass.set_pipeline(
-            self.kernels[self.aovs as usize]
+            self.kernels[kernel_index(self.aovs, self.hit_aov)]
                 .compiled(self.needs)
                 .expect("TracePass::prepare compiled this kernel"),
         );
@@ -134,6 +134,43 @@ impl TracePass {
         let tile = pixel_tile(sample_lanes);
         pass.dispatch_workgroups(view.width.div_ceil(tile.0), view.height.div_ceil(tile.1), 1);
     }
+}
+
+/// The kernel's constants by [`kernel_index`]: without and with the denoisers' inputs, then both again with the
+/// primary-hit AOV.
+const CONSTANTS: [&[(&str, f64)]; 4] = [
+    &[("PATH_AOVS", 0.0), ("PATH_HIT_AOV", 0.0)],
+    &[("PATH_AOVS", 1.0), ("PATH_HIT_AOV", 0.0)],
+    &[("PATH_AOVS", 0.0), ("PATH_HIT_AOV", 1.0)],
+    &[("PATH_AOVS", 1.0), ("PATH_HIT_AOV", 1.0)],
+];
+/// [`CONSTANTS`] on adapters that regenerate paths.
+const REGENERATING_CONSTANTS: [&[(&str, f64)]; 4] = [
+    &[
+        ("PATH_AOVS", 0.0),
+        ("PATH_HIT_AOV", 0.0),
+        ("PATH_REGENERATION", 1.0),
+    ],
+    &[
+        ("PATH_AOVS", 1.0),
+        ("PATH_HIT_AOV", 0.0),
+        ("PATH_REGENERATION", 1.0),
+    ],
+    &[
+        ("PATH_AOVS", 0.0),
+        ("PATH_HIT_AOV", 1.0),
+        ("PATH_REGENERATION", 1.0),
+    ],
+    &[
+        ("PATH_AOVS", 1.0),
+        ("PATH_HIT_AOV", 1.0),
+        ("PATH_REGENERATION", 1.0),
+    ],
+];
+
+/// Which of the pass's kernels a view with (or without) the denoisers' inputs and the hit AOV runs.
+fn kernel_index(aovs: bool, hit_aov: bool) -> usize {
+    aovs as usize + 2 * hit_aov as usize
 }
 
 /// The most invocations that share a pixel's samples: a workgroup of 64 then holds 2x2 pixels.

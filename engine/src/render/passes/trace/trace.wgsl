@@ -16,6 +16,11 @@
 // environment where the camera ray missed) summed; w: sum of luminance(scattered radiance)^2.
 @group(1) @binding(6) var<storage, read_write> moments: array<vec4<f32>>;
 
+// Whether the kernel can write `aov_hit` (the frame asks with FRAME_HIT_AOV): views without the hit AOV, every
+// render and bench frame, compile without its traversal of the pixel centre's ray, a second inlined copy of
+// `trace` (lavapipe spends 9% of its pipeline compile on it: docs/BENCHMARKS.md).
+override PATH_HIT_AOV: bool = true;
+
 var<workgroup> workgroup_rays: atomic<u32>;
 // One of each invocation's sums of its samples, where several share a pixel (`frame.sample_lanes` > 1): a vec4
 // at a time keeps the workgroup's memory at 1 KB (an SM's shared memory comes out of its L1 cache).
@@ -68,7 +73,7 @@ fn trace_samples(gid: vec2<u32>, lane: u32, lanes: u32) -> PixelSums {
     let pixel = gid.y * frame.width + gid.x;
     let origin = camera_origin();
     let forward = camera_forward();
-    if (frame.flags & FRAME_HIT_AOV) != 0u && frame.sample_base == 0u && lane == 0u {
+    if PATH_HIT_AOV && (frame.flags & FRAME_HIT_AOV) != 0u && frame.sample_base == 0u && lane == 0u {
         rays_traced++;
         let hit = trace(Ray(origin, camera_ray_dir(gid, vec2<f32>(0.5))), MISS, false);
         aov_hit[pixel] = vec4<u32>(hit.instance, hit.triangle, bitcast<u32>(hit.bary.x), bitcast<u32>(hit.bary.y));

@@ -1,0 +1,463 @@
+//! Kernels specialised before the driver sees them. The engine's kernels carry the features a scene may lack
+//! behind pipeline-overridable constants (`MATERIAL_LOBES`, `PATH_AOVS`, `NEXT_EVENT_LIGHT_KINDS`, ...), and
+//! wgpu hands the driver every branch those constants switch off: naga substitutes the values but keeps the
+//! `if`s, so the driver inlines and optimises the dead code before it finds it dead. On lavapipe that work is
+//! most of a run's start-up (the path tracer's pipeline: half a second; the layered BSDF alone, switched off for a
+//! scene without sheen or clearcoat, took a sixth of it: docs/BENCHMARKS.md).
+//!
+//! Here the WGSL is parsed once per module; per pipeline the constants are substituted (naga's
+//! `process_overrides`), every `if` whose condition the constants decide is replaced by the branch taken,
+//! statements after a `return`, `break` or `continue` are dropped, and whatever is then unreachable goes (naga's
+//! `compact`). A condition is decided when it folds from literals, constants, and the results of functions that
+//! return at once an expression of their arguments and constants (`scene_uses_texture(CORE_TEXTURE_EMISSIVE)`,
+//! `next_event_samples(LIGHT_SUN)`). Only statements whose execution the constants rule out are removed, so the
+//! kernel computes what the WGSL says. A module that does not parse or validate goes to wgpu as WGSL, which
+//! reports the error as before.
+
+use naga::{
+    Arena, BinaryOperator, Block, Expression, Function, Handle, Literal, Module, ShaderStage,
+    Statement, UnaryOperator,
+};
+use std::collections::HashMap;
+
+/// A kernel's WGSL, parsed and validated once.
+pub struct ParsedModule {
+    module: Module,
+    info: naga::valid::ModuleInfo,
+}
+
+/// `source` parsed and validated, or `None` where it does not parse or validate (wgpu then reports why).
+pub fn parse(source: &str) -> Option<ParsedModule> {
+    let module = naga::front::wgsl::parse_str(source).ok()?;
+    let info = validator().validate(&module).ok()?;
+    Some(ParsedModule { module, info })
+}
+
+/// The module of compute entry point `entry` with `constants` substituted and the branches they rule out
+/// removed; `None` where naga cannot substitute them (an unknown name) or the result does not validate.
+pub fn specialize(parsed: &ParsedModule, entry: &str, constants: &[(&str, f64)]) -> Option<Module> {
+    let mut values = naga::back::PipelineConstants::default();
+    for (name, value) in constants {
+        values.insert((*name).to_owned(), *value);
+    }
+    let (module, _) = naga::back::pipeline_constants::process_overrides(
+        &parsed.module,
+        &parsed.info,
+        Some((ShaderStage::Compute, entry)),
+        &values,
+    )
+    .ok()?;
+    let mut module = module.into_owned();
+    remove_dead_branches(&mut module);
+    naga::compact::compact(&mut module, naga::compact::KeepUnused::No);
+    validator().validate(&module).ok()?;
+    Some(module)
+}
+
+fn validator() -> naga::valid::Validator {
+    naga::valid::Validator::new(
+        naga::valid::ValidationFlags::all(),
+        naga::valid::Capabilities::all(),
+    )
+}
+
+/// Removes, in every function and entry point, the branches the module's constants rule out. Functions are
+/// visited in arena order, callees first (naga's WGSL front end orders them so), so that a call's result can be
+/// folded from its callee's already simplified body.
+fn remove_dead_branches(module: &mut Module) {
+    let handles: Vec<Handle<Function>> = module.functions.iter().map(|(h, _)| h).collect();
+    for handle in handles {
+        let mut body = std::mem::take(&mut module.functions[handle].body);
+        let folder = Folder::new(module, &module.functions[handle], &body);
+        prune_block(&mut body, &folder);
+        let function = &mut module.functions[handle];
+        function.body = body;
+        forget_names(function);
+    }
+    for index in 0..module.entry_points.len() {
+        let mut body = std::mem::take(&mut module.entry_points[index].function.body);
+        let folder = Folder::new(module, &module.entry_points[index].function, &body);
+        prune_block(&mut body, &folder);
+        let function = &mut module.entry_points[index].function;
+        function.body = body;
+        forget_names(function);
+    }
+}
+
+/// Drops the names of `let` values: `compact` keeps every named expression, and one in a removed branch may
+/// name the result of a call whose callee is gone. The names only label the driver's code.
+fn forget_names(function: &mut Function) {
+    function.named_expressions.clear();
+}
+
+/// Replaces each `if` the folder decides by the statements of the branch taken (their expressions' scope
+/// widens, which no valid use can notice) and drops what follows a statement that leaves the block.
+fn prune_block(block: &mut Block, folder: &Folder) {
+    let mut out = Block::with_capacity(block.len());
+    for (statement, span) in std::mem::take(block).span_into_iter() {
+        match statement {
+            Statement::If {
+                condition,
+                mut accept,
+                mut reject,
+            } => match folder.fold(condition) {
+                Some(Value::Bool(taken)) => {
+                    let mut branch = if taken { accept } else { reject };
+                    prune_block(&mut branch, folder);
+                    out.append(&mut branch);
+                }
+                _ => {
+                    prune_block(&mut accept, folder);
+                    prune_block(&mut reject, folder);
+                    out.push(
+                        Statement::If {
+                            condition,
+                            accept,
+                            reject,
+                        },
+                        span,
+                    );
+                }
+            },
+            Statement::Block(mut inner) => {
+                prune_block(&mut inner, folder);
+                out.push(Statement::Block(inner), span);
+            }
+            Statement::Switch {
+                selector,
+                mut cases,
+            } => {
+                for case in &mut cases {
+                    prune_block(&mut case.body, folder);
+                }
+                out.push(Statement::Switch { selector, cases }, span);
+            }
+            Statement::Loop {
+                mut body,
+                mut continuing,
+                break_if,
+            } => {
+                prune_block(&mut body, folder);
+                prune_block(&mut continuing, folder);
+                out.push(
+                    Statement::Loop {
+                        body,
+                        continuing,
+                        break_if,
+                    },
+                    span,
+                );
+            }
+            other => out.push(other, span),
+        }
+        if out.last().is_some_and(leaves_block) {
+            break;
+        }
+    }
+    *block = out;
+}
+
+/// Whether nothing after `statement` in its block can run.
+fn leaves_block(statement: &Statement) -> bool {
+    matches!(
+        statement,
+        Statement::Return { .. } | Statement::Break | Statement::Continue | Statement::Kill
+    )
+}
+
+/// A scalar the folder knows at compile time.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Value {
+    Bool(bool),
+    U32(u32),
+    I32(i32),
+}
+
+/// Calls nested deeper than this are not followed (the engine's deepest fold is two).
+const MOST_NESTED_CALLS: u32 = 8;
+
+/// Folds expressions of one function: literals, constants, arguments where the caller knows them, and calls to
+/// functions that return at once.
+struct Folder<'a> {
+    module: &'a Module,
+    expressions: &'a Arena<Expression>,
+    /// The call statement that produces each `CallResult`: callee and arguments.
+    calls: HashMap<Handle<Expression>, (Handle<Function>, Vec<Handle<Expression>>)>,
+    /// The values of the function's arguments, where a caller knows them.
+    arguments: Vec<Option<Value>>,
+    depth: u32,
+}
+
+impl<'a> Folder<'a> {
+    fn new(module: &'a Module, function: &'a Function, body: &Block) -> Self {
+        let mut calls = HashMap::new();
+        collect_calls(body, &mut calls);
+        Self {
+            module,
+            expressions: &function.expressions,
+            calls,
+            arguments: vec![None; function.arguments.len()],
+            depth: 0,
+        }
+    }
+
+    fn fold(&self, expression: Handle<Expression>) -> Option<Value> {
+        match self.expressions[expression] {
+            Expression::Literal(literal) => literal_value(literal),
+            Expression::Constant(constant) => {
+                match self.module.global_expressions[self.module.constants[constant].init] {
+                    Expression::Literal(literal) => literal_value(literal),
+                    _ => None,
+                }
+            }
+            Expression::FunctionArgument(index) => {
+                self.arguments.get(index as usize).copied().flatten()
+            }
+            Expression::Unary { op, expr } => match (op, self.fold(expr)?) {
+                (UnaryOperator::LogicalNot, Value::Bool(b)) => Some(Value::Bool(!b)),
+                (UnaryOperator::BitwiseNot, Value::U32(v)) => Some(Value::U32(!v)),
+                (UnaryOperator::BitwiseNot, Value::I32(v)) => Some(Value::I32(!v)),
+                (UnaryOperator::Negate, Value::I32(v)) => Some(Value::I32(v.wrapping_neg())),
+                _ => None,
+            },
+            Expression::Binary { op, left, right } => self.fold_binary(op, left, right),
+            Expression::Select {
+                condition,
+                accept,
+                reject,
+            } => match self.fold(condition)? {
+                Value::Bool(true) => self.fold(accept),
+                Value::Bool(false) => self.fold(reject),
+                _ => None,
+            },
+            Expression::CallResult(_) => self.fold_call(expression),
+            _ => None,
+        }
+    }
+
+    fn fold_binary(
+        &self,
+        op: BinaryOperator,
+        left: Handle<Expression>,
+        right: Handle<Expression>,
+    ) -> Option<Value> {
+        use BinaryOperator as B;
+        let (l, r) = (self.fold(left), self.fold(right));
+        // Either side decides `&&` and `||` (naga's expressions have no side effects).
+        match op {
+            B::LogicalAnd if l == Some(Value::Bool(false)) || r == Some(Value::Bool(false)) => {
+                return Some(Value::Bool(false));
+            }
+            B::LogicalOr if l == Some(Value::Bool(true)) || r == Some(Value::Bool(true)) => {
+                return Some(Value::Bool(true));
+            }
+            _ => {}
+        }
+        let (l, r) = (l?, r?);
+        Some(match (op, l, r) {
+            (B::LogicalAnd, Value::Bool(a), Value::Bool(b)) => Value::Bool(a && b),
+            (B::LogicalOr, Value::Bool(a), Value::Bool(b)) => Value::Bool(a || b),
+            (B::Equal, a, b) => Value::Bool(a == b),
+            (B::NotEqual, a, b) => Value::Bool(a != b),
+            (B::Less, Value::U32(a), Value::U32(b)) => Value::Bool(a < b),
+            (B::LessEqual, Value::U32(a), Value::U32(b)) => Value::Bool(a <= b),
+            (B::Greater, Value::U32(a), Value::U32(b)) => Value::Bool(a > b),
+            (B::GreaterEqual, Value::U32(a), Value::U32(b)) => Value::Bool(a >= b),
+            (B::Less, Value::I32(a), Value::I32(b)) => Value::Bool(a < b),
+            (B::LessEqual, Value::I32(a), Value::I32(b)) => Value::Bool(a <= b),
+            (B::Greater, Value::I32(a), Value::I32(b)) => Value::Bool(a > b),
+            (B::GreaterEqual, Value::I32(a), Value::I32(b)) => Value::Bool(a >= b),
+            (B::And, Value::U32(a), Value::U32(b)) => Value::U32(a & b),
+            (B::InclusiveOr, Value::U32(a), Value::U32(b)) => Value::U32(a | b),
+            (B::ExclusiveOr, Value::U32(a), Value::U32(b)) => Value::U32(a ^ b),
+            (B::And, Value::Bool(a), Value::Bool(b)) => Value::Bool(a & b),
+            (B::InclusiveOr, Value::Bool(a), Value::Bool(b)) => Value::Bool(a | b),
+            // WGSL takes a shift's amount modulo the bit width at run time, as wrapping shifts do.
+            (B::ShiftLeft, Value::U32(a), Value::U32(b)) => Value::U32(a.wrapping_shl(b)),
+            (B::ShiftRight, Value::U32(a), Value::U32(b)) => Value::U32(a.wrapping_shr(b)),
+            (B::Add, Value::U32(a), Value::U32(b)) => Value::U32(a.wrapping_add(b)),
+            (B::Subtract, Value::U32(a), Value::U32(b)) => Value::U32(a.wrapping_sub(b)),
+            (B::Multiply, Value::U32(a), Value::U32(b)) => Value::U32(a.wrapping_mul(b)),
+            _ => return None,
+        })
+    }
+
+    /// The value a call returns, where its callee returns at once an expression this folds.
+    fn fold_call(&self, result: Handle<Expression>) -> Option<Value> {
+        if self.depth >= MOST_NESTED_CALLS {
+            return None;
+        }
+        let (callee, arguments) = self.calls.get(&result)?;
+        let function = &self.module.functions[*callee];
+        let value = immediate_return(&function.body)?;
+        let inner = Folder {
+            module: self.module,
+            expressions: &function.expressions,
+            calls: {
+                let mut calls = HashMap::new();
+                collect_calls(&function.body, &mut calls);
+                calls
+            },
+            arguments: arguments.iter().map(|a| self.fold(*a)).collect(),
+            depth: self.depth + 1,
+        };
+        inner.fold(value)
+    }
+}
+
+/// The expression a function returns before any other statement (but the evaluation of expressions and calls).
+fn immediate_return(body: &Block) -> Option<Handle<Expression>> {
+    for statement in body.iter() {
+        match statement {
+            Statement::Emit(_) | Statement::Call { .. } => continue,
+            Statement::Return { value } => return *value,
+            _ => return None,
+        }
+    }
+    None
+}
+
+/// Every call statement in `block` with a result, by its result expression.
+fn collect_calls(
+    block: &Block,
+    calls: &mut HashMap<Handle<Expression>, (Handle<Function>, Vec<Handle<Expression>>)>,
+) {
+    for statement in block.iter() {
+        match statement {
+            Statement::Call {
+                function,
+                arguments,
+                result: Some(result),
+            } => {
+                calls.insert(*result, (*function, arguments.clone()));
+            }
+            Statement::Block(inner) => collect_calls(inner, calls),
+            Statement::If { accept, reject, .. } => {
+                collect_calls(accept, calls);
+                collect_calls(reject, calls);
+            }
+            Statement::Switch { cases, .. } => {
+                for case in cases {
+                    collect_calls(&case.body, calls);
+                }
+            }
+            Statement::Loop {
+                body, continuing, ..
+            } => {
+                collect_calls(body, calls);
+                collect_calls(continuing, calls);
+            }
+            _ => {}
+        }
+    }
+}
+
+fn literal_value(literal: Literal) -> Option<Value> {
+    match literal {
+        Literal::Bool(b) => Some(Value::Bool(b)),
+        Literal::U32(v) => Some(Value::U32(v)),
+        Literal::I32(v) => Some(Value::I32(v)),
+        _ => None,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const KERNEL: &str = r#"
+override FEATURES: u32 = 3u;
+override DEBUG: bool = true;
+@group(0) @binding(0) var<storage, read_write> out: array<u32>;
+
+fn uses(feature: u32) -> bool {
+    return (FEATURES & (1u << feature)) != 0u;
+}
+
+fn expensive(x: u32) -> u32 {
+    var v = x;
+    for (var i = 0u; i < 8u; i++) { v = v * 1664525u + 1013904223u; }
+    return v;
+}
+
+fn cheap(x: u32) -> u32 {
+    if !uses(0u) { return x; }
+    return x + 1u;
+}
+
+@compute @workgroup_size(1)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    var v = id.x;
+    if uses(1u) && v > 2u {
+        v = expensive(v);
+    }
+    if DEBUG && uses(0u) { out[1] = 7u; }
+    out[0] = cheap(v);
+}
+"#;
+
+    fn names(module: &Module) -> Vec<String> {
+        let mut names: Vec<String> = module
+            .functions
+            .iter()
+            .filter_map(|(_, f)| f.name.clone())
+            .collect();
+        names.sort();
+        names
+    }
+
+    #[test]
+    fn branches_the_constants_rule_out_are_removed() {
+        let parsed = parse(KERNEL).expect("the test kernel parses");
+        // Feature 1 off: `expensive` is never called, so it goes.
+        let module = specialize(&parsed, "main", &[("FEATURES", 1.0)]).unwrap();
+        assert!(!names(&module).contains(&"expensive".to_owned()));
+        // Feature 1 on: the branch depends on `v` too and stays.
+        let module = specialize(&parsed, "main", &[("FEATURES", 2.0)]).unwrap();
+        assert!(names(&module).contains(&"expensive".to_owned()));
+    }
+
+    #[test]
+    fn folds_calls_with_constant_arguments_and_unreachable_statements() {
+        let parsed = parse(KERNEL).unwrap();
+        let module = specialize(&parsed, "main", &[("FEATURES", 0.0), ("DEBUG", 1.0)]).unwrap();
+        // `cheap` returns at once without feature 0; the store under `DEBUG && uses(0u)` is gone.
+        let cheap = module
+            .functions
+            .iter()
+            .find(|(_, f)| f.name.as_deref() == Some("cheap"))
+            .map(|(_, f)| f)
+            .unwrap();
+        let returns = cheap
+            .body
+            .iter()
+            .filter(|s| matches!(s, Statement::Return { .. }))
+            .count();
+        assert_eq!(returns, 1, "the statements after the first return are gone");
+        let entry = &module.entry_points[0].function;
+        let stores = count_stores(&entry.body);
+        assert_eq!(stores, 1, "only out[0] is written");
+        let module = specialize(&parsed, "main", &[("FEATURES", 1.0), ("DEBUG", 1.0)]).unwrap();
+        assert_eq!(count_stores(&module.entry_points[0].function.body), 2);
+    }
+
+    fn count_stores(block: &Block) -> usize {
+        block
+            .iter()
+            .map(|s| match s {
+                Statement::Store { .. } => 1,
+                Statement::If { accept, reject, .. } => count_stores(accept) + count_stores(reject),
+                Statement::Block(b) => count_stores(b),
+                Statement::Loop { body, .. } => count_stores(body),
+                _ => 0,
+            })
+            .sum()
+    }
+
+    #[test]
+    fn unknown_constants_and_bad_sources_fall_back() {
+        assert!(parse("fn broken( {").is_none());
+        let parsed = parse(KERNEL).unwrap();
+        assert!(specialize(&parsed, "main", &[("NO_SUCH_CONSTANT", 1.0)]).is_none());
+    }
+}
