@@ -15,9 +15,10 @@
 //! reports the error as before.
 
 use naga::{
-    Arena, BinaryOperator, Block, Expression, Function, Handle, Literal, Module, ShaderStage,
-    Statement, UnaryOperator,
+    Arena, BinaryOperator, Block, Expression, Function, Handle, Literal, LocalVariable, Module,
+    ShaderStage, Statement, UnaryOperator,
 };
+use std::cell::RefCell;
 use std::collections::HashMap;
 
 /// A kernel's WGSL, parsed and validated once.
@@ -68,16 +69,14 @@ fn remove_dead_branches(module: &mut Module) {
     let handles: Vec<Handle<Function>> = module.functions.iter().map(|(h, _)| h).collect();
     for handle in handles {
         let mut body = std::mem::take(&mut module.functions[handle].body);
-        let folder = Folder::new(module, &module.functions[handle], &body);
-        prune_block(&mut body, &folder);
+        prune_function(module, &module.functions[handle], &mut body);
         let function = &mut module.functions[handle];
         function.body = body;
         forget_names(function);
     }
     for index in 0..module.entry_points.len() {
         let mut body = std::mem::take(&mut module.entry_points[index].function.body);
-        let folder = Folder::new(module, &module.entry_points[index].function, &body);
-        prune_block(&mut body, &folder);
+        prune_function(module, &module.entry_points[index].function, &mut body);
         let function = &mut module.entry_points[index].function;
         function.body = body;
         forget_names(function);
@@ -90,12 +89,56 @@ fn forget_names(function: &mut Function) {
     function.named_expressions.clear();
 }
 
+/// Prunes `body` of `function` (taken out of it): local variables start at their initial values (WGSL's zero
+/// where there is none).
+fn prune_function(module: &Module, function: &Function, body: &mut Block) {
+    let folder = Folder::new(module, function, body);
+    let mut known = HashMap::new();
+    for (handle, local) in function.local_variables.iter() {
+        let value = match local.init {
+            Some(init) => folder.fold(init),
+            None => zero_value(&module.types[local.ty].inner),
+        };
+        if let Some(value) = value {
+            known.insert(handle, value);
+        }
+    }
+    prune_block(body, &folder, &mut known);
+}
+
+/// Local variables' values where the statements so far decide them (a forward pass over straight-line code).
+type KnownLocals = HashMap<Handle<LocalVariable>, Value>;
+
 /// Replaces each `if` the folder decides by the statements of the branch taken (their expressions' scope
-/// widens, which no valid use can notice) and drops what follows a statement that leaves the block.
-fn prune_block(block: &mut Block, folder: &Folder) {
+/// widens, which no valid use can notice) and drops what follows a statement that leaves the block. `known`
+/// holds the local variables' values on entry and is left with those on exit. Naga lowers `a && b` and `a || b`
+/// to a local variable stored in branches and loaded by the `if` that tests it, so the folder follows stores of
+/// values it knows into the loads emitted after them.
+fn prune_block(block: &mut Block, folder: &Folder, known: &mut KnownLocals) {
     let mut out = Block::with_capacity(block.len());
     for (statement, span) in std::mem::take(block).span_into_iter() {
         match statement {
+            Statement::Emit(ref range) => {
+                for expression in range.clone() {
+                    if let Expression::Load { pointer } = folder.expressions[expression]
+                        && let Expression::LocalVariable(local) = folder.expressions[pointer]
+                        && let Some(value) = known.get(&local)
+                    {
+                        folder.loads.borrow_mut().insert(expression, *value);
+                    }
+                }
+                out.push(statement, span);
+            }
+            Statement::Store { pointer, value } => {
+                if let Some(local) = folder.root_local(pointer) {
+                    let whole = matches!(folder.expressions[pointer], Expression::LocalVariable(_));
+                    match folder.fold(value).filter(|_| whole) {
+                        Some(v) => known.insert(local, v),
+                        None => known.remove(&local),
+                    };
+                }
+                out.push(statement, span);
+            }
             Statement::If {
                 condition,
                 mut accept,
@@ -103,12 +146,14 @@ fn prune_block(block: &mut Block, folder: &Folder) {
             } => match folder.fold(condition) {
                 Some(Value::Bool(taken)) => {
                     let mut branch = if taken { accept } else { reject };
-                    prune_block(&mut branch, folder);
+                    prune_block(&mut branch, folder, known);
                     out.append(&mut branch);
                 }
                 _ => {
-                    prune_block(&mut accept, folder);
-                    prune_block(&mut reject, folder);
+                    let mut after_reject = known.clone();
+                    prune_block(&mut accept, folder, known);
+                    prune_block(&mut reject, folder, &mut after_reject);
+                    known.retain(|local, value| after_reject.get(local) == Some(value));
                     out.push(
                         Statement::If {
                             condition,
@@ -120,15 +165,19 @@ fn prune_block(block: &mut Block, folder: &Folder) {
                 }
             },
             Statement::Block(mut inner) => {
-                prune_block(&mut inner, folder);
+                prune_block(&mut inner, folder, known);
                 out.push(Statement::Block(inner), span);
             }
             Statement::Switch {
                 selector,
                 mut cases,
             } => {
+                // Cases may fall through into each other: each starts from what no case changes.
+                for case in &cases {
+                    forget_stored(&case.body, folder, known);
+                }
                 for case in &mut cases {
-                    prune_block(&mut case.body, folder);
+                    prune_block(&mut case.body, folder, &mut known.clone());
                 }
                 out.push(Statement::Switch { selector, cases }, span);
             }
@@ -137,8 +186,11 @@ fn prune_block(block: &mut Block, folder: &Folder) {
                 mut continuing,
                 break_if,
             } => {
-                prune_block(&mut body, folder);
-                prune_block(&mut continuing, folder);
+                // Later iterations see the loop's own stores: the body starts from what the loop never changes.
+                forget_stored(&body, folder, known);
+                forget_stored(&continuing, folder, known);
+                prune_block(&mut body, folder, &mut known.clone());
+                prune_block(&mut continuing, folder, &mut known.clone());
                 out.push(
                     Statement::Loop {
                         body,
@@ -148,7 +200,26 @@ fn prune_block(block: &mut Block, folder: &Folder) {
                     span,
                 );
             }
-            other => out.push(other, span),
+            Statement::Call { ref arguments, .. } => {
+                // A callee can write a local variable only through a pointer passed to it.
+                for argument in arguments {
+                    if let Some(local) = folder.root_local(*argument) {
+                        known.remove(&local);
+                    }
+                }
+                out.push(statement, span);
+            }
+            Statement::Return { .. }
+            | Statement::Break
+            | Statement::Continue
+            | Statement::Kill
+            | Statement::ControlBarrier(_)
+            | Statement::MemoryBarrier(_) => out.push(statement, span),
+            other => {
+                // Anything else that may write memory: no local variable is known any more.
+                known.clear();
+                out.push(other, span);
+            }
         }
         if out.last().is_some_and(leaves_block) {
             break;
@@ -157,12 +228,70 @@ fn prune_block(block: &mut Block, folder: &Folder) {
     *block = out;
 }
 
+/// Forgets the local variables `block` stores to (anywhere in it, nested blocks included), or everything where
+/// it holds a statement that may write memory otherwise.
+fn forget_stored(block: &Block, folder: &Folder, known: &mut KnownLocals) {
+    for statement in block.iter() {
+        match statement {
+            Statement::Store { pointer, .. } => {
+                if let Some(local) = folder.root_local(*pointer) {
+                    known.remove(&local);
+                }
+            }
+            Statement::Call { arguments, .. } => {
+                for argument in arguments {
+                    if let Some(local) = folder.root_local(*argument) {
+                        known.remove(&local);
+                    }
+                }
+            }
+            Statement::Block(inner) => forget_stored(inner, folder, known),
+            Statement::If { accept, reject, .. } => {
+                forget_stored(accept, folder, known);
+                forget_stored(reject, folder, known);
+            }
+            Statement::Switch { cases, .. } => {
+                for case in cases {
+                    forget_stored(&case.body, folder, known);
+                }
+            }
+            Statement::Loop {
+                body, continuing, ..
+            } => {
+                forget_stored(body, folder, known);
+                forget_stored(continuing, folder, known);
+            }
+            Statement::Emit(_)
+            | Statement::Return { .. }
+            | Statement::Break
+            | Statement::Continue
+            | Statement::Kill
+            | Statement::ControlBarrier(_)
+            | Statement::MemoryBarrier(_) => {}
+            _ => known.clear(),
+        }
+    }
+}
+
 /// Whether nothing after `statement` in its block can run.
 fn leaves_block(statement: &Statement) -> bool {
     matches!(
         statement,
         Statement::Return { .. } | Statement::Break | Statement::Continue | Statement::Kill
     )
+}
+
+/// WGSL's initial value of a local variable of this type, where the folder tracks the type.
+fn zero_value(ty: &naga::TypeInner) -> Option<Value> {
+    match *ty {
+        naga::TypeInner::Scalar(naga::Scalar {
+            kind: naga::ScalarKind::Bool,
+            ..
+        }) => Some(Value::Bool(false)),
+        naga::TypeInner::Scalar(naga::Scalar::U32) => Some(Value::U32(0)),
+        naga::TypeInner::Scalar(naga::Scalar::I32) => Some(Value::I32(0)),
+        _ => None,
+    }
 }
 
 /// A scalar the folder knows at compile time.
@@ -185,6 +314,8 @@ struct Folder<'a> {
     calls: HashMap<Handle<Expression>, (Handle<Function>, Vec<Handle<Expression>>)>,
     /// The values of the function's arguments, where a caller knows them.
     arguments: Vec<Option<Value>>,
+    /// The values of loads of local variables, as known where they were emitted (filled in by `prune_block`).
+    loads: RefCell<HashMap<Handle<Expression>, Value>>,
     depth: u32,
 }
 
@@ -197,7 +328,19 @@ impl<'a> Folder<'a> {
             expressions: &function.expressions,
             calls,
             arguments: vec![None; function.arguments.len()],
+            loads: RefCell::default(),
             depth: 0,
+        }
+    }
+
+    /// The local variable a pointer expression points into, if any.
+    fn root_local(&self, pointer: Handle<Expression>) -> Option<Handle<LocalVariable>> {
+        match self.expressions[pointer] {
+            Expression::LocalVariable(local) => Some(local),
+            Expression::Access { base, .. } | Expression::AccessIndex { base, .. } => {
+                self.root_local(base)
+            }
+            _ => None,
         }
     }
 
@@ -231,6 +374,7 @@ impl<'a> Folder<'a> {
                 _ => None,
             },
             Expression::CallResult(_) => self.fold_call(expression),
+            Expression::Load { .. } => self.loads.borrow().get(&expression).copied(),
             _ => None,
         }
     }
@@ -299,6 +443,7 @@ impl<'a> Folder<'a> {
                 calls
             },
             arguments: arguments.iter().map(|a| self.fold(*a)).collect(),
+            loads: RefCell::default(),
             depth: self.depth + 1,
         };
         inner.fold(value)
@@ -435,20 +580,29 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
             .count();
         assert_eq!(returns, 1, "the statements after the first return are gone");
         let entry = &module.entry_points[0].function;
-        let stores = count_stores(&entry.body);
+        let stores = count_stores(&entry.body, &entry.expressions);
         assert_eq!(stores, 1, "only out[0] is written");
         let module = specialize(&parsed, "main", &[("FEATURES", 1.0), ("DEBUG", 1.0)]).unwrap();
-        assert_eq!(count_stores(&module.entry_points[0].function.body), 2);
+        let entry = &module.entry_points[0].function;
+        assert_eq!(count_stores(&entry.body, &entry.expressions), 2);
     }
 
-    fn count_stores(block: &Block) -> usize {
+    /// Stores to the storage buffer (not to local variables).
+    fn count_stores(block: &Block, expressions: &Arena<Expression>) -> usize {
         block
             .iter()
             .map(|s| match s {
-                Statement::Store { .. } => 1,
-                Statement::If { accept, reject, .. } => count_stores(accept) + count_stores(reject),
-                Statement::Block(b) => count_stores(b),
-                Statement::Loop { body, .. } => count_stores(body),
+                Statement::Store { pointer, .. } => match expressions[*pointer] {
+                    Expression::AccessIndex { base, .. } => {
+                        matches!(expressions[base], Expression::GlobalVariable(_)) as usize
+                    }
+                    _ => 0,
+                },
+                Statement::If { accept, reject, .. } => {
+                    count_stores(accept, expressions) + count_stores(reject, expressions)
+                }
+                Statement::Block(b) => count_stores(b, expressions),
+                Statement::Loop { body, .. } => count_stores(body, expressions),
                 _ => 0,
             })
             .sum()
