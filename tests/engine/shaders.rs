@@ -22,6 +22,66 @@ fn all_wgsl_kernels_validate() {
     }
 }
 
+/// Every compute kernel reaches the driver specialised (`gpu::specialize`): a kernel that fell back to WGSL and
+/// constants would still render, only with the compile time of every branch its constants switch off, so the
+/// fallback is caught here. The path tracer compiled for a scene of the core BSDF and triangle lights loses the
+/// layered BSDF and the environment's sampling, which its default constants keep.
+#[test]
+fn every_compute_kernel_specialises() {
+    use raykin::gpu::specialize;
+    for (name, source) in passes::all_kernels() {
+        let parsed =
+            specialize::parse(&source).unwrap_or_else(|| panic!("{name}.wgsl does not parse"));
+        let module = naga::front::wgsl::parse_str(&source).unwrap();
+        for entry in module
+            .entry_points
+            .iter()
+            .filter(|e| e.stage == naga::ShaderStage::Compute)
+        {
+            assert!(
+                specialize::specialize(&parsed, &entry.name, &[]).is_some(),
+                "{name}.wgsl `{}` does not specialise",
+                entry.name
+            );
+        }
+    }
+    let trace = passes::all_kernels()
+        .into_iter()
+        .find(|(name, _)| *name == "trace")
+        .unwrap()
+        .1;
+    let parsed = specialize::parse(&trace).unwrap();
+    let functions = |constants: &[(&str, f64)]| -> Vec<String> {
+        let module = specialize::specialize(&parsed, "trace_pixels", constants).unwrap();
+        module
+            .functions
+            .iter()
+            .filter_map(|(_, f)| f.name.clone())
+            .collect()
+    };
+    let general = functions(&[]);
+    let cornell = functions(&[
+        ("MATERIAL_LOBES", 0.0),
+        ("PATH_AOVS", 0.0),
+        ("PATH_HIT_AOV", 0.0),
+        (
+            "NEXT_EVENT_LIGHT_KINDS",
+            f64::from(1u32 << raykin::render::layout::LIGHT_TRIANGLE),
+        ),
+    ]);
+    for gone in ["layered_eval", "environment_sample_li", "sun_sample_li"] {
+        assert!(
+            general.iter().any(|f| f == gone),
+            "the general kernel calls {gone}"
+        );
+        assert!(
+            !cornell.iter().any(|f| f == gone),
+            "the Cornell box's kernel still calls {gone}"
+        );
+    }
+    assert!(cornell.iter().any(|f| f == "triangle_light_sample_li"));
+}
+
 /// On CPU adapters compute kernels read their parameters from storage buffers (`gpu::params_in_storage`):
 /// lavapipe specialises a kernel on the values of uniforms that decide branches or loop counts and compiles it
 /// again (tens of seconds) for each new image size, depth or camera. They read the scene from textures

@@ -5,7 +5,7 @@ pub mod external_memory;
 pub mod limits;
 mod pipeline_cache;
 pub mod readback;
-mod specialize;
+pub mod specialize;
 mod timestamps;
 
 pub use pipeline_cache::PipelineCache;

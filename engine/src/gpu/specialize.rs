@@ -467,10 +467,7 @@ fn immediate_return(body: &Block) -> Option<Handle<Expression>> {
 }
 
 /// Every call statement in `block` with a result, by its result expression.
-fn collect_calls(
-    block: &Block,
-    calls: &mut Calls,
-) {
+fn collect_calls(block: &Block, calls: &mut Calls) {
     for statement in block.iter() {
         match statement {
             Statement::Call {
