@@ -73,4 +73,17 @@ side_by_side() {
   grep -h "traced by" /tmp/gpu-mitsuba/bench.log > "$OUT/traced-by.txt"
   tail -9 "$OUT/summary.md"
 }
+# Added for the rerun with e7d3ce2 (PARTS="images startup frames"): whether the specialised kernels give the same
+# image on the GPU, byte for byte (128x128, 16 spp) -> images.txt.
+images() {
+  for scene in CornellBox/CornellBox.glb FlightHelmet/glTF/FlightHelmet.gltf \
+    MetalRoughSpheresNoTextures/glTF/MetalRoughSpheresNoTextures.gltf; do
+    for v in off on; do
+      RAYKIN_SPECIALIZE=$v relb/head render "relb/assets/$scene" --width 128 --height 128 --spp 16 \
+        --out "/tmp/image-$v.exr" > /dev/null 2>&1
+    done
+    if cmp -s /tmp/image-off.exr /tmp/image-on.exr; then r=identical; else r=differ; fi
+    echo "${scene%%/*}: $r" | tee -a "$OUT/images.txt"
+  done
+}
 for part in ${PARTS:-startup frames cornell side_by_side}; do "$part"; done
