@@ -177,10 +177,14 @@ impl PipelineCache {
                 parsed: specialize.then(|| specialize::parse(source)).flatten(),
             });
         let start = std::time::Instant::now();
-        let specialized = module
-            .parsed
-            .as_ref()
-            .and_then(|parsed| specialize::specialize(parsed, entry, constants));
+        let specialized = module.parsed.as_ref().and_then(|parsed| {
+            let specialized = specialize::specialize(parsed, entry, constants);
+            if specialized.is_none() {
+                // The kernel still compiles, with every branch its constants switch off (a bug to report).
+                tracing::warn!("pipeline {label} `{entry}` not specialised: compiled from WGSL");
+            }
+            specialized
+        });
         let layout = module.layout.clone();
         let (shader, constants) = match specialized {
             // SAFETY: see `engine_shader_checks`.
