@@ -161,7 +161,6 @@ impl PipelineCache {
         if let Some(pipeline) = entries.pipelines.get(&key) {
             return pipeline.clone();
         }
-        let specialize = self.specialize;
         let module = entries
             .modules
             .entry(module_key)
@@ -174,7 +173,7 @@ impl PipelineCache {
                         bind_group_layouts: layouts,
                         immediate_size: 0,
                     }),
-                parsed: specialize.then(|| specialize::parse(source)).flatten(),
+                parsed: self.specialize.then(|| specialize::parse(source)).flatten(),
             });
         let start = std::time::Instant::now();
         let specialized = module.parsed.as_ref().and_then(|parsed| {

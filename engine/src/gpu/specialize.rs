@@ -210,15 +210,11 @@ fn prune_block(block: &mut Block, folder: &Folder, known: &mut KnownLocals) {
                 }
                 out.push(statement, span);
             }
-            Statement::Return { .. }
-            | Statement::Break
-            | Statement::Continue
-            | Statement::Kill
-            | Statement::ControlBarrier(_)
-            | Statement::MemoryBarrier(_) => out.push(statement, span),
             other => {
                 // Anything else that may write memory: no local variable is known any more.
-                known.clear();
+                if !writes_no_memory(&other) {
+                    known.clear();
+                }
                 out.push(other, span);
             }
         }
@@ -232,44 +228,65 @@ fn prune_block(block: &mut Block, folder: &Folder, known: &mut KnownLocals) {
 /// Forgets the local variables `block` stores to (anywhere in it, nested blocks included), or everything where
 /// it holds a statement that may write memory otherwise.
 fn forget_stored(block: &Block, folder: &Folder, known: &mut KnownLocals) {
-    for statement in block.iter() {
-        match statement {
-            Statement::Store { pointer, .. } => {
-                if let Some(local) = folder.root_local(*pointer) {
+    for_each_statement(block, &mut |statement| match statement {
+        Statement::Store { pointer, .. } => {
+            if let Some(local) = folder.root_local(*pointer) {
+                known.remove(&local);
+            }
+        }
+        Statement::Call { arguments, .. } => {
+            for argument in arguments {
+                if let Some(local) = folder.root_local(*argument) {
                     known.remove(&local);
                 }
             }
-            Statement::Call { arguments, .. } => {
-                for argument in arguments {
-                    if let Some(local) = folder.root_local(*argument) {
-                        known.remove(&local);
-                    }
-                }
-            }
-            Statement::Block(inner) => forget_stored(inner, folder, known),
-            Statement::If { accept, reject, .. } => {
-                forget_stored(accept, folder, known);
-                forget_stored(reject, folder, known);
-            }
-            Statement::Switch { cases, .. } => {
-                for case in cases {
-                    forget_stored(&case.body, folder, known);
-                }
-            }
-            Statement::Loop {
-                body, continuing, ..
-            } => {
-                forget_stored(body, folder, known);
-                forget_stored(continuing, folder, known);
-            }
-            Statement::Emit(_)
+        }
+        statement if !writes_no_memory(statement) => known.clear(),
+        _ => {}
+    });
+}
+
+/// Whether `statement` writes no memory itself (a `Store` or a `Call` may; control flow holds statements that
+/// may, and `for_each_statement` visits those).
+fn writes_no_memory(statement: &Statement) -> bool {
+    matches!(
+        statement,
+        Statement::Emit(_)
+            | Statement::Block(_)
+            | Statement::If { .. }
+            | Statement::Switch { .. }
+            | Statement::Loop { .. }
             | Statement::Return { .. }
             | Statement::Break
             | Statement::Continue
             | Statement::Kill
             | Statement::ControlBarrier(_)
-            | Statement::MemoryBarrier(_) => {}
-            _ => known.clear(),
+            | Statement::MemoryBarrier(_)
+    )
+}
+
+/// Calls `visit` with every statement of `block`, those nested in blocks, branches, cases and loops included.
+fn for_each_statement(block: &Block, visit: &mut impl FnMut(&Statement)) {
+    for statement in block.iter() {
+        visit(statement);
+        match statement {
+            Statement::Block(inner) => for_each_statement(inner, visit),
+            Statement::If { accept, reject, .. } => {
+                for_each_statement(accept, visit);
+                for_each_statement(reject, visit);
+            }
+            Statement::Switch { cases, .. } => {
+                for case in cases {
+                    for_each_statement(&case.body, visit);
+                }
+            }
+            Statement::Loop {
+                body, continuing, ..
+            } => {
+                for_each_statement(body, visit);
+                for_each_statement(continuing, visit);
+            }
+            _ => {}
         }
     }
 }
@@ -325,12 +342,10 @@ struct Folder<'a> {
 
 impl<'a> Folder<'a> {
     fn new(module: &'a Module, function: &'a Function, body: &Block) -> Self {
-        let mut calls = HashMap::new();
-        collect_calls(body, &mut calls);
         Self {
             module,
             expressions: &function.expressions,
-            calls,
+            calls: collect_calls(body),
             arguments: vec![None; function.arguments.len()],
             loads: RefCell::default(),
             depth: 0,
@@ -437,15 +452,11 @@ impl<'a> Folder<'a> {
         }
         let (callee, arguments) = self.calls.get(&result)?;
         let function = &self.module.functions[*callee];
-        let value = immediate_return(&function.body)?;
+        let (value, calls) = immediate_return(&function.body)?;
         let inner = Folder {
             module: self.module,
             expressions: &function.expressions,
-            calls: {
-                let mut calls = HashMap::new();
-                collect_calls(&function.body, &mut calls);
-                calls
-            },
+            calls,
             arguments: arguments.iter().map(|a| self.fold(*a)).collect(),
             loads: RefCell::default(),
             depth: self.depth + 1,
@@ -454,12 +465,23 @@ impl<'a> Folder<'a> {
     }
 }
 
-/// The expression a function returns before any other statement (but the evaluation of expressions and calls).
-fn immediate_return(body: &Block) -> Option<Handle<Expression>> {
+/// The expression a function returns before any other statement (but the evaluation of expressions and calls),
+/// with the calls before it (the only ones its value can depend on).
+fn immediate_return(body: &Block) -> Option<(Handle<Expression>, Calls)> {
+    let mut calls = Calls::new();
     for statement in body.iter() {
         match statement {
-            Statement::Emit(_) | Statement::Call { .. } => continue,
-            Statement::Return { value } => return *value,
+            Statement::Emit(_) => {}
+            Statement::Call {
+                function,
+                arguments,
+                result,
+            } => {
+                if let Some(result) = result {
+                    calls.insert(*result, (*function, arguments.clone()));
+                }
+            }
+            Statement::Return { value } => return value.map(|value| (value, calls)),
             _ => return None,
         }
     }
@@ -467,35 +489,19 @@ fn immediate_return(body: &Block) -> Option<Handle<Expression>> {
 }
 
 /// Every call statement in `block` with a result, by its result expression.
-fn collect_calls(block: &Block, calls: &mut Calls) {
-    for statement in block.iter() {
-        match statement {
-            Statement::Call {
-                function,
-                arguments,
-                result: Some(result),
-            } => {
-                calls.insert(*result, (*function, arguments.clone()));
-            }
-            Statement::Block(inner) => collect_calls(inner, calls),
-            Statement::If { accept, reject, .. } => {
-                collect_calls(accept, calls);
-                collect_calls(reject, calls);
-            }
-            Statement::Switch { cases, .. } => {
-                for case in cases {
-                    collect_calls(&case.body, calls);
-                }
-            }
-            Statement::Loop {
-                body, continuing, ..
-            } => {
-                collect_calls(body, calls);
-                collect_calls(continuing, calls);
-            }
-            _ => {}
+fn collect_calls(block: &Block) -> Calls {
+    let mut calls = Calls::new();
+    for_each_statement(block, &mut |statement| {
+        if let Statement::Call {
+            function,
+            arguments,
+            result: Some(result),
+        } = statement
+        {
+            calls.insert(*result, (*function, arguments.clone()));
         }
-    }
+    });
+    calls
 }
 
 fn literal_value(literal: Literal) -> Option<Value> {

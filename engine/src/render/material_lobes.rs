@@ -212,7 +212,7 @@ pub struct LobeKernels {
     entry: &'static str,
     module: ComputeModule,
     /// Pipeline constants of the module's own, the same for every lobe choice.
-    constants: &'static [(&'static str, f64)],
+    constants: Vec<(&'static str, f64)>,
     pipelines: HashMap<KernelNeeds, wgpu::ComputePipeline>,
 }
 
@@ -228,14 +228,17 @@ impl LobeKernels {
             label,
             entry,
             module: ComputeModule::new(ctx, source, layouts),
-            constants: &[],
+            constants: Vec::new(),
             pipelines: HashMap::new(),
         }
     }
 
     /// The same kernels compiled with these values of the module's other pipeline constants.
-    pub fn with_constants(self, constants: &'static [(&'static str, f64)]) -> Self {
-        Self { constants, ..self }
+    pub fn with_constants(self, constants: &[(&'static str, f64)]) -> Self {
+        Self {
+            constants: constants.to_vec(),
+            ..self
+        }
     }
 
     /// The kernel for `needs`, compiled now if it has not been.

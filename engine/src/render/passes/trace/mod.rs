@@ -27,7 +27,8 @@ pub const KERNEL: ShaderModule = ShaderModule {
 #[derive(Resource)]
 pub struct TracePass {
     /// Per lobe choice, indexed by [`kernel_index`]: with or without the denoisers' inputs (`PATH_AOVS`) and
-    /// the primary-hit AOV (`PATH_HIT_AOV`); each compiled when a view first needs it.
+    /// the primary-hit AOV (`PATH_HIT_AOV`), regenerating paths where the adapter does; each compiled when a view
+    /// first needs it.
     kernels: [LobeKernels; 4],
     needs: KernelNeeds,
     aovs: bool,
@@ -47,7 +48,15 @@ impl TracePass {
                 Params, ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite,
             ],
         );
-        let kernels = |aovs: &'static [(&'static str, f64)]| {
+        let kernels = |index: usize| {
+            let (aovs, hit_aov) = kernel_flags(index);
+            let mut constants = vec![
+                ("PATH_AOVS", f64::from(u8::from(aovs))),
+                ("PATH_HIT_AOV", f64::from(u8::from(hit_aov))),
+            ];
+            if ctx.path_regeneration {
+                constants.push(("PATH_REGENERATION", 1.0));
+            }
             LobeKernels::new(
                 ctx,
                 "path trace",
@@ -55,15 +64,10 @@ impl TracePass {
                 &[Some(scene_layout), Some(&view_layout)],
                 "trace_pixels",
             )
-            .with_constants(aovs)
-        };
-        let constants = if ctx.path_regeneration {
-            &REGENERATING_CONSTANTS
-        } else {
-            &CONSTANTS
+            .with_constants(&constants)
         };
         Self {
-            kernels: constants.map(kernels),
+            kernels: std::array::from_fn(kernels),
             needs: KernelNeeds::default(),
             aovs: true,
             hit_aov: false,
@@ -136,41 +140,14 @@ impl TracePass {
     }
 }
 
-/// The kernel's constants by [`kernel_index`]: without and with the denoisers' inputs, then both again with the
-/// primary-hit AOV.
-const CONSTANTS: [&[(&str, f64)]; 4] = [
-    &[("PATH_AOVS", 0.0), ("PATH_HIT_AOV", 0.0)],
-    &[("PATH_AOVS", 1.0), ("PATH_HIT_AOV", 0.0)],
-    &[("PATH_AOVS", 0.0), ("PATH_HIT_AOV", 1.0)],
-    &[("PATH_AOVS", 1.0), ("PATH_HIT_AOV", 1.0)],
-];
-/// [`CONSTANTS`] on adapters that regenerate paths.
-const REGENERATING_CONSTANTS: [&[(&str, f64)]; 4] = [
-    &[
-        ("PATH_AOVS", 0.0),
-        ("PATH_HIT_AOV", 0.0),
-        ("PATH_REGENERATION", 1.0),
-    ],
-    &[
-        ("PATH_AOVS", 1.0),
-        ("PATH_HIT_AOV", 0.0),
-        ("PATH_REGENERATION", 1.0),
-    ],
-    &[
-        ("PATH_AOVS", 0.0),
-        ("PATH_HIT_AOV", 1.0),
-        ("PATH_REGENERATION", 1.0),
-    ],
-    &[
-        ("PATH_AOVS", 1.0),
-        ("PATH_HIT_AOV", 1.0),
-        ("PATH_REGENERATION", 1.0),
-    ],
-];
-
 /// Which of the pass's kernels a view with (or without) the denoisers' inputs and the hit AOV runs.
 fn kernel_index(aovs: bool, hit_aov: bool) -> usize {
-    aovs as usize + 2 * hit_aov as usize
+    aovs as usize | (hit_aov as usize) << 1
+}
+
+/// The denoisers' inputs and the hit AOV of kernel `index` ([`kernel_index`]'s inverse).
+fn kernel_flags(index: usize) -> (bool, bool) {
+    (index & 1 != 0, index & 2 != 0)
 }
 
 /// The most invocations that share a pixel's samples: a workgroup of 64 then holds 2x2 pixels.
@@ -229,6 +206,16 @@ mod tests {
         assert_eq!(lanes_for(960 * 540, 1, LANE_INVOCATIONS), 1);
         assert_eq!(lanes_for(16, 64, LANE_INVOCATIONS), 16);
         assert_eq!(lanes_for(0, 0, LANE_INVOCATIONS), 1);
+    }
+
+    #[test]
+    fn each_kernel_index_names_one_kernel() {
+        for aovs in [false, true] {
+            for hit_aov in [false, true] {
+                assert_eq!(kernel_flags(kernel_index(aovs, hit_aov)), (aovs, hit_aov));
+                assert!(kernel_index(aovs, hit_aov) < 4);
+            }
+        }
     }
 
     #[test]

@@ -191,10 +191,10 @@ impl WavefrontPass {
         // differs only below it. With a gap, `advance` wrote through a stale group on NVIDIA and sized nothing.
         let [scene, view] = queue;
         let sizing = [scene, view, Some(&args_layout)];
-        let constants: &'static [(&'static str, f64)] = &[("PATH_AOVS", 0.0)];
+        let constants: &[(&'static str, f64)] = &[("PATH_AOVS", 0.0)];
         let kernel_with = |entry: &'static str,
                            layouts: &[Option<&wgpu::BindGroupLayout>],
-                           constants: &'static [(&'static str, f64)]| {
+                           constants: &[(&'static str, f64)]| {
             LobeKernels::new(ctx, "wavefront", source.clone(), layouts, entry)
                 .with_constants(constants)
         };
