@@ -247,6 +247,9 @@ pub struct BenchArgs {
     pub frames: Option<usize>,
     #[arg(long, default_value_t = 6)]
     pub max_depth: u32,
+    /// Path depth from which Russian roulette may end a path (see `render --help`).
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..))]
+    pub rr_depth: u32,
     /// Samples per pixel per frame of the frame loop and of the error part's default curve (an offline
     /// render's dispatch: `render --spp-per-dispatch`).
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=1024))]
@@ -381,6 +384,9 @@ pub struct SceneArgs {
     /// Disable Russian roulette.
     #[arg(long)]
     pub no_rr: bool,
+    /// Path depth from which Russian roulette may end a path (Mitsuba's `rr_depth`; 1: from the first bounce).
+    #[arg(long, default_value_t = 3, value_parser = at_least_one(), allow_negative_numbers = true)]
+    pub rr_depth: u32,
     /// Pose time in seconds (clip 0 unless --animation); the same time always gives the same image.
     #[arg(long, value_parser = parse_finite, allow_hyphen_values = true)]
     pub time: Option<f32>,

@@ -41,6 +41,7 @@ pub fn settings_from(args: &SceneArgs, scene: &SceneAsset) -> Result<RenderSetti
         exposure: args.exposure,
         seed: args.seed,
         russian_roulette: !args.no_rr,
+        rr_depth: args.rr_depth,
         nee: !args.no_nee,
         denoise: args.denoise.is_some(),
         denoiser: args
@@ -489,6 +490,7 @@ pub fn run_default() -> Result<()> {
         exposure: 0.0,
         no_nee: false,
         no_rr: false,
+        rr_depth: 3,
         time: None,
         animation: None,
         spp_per_dispatch: 16,

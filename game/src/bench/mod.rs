@@ -210,6 +210,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let base = RenderSettings {
         spp_per_frame: args.spp_per_frame,
         max_depth: args.max_depth,
+        rr_depth: args.rr_depth,
         static_bvh: args.static_bvh.layout(),
         merge_static: args.static_bvh.merged(),
         deform: args.deform.into(),
