@@ -490,7 +490,7 @@ pub fn run_default() -> Result<()> {
         exposure: 0.0,
         no_nee: false,
         no_rr: false,
-        rr_depth: 3,
+        rr_depth: 4,
         time: None,
         animation: None,
         spp_per_dispatch: 16,

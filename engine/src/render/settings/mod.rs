@@ -141,7 +141,8 @@ pub struct RenderSettings {
     pub depth_view_scale: f32,
     pub seed: u32,
     pub russian_roulette: bool,
-    /// First path depth at which Russian roulette may end a path.
+    /// First path depth at which Russian roulette may end a path: 4, measured against 3 and 5 on the bench's
+    /// five static scenes (docs/BENCHMARKS.md, "Where Russian roulette starts").
     pub rr_depth: u32,
     /// Next-event estimation on every light (with MIS).
     pub nee: bool,
@@ -206,7 +207,7 @@ impl Default for RenderSettings {
             depth_view_scale: 0.1,
             seed: 0,
             russian_roulette: true,
-            rr_depth: 3,
+            rr_depth: 4,
             nee: true,
             light_sampler: LightSampler::default(),
             bvh_quality: crate::bvh::BvhQuality::Medium,
