@@ -132,18 +132,16 @@ fn sample_direct(s: SurfaceInteraction, wo: vec3<f32>, tbn: mat3x3<f32>, sampler
     // Light from behind the surface counts only through a transmitting lobe.
     let behind = dot(ls.wi, s.ng) <= 0.0;
     if behind && (bsdf_flags(s.bsdf) & BSDF_TRANSMISSION) == 0u { return none; }
-    let origin = offset_ray_origin(s.p, select(s.ng, -s.ng, behind));
     let wi = ls.wi * tbn;
     let f = bsdf_eval(wo, wi, s.bsdf);
     if all(f == vec3<f32>(0.0)) { return none; }
     let pdf_light = choice.pmf * ls.pdf;
     let weight = select(power_heuristic(pdf_light, bsdf_pdf(wo, wi, s.bsdf)), 1.0, ls.delta);
-    // Stop the shadow ray just short of the light so it cannot hit the light itself.
-    let t_max = select(ls.distance * (1.0 - 1e-4), MISS, ls.distance >= MISS);
+    let shadow = light_shadow_ray(s.p, select(s.ng, -s.ng, behind), ls);
     var shadow_medium = medium;
     if behind { shadow_medium = medium_after_transmission(s, medium); }
     let absorbed = transmittance(shadow_medium, min(ls.distance, MISS));
-    return DirectLight(Ray(origin, ls.wi), t_max, f * abs(wi.z) * ls.li * absorbed * weight / pdf_light);
+    return DirectLight(shadow.ray, shadow.t_max, f * abs(wi.z) * ls.li * absorbed * weight / pdf_light);
 }
 
 // Density with which next-event estimation from `last_vertex` would have produced the emissive hit `hit` at

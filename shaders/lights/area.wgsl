@@ -76,6 +76,7 @@ fn triangle_light_sample_li(light: Light, ctx: LightSampleContext, u: vec2<f32>)
     var distance: f32;
     var b: vec2<f32>;
     var pdf: f32;
+    let n = cross(p[1] - p[0], p[2] - p[0]) / (2.0 * area);
     let omega = triangle_spherical_area(p, ctx.p);
     if omega > 0.0 {
         dir = sample_spherical_triangle(normalize(p[0] - ctx.p), normalize(p[1] - ctx.p), normalize(p[2] - ctx.p), u);
@@ -92,12 +93,12 @@ fn triangle_light_sample_li(light: Light, ctx: LightSampleContext, u: vec2<f32>)
         if distance2 <= 0.0 { return no_light_sample(); }
         distance = sqrt(distance2);
         dir = to_light / distance;
-        let n = cross(p[1] - p[0], p[2] - p[0]) / (2.0 * area);
         let cos_l = abs(dot(n, dir));
         if cos_l <= 1e-7 { return no_light_sample(); }
         pdf = distance2 / (cos_l * area);
     }
-    return LightLiSample(dir, distance, area_light_emission(m, light.index_a, light.index_b, b), pdf, false);
+    let facing = select(n, -n, dot(n, ctx.p - p[0]) < 0.0);
+    return LightLiSample(dir, distance, area_light_emission(m, light.index_a, light.index_b, b), pdf, false, facing);
 }
 
 // Solid-angle density with which `triangle_light_sample_li` from ctx gives direction `wi`, which meets the

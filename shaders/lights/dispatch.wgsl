@@ -38,6 +38,14 @@ fn light_sample_li(index: u32, ctx: LightSampleContext, u: vec2<f32>, allow_inco
     return no_light_sample();
 }
 
+// The shadow ray of light sample `ls` taken at surface point `p`, leaving on the side of `n` (the geometric
+// normal, flipped for light from behind): to just short of the light's surface for a light at a finite distance,
+// both ends moved off their surfaces (`spawn_ray_to`); to infinity along `ls.wi` otherwise.
+fn light_shadow_ray(p: vec3<f32>, n: vec3<f32>, ls: LightLiSample) -> RaySegment {
+    if ls.distance >= MISS { return RaySegment(Ray(offset_ray_origin(p, n), ls.wi), MISS); }
+    return spawn_ray_to(p, n, p + ls.wi * ls.distance, ls.n);
+}
+
 // Density of `wi` for emissive triangle `index`, met at `distance` from ctx.
 fn emitter_pdf_li(index: u32, ctx: LightSampleContext, wi: vec3<f32>, distance: f32) -> f32 {
     return triangle_light_pdf(read_light(index), ctx, wi, distance);

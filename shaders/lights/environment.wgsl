@@ -217,5 +217,5 @@ fn environment_sample_li(light: Light, u: vec2<f32>, compensated: bool) -> Light
         pdf = environment_cell_density(dist, w, rows, i, j) / (2.0 * PI * PI * sin_theta);
     }
     if pdf <= 0.0 { return no_light_sample(); }
-    return LightLiSample(dir, MISS, environment_le_at(light, uv), pdf, false);
+    return LightLiSample(dir, MISS, environment_le_at(light, uv), pdf, false, vec3<f32>(0.0));
 }

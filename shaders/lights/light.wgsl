@@ -14,6 +14,9 @@ struct LightLiSample {
     pdf: f32,
     // A delta light (point, spot, directional): BSDF sampling cannot hit it, so it takes no MIS weight.
     delta: bool,
+    // The light's surface normal at the sampled point, on the side facing the shading point (zero for lights
+    // without a surface): where a shadow ray's far end moves off it (traversal/ray.wgsl `spawn_ray_to`).
+    n: vec3<f32>,
 }
 
 // What a ray leaving the scene sees of a light at infinity, and the density with which next-event estimation
@@ -37,5 +40,5 @@ struct LightChoice {
 }
 
 fn no_light_sample() -> LightLiSample {
-    return LightLiSample(vec3<f32>(0.0, 0.0, 1.0), 0.0, vec3<f32>(0.0), 0.0, false);
+    return LightLiSample(vec3<f32>(0.0, 0.0, 1.0), 0.0, vec3<f32>(0.0), 0.0, false, vec3<f32>(0.0));
 }

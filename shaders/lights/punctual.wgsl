@@ -33,10 +33,10 @@ fn point_light_sample_li(light: Light, ctx: LightSampleContext) -> LightLiSample
         li *= spot_angular_falloff(light, dot(light.direction, -wi));
     }
     if all(li == vec3<f32>(0.0)) { return no_light_sample(); }
-    return LightLiSample(wi, distance, li, 1.0, true);
+    return LightLiSample(wi, distance, li, 1.0, true, vec3<f32>(0.0));
 }
 
 // Directional lights: `direction` is where the light travels, `radiance` the irradiance it gives.
 fn directional_light_sample_li(light: Light) -> LightLiSample {
-    return LightLiSample(-light.direction, MISS, light.radiance, 1.0, true);
+    return LightLiSample(-light.direction, MISS, light.radiance, 1.0, true, vec3<f32>(0.0));
 }

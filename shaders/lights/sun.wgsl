@@ -19,5 +19,5 @@ fn sun_pdf(light: Light, dir: vec3<f32>) -> f32 {
 
 fn sun_sample_li(light: Light, u: vec2<f32>) -> LightLiSample {
     let dir = normalize(basis(light.direction) * sample_uniform_cone(u, light.range));
-    return LightLiSample(dir, MISS, light.radiance, 1.0 / (2.0 * PI * light.range), false);
+    return LightLiSample(dir, MISS, light.radiance, 1.0 / (2.0 * PI * light.range), false, vec3<f32>(0.0));
 }

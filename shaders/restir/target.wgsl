@@ -35,8 +35,8 @@ fn evaluate_light_sample(sp: ShadingPoint, light: u32, u: vec2<f32>) -> LightEva
     let f = bsdf_eval(sp.wo * tbn, wi, sp.bsdf);
     let value = f * abs(wi.z) * ls.li / ls.pdf;
     if !finite3(value) { return no_light_eval(); }
-    let origin = offset_ray_origin(sp.p, select(sp.ng, -sp.ng, behind));
-    return LightEval(value, Ray(origin, ls.wi), ls.distance * (1.0 - 1e-4));
+    let shadow = light_shadow_ray(sp.p, select(sp.ng, -sp.ng, behind), ls);
+    return LightEval(value, shadow.ray, shadow.t_max);
 }
 
 fn target_function(e: LightEval) -> f32 {

@@ -64,3 +64,22 @@ fn offset_ray_origin(p: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
         select(p_i.y, p.y + float_scale * n.y, abs(p.y) < origin),
         select(p_i.z, p.z + float_scale * n.z, abs(p.z) < origin));
 }
+
+// A ray from one surface point to another and how far it may go (pbrt-v4's `SpawnRayTo`): both ends moved off
+// their surfaces as `offset_ray_origin` does, `n_from` towards the far end's side and `n_to` towards the near
+// end's (zero for a point in free space), and the ray stopping just short of the moved far end. Moving only the
+// origin is not enough next to a light: from a ceiling 0.9 units above a lamp at y = 548 the origin moves 0.016
+// towards it, so a shadow ray aimed at the unmoved lamp point crosses the lamp's plane before a t_max of
+// (1 - 1e-4) x the distance and the lamp blocks its own light.
+struct RaySegment {
+    ray: Ray,
+    t_max: f32,
+}
+
+fn spawn_ray_to(p_from: vec3<f32>, n_from: vec3<f32>, p_to: vec3<f32>, n_to: vec3<f32>) -> RaySegment {
+    let origin = offset_ray_origin(p_from, n_from);
+    let d = offset_ray_origin(p_to, n_to) - origin;
+    let length = length(d);
+    if !(length > 0.0) { return RaySegment(Ray(origin, vec3<f32>(0.0, 0.0, 1.0)), 0.0); }
+    return RaySegment(Ray(origin, d / length), length * (1.0 - 1e-4));
+}

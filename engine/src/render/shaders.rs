@@ -69,6 +69,7 @@ pub const LIBRARY: &[ShaderModule] = library! {
     "lights/dispatch" => [
         "constants",
         "scene/bindings",
+        "traversal/ray",
         "lights/area",
         "lights/punctual",
         "lights/environment",
