@@ -117,6 +117,8 @@ pub struct SceneErrors {
     /// The reference image (mean of its halves), for comparisons with other renderers.
     #[serde(skip)]
     pub reference_mean: Vec<[f32; 3]>,
+    /// Standard error of each channel's mean of the reference, from its halves.
+    pub reference_mean_standard_error: [f64; 3],
     /// Default curve: least-squares slope of log relMSE against log spp (Monte Carlo: -1), and of log relative
     /// RMSE (= half of it; the TARGETS figure, -0.5 +- 0.05); tone-mapped, then linear radiance.
     pub slope_rel_mse_vs_spp: Option<f64>,
@@ -340,6 +342,7 @@ pub fn measure(
         repeats: suite.error_repeats,
         curves,
         reference_mean: r.mean,
+        reference_mean_standard_error: r.mean_standard_error,
         slope_rel_mse_vs_spp: slope,
         slope_rel_rmse_vs_spp: slope.map(|s| s * 0.5),
         slope_rel_rmse_linear_vs_spp: slope_linear.map(|s| s * 0.5),
@@ -421,6 +424,8 @@ pub(super) struct Reference {
     /// relMSE of the mean against the truth, estimated from the halves: tone-mapped and linear.
     pub noise: f64,
     pub noise_linear: f64,
+    /// Standard error of each channel's image mean (`metrics::mean_standard_error` of the halves).
+    pub mean_standard_error: [f64; 3],
     pub key: String,
     pub from_cache: bool,
 }
@@ -514,6 +519,7 @@ pub(super) fn cached_reference(
         mean,
         noise: rel_mse(&tonemap(&a), &tonemap(&b)) / 4.0,
         noise_linear: rel_mse(&a, &b) / 4.0,
+        mean_standard_error: super::metrics::mean_standard_error(&a, &b),
         key,
         from_cache,
     })

@@ -78,9 +78,57 @@ pub fn flip_mean(reference_srgb8: &[u8], test_srgb8: &[u8], width: u32, height: 
     nv_flip::FlipPool::from_image(&error).mean() as f64
 }
 
+/// The standard error of each channel's image mean of the average of two independent halves `a` and `b`: an
+/// averaged pixel's variance is estimated by (a - b)^2 / 4 and the mean's by their sum over n^2 (pixels taken
+/// as independent). Heavy-tailed light (rare bright paths) makes it an underestimate.
+pub fn mean_standard_error(a: &[[f32; 3]], b: &[[f32; 3]]) -> [f64; 3] {
+    let n = a.len().min(b.len()).max(1) as f64;
+    [0, 1, 2].map(|c| {
+        let sum: f64 = a
+            .iter()
+            .zip(b)
+            .map(|(x, y)| (x[c] as f64 - y[c] as f64).powi(2) / 4.0)
+            .sum();
+        sum.sqrt() / n
+    })
+}
+
+/// How many standard errors the ratio of two image means lies from 1, given each mean's standard error (first
+/// order: the ratio's relative error is the two relative errors in quadrature). 0 where it cannot be told.
+pub fn ratio_standard_errors(
+    ratio: f64,
+    mean: f64,
+    error: f64,
+    other_mean: f64,
+    other_error: f64,
+) -> f64 {
+    let relative = ((error / mean).powi(2) + (other_error / other_mean).powi(2)).sqrt();
+    let sigmas = (ratio - 1.0) / (ratio * relative);
+    if sigmas.is_finite() { sigmas } else { 0.0 }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn mean_standard_error_of_known_halves() {
+        // Halves that differ by +-d in every pixel: each averaged pixel has variance d^2 / 4, the mean of n of
+        // them d / (2 sqrt(n)).
+        let n = 400;
+        let a = vec![[1.1f32, 2.0, 0.0]; n];
+        let b = vec![[0.9f32, 2.0, 0.0]; n];
+        let e = mean_standard_error(&a, &b);
+        assert!(
+            (e[0] - 0.2 / (2.0 * (n as f64).sqrt())).abs() < 1e-6,
+            "{e:?}"
+        );
+        assert_eq!((e[1], e[2]), (0.0, 0.0));
+        // A 1% difference of means known to 0.1% each is about 7 standard errors; none where no error is known.
+        let s = ratio_standard_errors(0.99, 1.0, 0.001, 1.0, 0.001);
+        assert!((s + 7.14).abs() < 0.05, "{s}");
+        assert_eq!(ratio_standard_errors(1.0, 1.0, 0.0, 1.0, 0.0), 0.0);
+    }
 
     #[test]
     fn rel_mse_of_known_images() {

@@ -822,7 +822,8 @@ error = median over each curve's second half of relMSE x time, raykin / Mitsuba 
 raykin's time from GPU timestamps of the trace pass or the wall time of its frames, Mitsuba's the wall time of \
 `mi.render` after a warm-up render; steady = variance ratio x raykin's trace ms per sample over its last segment / \
 Mitsuba's ms per sample; references apart = relMSE of the two converged images against each other, both \
-noises subtracted.\n";
+noises subtracted, and the ratio of their means per channel, with the largest of its distances from 1 in \
+standard errors (from each reference's halves; beyond 5 and 0.2%, the run warns that the images differ).\n";
     }
     s += &oidn_markdown(r);
     s
