@@ -202,3 +202,87 @@ fn next_event_estimation_is_unbiased_next_to_a_light() {
         "next-event estimation {nee} against BSDF sampling {bsdf} in the slit (standard error {error})"
     );
 }
+
+/// The same at a meter scale, in a scene of two squares: a white shelf at y = 2.5 m facing a light panel 0.4 m
+/// above it. 256 ulps of 2.5 are 6.1e-5 m, more than 1e-4 of the 0.4 m gap, so before `spawn_ray_to` every
+/// shadow ray from the shelf to the panel crossed the panel's plane and was blocked: any surface facing a parallel
+/// light closer than 15-30% of its own coordinate lost the light's next-event estimate.
+#[test]
+fn next_event_estimation_reaches_a_light_panel_above_a_shelf() {
+    use glam::{Vec3, Vec4};
+    use raykin::camera::CameraChoice;
+    use raykin::scene::Material;
+    let (ctx, _gpu) = gpu();
+    let v = Vec3::new;
+    let square = |y: f32, up: bool, material: u32| {
+        let mut corners = [
+            v(-0.5, y, 0.5),
+            v(0.5, y, 0.5),
+            v(0.5, y, -0.5),
+            v(-0.5, y, -0.5),
+        ];
+        if !up {
+            corners.reverse();
+        }
+        quad_mesh(corners, material)
+    };
+    let scene = Arc::new(raykin::scene::procedural::scene_from_meshes(
+        "shelf under a panel",
+        vec![
+            (square(2.5, true, 0), Default::default()),
+            (square(2.9, false, 1), Default::default()),
+        ],
+        vec![
+            Material {
+                name: "shelf".into(),
+                base_color: Vec4::new(0.8, 0.8, 0.8, 1.0),
+                roughness: 1.0,
+                metallic: 0.0,
+                ..Default::default()
+            },
+            Material {
+                name: "panel".into(),
+                base_color: Vec4::new(0.0, 0.0, 0.0, 1.0),
+                emissive: Vec3::ONE,
+                emissive_strength: 5.0,
+                ..Default::default()
+            },
+        ],
+    ));
+    // From the side, between the two planes, looking down at the shelf.
+    let camera = CameraChoice::LookAt {
+        eye: v(0.0, 2.8, 1.6),
+        target: v(0.0, 2.5, 0.0),
+        yfov: 30f32.to_radians(),
+    };
+    let mean = |nee: bool, seed: u32| {
+        let settings = raykin::render::RenderSettings {
+            width: 32,
+            height: 32,
+            max_depth: 1,
+            nee,
+            seed,
+            environment: raykin::render::Environment::Constant([0.0; 3]),
+            ..Default::default()
+        };
+        let image = render(&ctx, &scene, settings, &camera, 256);
+        assert_all_finite(&image, "the shelf");
+        image
+            .iter()
+            .map(|p| (p[0] + p[1] + p[2]) as f64 / 3.0)
+            .sum::<f64>()
+            / image.len() as f64
+    };
+    let (nee_a, nee_b) = (mean(true, 1), mean(true, 2));
+    let (bsdf_a, bsdf_b) = (mean(false, 3), mean(false, 4));
+    let (nee, bsdf) = ((nee_a + nee_b) / 2.0, (bsdf_a + bsdf_b) / 2.0);
+    let error = (((nee_a - nee_b) / 2.0).powi(2) + ((bsdf_a - bsdf_b) / 2.0).powi(2)).sqrt();
+    eprintln!(
+        "shelf: NEE + MIS {nee:.5} ({nee_a:.5}, {nee_b:.5}), BSDF sampling {bsdf:.5} ({bsdf_a:.5}, {bsdf_b:.5})"
+    );
+    assert!(bsdf > 0.05, "the camera does not see the lit shelf: {bsdf}");
+    assert!(
+        (nee - bsdf).abs() < 4.0 * error + 0.02 * bsdf,
+        "next-event estimation {nee} against BSDF sampling {bsdf} on the shelf (standard error {error})"
+    );
+}
