@@ -155,6 +155,11 @@ impl LoadArgs {
     }
 }
 
+/// Russian roulette's start as the engine's settings have it (one place for the measured default).
+pub fn default_rr_depth() -> u32 {
+    raykin::render::RenderSettings::default().rr_depth
+}
+
 /// A u32 of at least 1 (sample counts, sizes).
 pub fn at_least_one() -> clap::builder::RangedI64ValueParser<u32> {
     clap::value_parser!(u32).range(1..)
@@ -248,7 +253,7 @@ pub struct BenchArgs {
     #[arg(long, default_value_t = 6)]
     pub max_depth: u32,
     /// Path depth from which Russian roulette may end a path (see `render --help`).
-    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..))]
+    #[arg(long, default_value_t = default_rr_depth(), value_parser = at_least_one())]
     pub rr_depth: u32,
     /// Samples per pixel per frame of the frame loop and of the error part's default curve (an offline
     /// render's dispatch: `render --spp-per-dispatch`).
@@ -385,7 +390,7 @@ pub struct SceneArgs {
     #[arg(long)]
     pub no_rr: bool,
     /// Path depth from which Russian roulette may end a path (Mitsuba's `rr_depth`; 1: from the first bounce).
-    #[arg(long, default_value_t = 4, value_parser = at_least_one(), allow_negative_numbers = true)]
+    #[arg(long, default_value_t = default_rr_depth(), value_parser = at_least_one(), allow_negative_numbers = true)]
     pub rr_depth: u32,
     /// Pose time in seconds (clip 0 unless --animation); the same time always gives the same image.
     #[arg(long, value_parser = parse_finite, allow_hyphen_values = true)]

@@ -490,7 +490,7 @@ pub fn run_default() -> Result<()> {
         exposure: 0.0,
         no_nee: false,
         no_rr: false,
-        rr_depth: 4,
+        rr_depth: crate::cli::default_rr_depth(),
         time: None,
         animation: None,
         spp_per_dispatch: 16,

@@ -201,20 +201,8 @@ fn prune_block(block: &mut Block, folder: &Folder, known: &mut KnownLocals) {
                     span,
                 );
             }
-            Statement::Call { ref arguments, .. } => {
-                // A callee can write a local variable only through a pointer passed to it.
-                for argument in arguments {
-                    if let Some(local) = folder.root_local(*argument) {
-                        known.remove(&local);
-                    }
-                }
-                out.push(statement, span);
-            }
             other => {
-                // Anything else that may write memory: no local variable is known any more.
-                if !writes_no_memory(&other) {
-                    known.clear();
-                }
+                forget_written(&other, folder, known);
                 out.push(other, span);
             }
         }
@@ -228,7 +216,16 @@ fn prune_block(block: &mut Block, folder: &Folder, known: &mut KnownLocals) {
 /// Forgets the local variables `block` stores to (anywhere in it, nested blocks included), or everything where
 /// it holds a statement that may write memory otherwise.
 fn forget_stored(block: &Block, folder: &Folder, known: &mut KnownLocals) {
-    for_each_statement(block, &mut |statement| match statement {
+    for_each_statement(block, &mut |statement| {
+        forget_written(statement, folder, known)
+    });
+}
+
+/// Forgets what `statement` itself may write: the local variable a `Store` writes into, those whose pointers a
+/// `Call` passes (a callee can write a local variable only through one), everything for any other statement
+/// that may write memory.
+fn forget_written(statement: &Statement, folder: &Folder, known: &mut KnownLocals) {
+    match statement {
         Statement::Store { pointer, .. } => {
             if let Some(local) = folder.root_local(*pointer) {
                 known.remove(&local);
@@ -243,7 +240,7 @@ fn forget_stored(block: &Block, folder: &Folder, known: &mut KnownLocals) {
         }
         statement if !writes_no_memory(statement) => known.clear(),
         _ => {}
-    });
+    }
 }
 
 /// Whether `statement` writes no memory itself (a `Store` or a `Call` may; control flow holds statements that

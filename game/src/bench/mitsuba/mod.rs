@@ -199,14 +199,15 @@ pub fn compare(
     let mitsuba_efficiency = efficiency(&points, noise, |p| p.time_ms);
     let references_rel_mse =
         rel_mse(&tonemap(raykin_reference), &display) - noise - reference_noise;
-    let channel_mean = |image: &[[f32; 3]], c: usize| {
-        image.iter().map(|p| p[c] as f64).sum::<f64>() / image.len().max(1) as f64
+    let channel_means = |image: &[[f32; 3]]| {
+        [0, 1, 2]
+            .map(|c| image.iter().map(|p| p[c] as f64).sum::<f64>() / image.len().max(1) as f64)
     };
+    let (raykin_means, mitsuba_means) = (channel_means(raykin_reference), channel_means(&mean));
     // A mean at or below 0 (negative outliers) has no ratio: NaN, written as null.
     let reference_mean_ratio = [0, 1, 2].map(|c| {
-        let m = channel_mean(&mean, c);
-        if m > 0.0 {
-            channel_mean(raykin_reference, c) / m
+        if mitsuba_means[c] > 0.0 {
+            raykin_means[c] / mitsuba_means[c]
         } else {
             f64::NAN
         }
@@ -215,9 +216,9 @@ pub fn compare(
     let reference_mean_ratio_sigmas = [0, 1, 2].map(|c| {
         super::metrics::ratio_standard_errors(
             reference_mean_ratio[c],
-            channel_mean(raykin_reference, c),
+            raykin_means[c],
             errors.reference_mean_standard_error[c],
-            channel_mean(&mean, c),
+            mitsuba_means[c],
             mitsuba_mean_error[c],
         )
     });
