@@ -46,10 +46,16 @@ fn sample_uniform_cone(u: vec2<f32>, one_minus_cos_max: f32) -> vec3<f32> {
     return vec3<f32>(sin_theta * cos(phi), sin_theta * sin(phi), cos_theta);
 }
 
-// The angle between unit vectors, accurate near 0 and pi (where acos(dot) is not).
-fn angle_between(a: vec3<f32>, b: vec3<f32>) -> f32 {
-    if dot(a, b) < 0.0 { return PI - 2.0 * asin(min(1.0, 0.5 * length(a + b))); }
-    return 2.0 * asin(min(1.0, 0.5 * length(b - a)));
+// sin and cos of an angle in [0, 2 pi) as (sin, cos), to the relative precision a small angle needs: below 0.5
+// by their Taylor series (truncation below 1e-8), above by the built-ins. The built-ins, like every SPIR-V
+// transcendental, are promised only to an absolute error (2^-11 by the specification; Mesa's lavapipe, and its
+// asin, much worse than f32's rounding), which is large against a small spherical triangle's area.
+fn sin_cos_of_angle(x: f32) -> vec2<f32> {
+    if x >= 0.5 { return vec2<f32>(sin(x), cos(x)); }
+    let x2 = x * x;
+    let s = x * (1.0 - x2 / 6.0 * (1.0 - x2 / 20.0 * (1.0 - x2 / 42.0 * (1.0 - x2 / 72.0))));
+    let c = 1.0 - x2 / 2.0 * (1.0 - x2 / 12.0 * (1.0 - x2 / 30.0 * (1.0 - x2 / 56.0)));
+    return vec2<f32>(s, c);
 }
 
 // Solid angle of the spherical triangle of unit vectors a, b, c (Van Oosterom & Strackee 1983).
@@ -62,28 +68,29 @@ fn orthonormal_part(v: vec3<f32>, w: vec3<f32>) -> vec3<f32> {
     return normalize(v - dot(v, w) * w);
 }
 
-// A direction uniformly distributed over the spherical triangle of unit vectors a, b, c (Arvo, "Stratified
-// Sampling of Spherical Triangles", SIGGRAPH 1995): u.x picks the sub-triangle's area, u.y the point along
-// the arc from b. The density is 1 / spherical_triangle_area(a, b, c); a zero vector when the triangle is
-// degenerate.
-fn sample_spherical_triangle(a: vec3<f32>, b: vec3<f32>, c: vec3<f32>, u: vec2<f32>) -> vec3<f32> {
-    // Normals of the great circles through each edge; the triangle's angles are between them.
+// A direction uniformly distributed over the spherical triangle of unit vectors a, b, c, whose solid angle is
+// `area` (spherical_triangle_area) (Arvo, "Stratified Sampling of Spherical Triangles", SIGGRAPH 1995): u.x picks
+// the sub-triangle's area, u.y the point along the arc from b. The density is 1 / area; a zero vector when the
+// triangle is degenerate. Arvo's formulas take the sub-triangle's angle sum, pi + its area, from the sum of the
+// triangle's three angles; in f32 with GPU asin (Mesa's is a cubic) that sum minus pi was 5% short of a 0.007 sr
+// triangle's area, and the directions covered only part of the triangle that the density 1 / area assumed: light
+// from small and thin emitters came out dark (docs/ACCURACY.md). So the sub-area here is u.x times the given area
+// (Van Oosterom and Strackee's formula, accurate however small), and the formulas need only the angle at a, whose
+// sine and cosine come from the edge planes' normals without any transcendental.
+fn sample_spherical_triangle(a: vec3<f32>, b: vec3<f32>, c: vec3<f32>, area: f32, u: vec2<f32>) -> vec3<f32> {
+    // Normals of the great circles through the edges at a; the angle at a is between them.
     var n_ab = cross(a, b);
-    var n_bc = cross(b, c);
-    var n_ca = cross(c, a);
-    if dot(n_ab, n_ab) == 0.0 || dot(n_bc, n_bc) == 0.0 || dot(n_ca, n_ca) == 0.0 { return vec3<f32>(0.0); }
+    var n_ac = cross(a, c);
+    if dot(n_ab, n_ab) == 0.0 || dot(n_ac, n_ac) == 0.0 { return vec3<f32>(0.0); }
     n_ab = normalize(n_ab);
-    n_bc = normalize(n_bc);
-    n_ca = normalize(n_ca);
-    let alpha = angle_between(n_ab, -n_ca);
-    let beta = angle_between(n_bc, -n_ab);
-    let gamma = angle_between(n_ca, -n_bc);
-    // The sub-triangle (a, b, c') with area u.x times the whole: its angle sum is that area + pi.
-    let area_pi = mix(PI, alpha + beta + gamma, u.x);
-    let cos_alpha = cos(alpha);
-    let sin_alpha = sin(alpha);
-    let sin_phi = sin(area_pi) * cos_alpha - cos(area_pi) * sin_alpha;
-    let cos_phi = cos(area_pi) * cos_alpha + sin(area_pi) * sin_alpha;
+    n_ac = normalize(n_ac);
+    let cos_alpha = dot(n_ab, n_ac);
+    let sin_alpha = length(cross(n_ab, n_ac));
+    // The sub-triangle (a, b, c') of area s = u.x * area has angle sum pi + s, and Arvo's phi = pi + s - alpha:
+    // sin(phi) = sin(alpha - s), cos(phi) = -cos(alpha - s).
+    let sc = sin_cos_of_angle(u.x * area);
+    let sin_phi = sin_alpha * sc.y - cos_alpha * sc.x;
+    let cos_phi = -(cos_alpha * sc.y + sin_alpha * sc.x);
     let k1 = cos_phi + cos_alpha;
     let k2 = sin_phi - sin_alpha * dot(a, b);
     let denominator = (k2 * sin_phi + k1 * cos_phi) * sin_alpha;

@@ -79,7 +79,7 @@ fn triangle_light_sample_li(light: Light, ctx: LightSampleContext, u: vec2<f32>)
     let n = cross(p[1] - p[0], p[2] - p[0]) / (2.0 * area);
     let omega = triangle_spherical_area(p, ctx.p);
     if omega > 0.0 {
-        dir = sample_spherical_triangle(normalize(p[0] - ctx.p), normalize(p[1] - ctx.p), normalize(p[2] - ctx.p), u);
+        dir = sample_spherical_triangle(normalize(p[0] - ctx.p), normalize(p[1] - ctx.p), normalize(p[2] - ctx.p), omega, u);
         let h = triangle_plane_hit(p, ctx.p, dir);
         if h.x <= 0.0 || !is_finite(h.x) { return no_light_sample(); }
         distance = h.x;
