@@ -14,7 +14,7 @@ source "$here/gpu-common.sh"
 work=/tmp/gpu-mitsuba
 mkdir -p "$work"
 trap 'tar czf "$out/side-by-side.tgz" -C "$work" . ; cp "$work/bench/summary.md" "$out/" 2>/dev/null' EXIT
-scenes="${MITSUBA_SCENES:-cornell spheres flight-helmet env-lit many-lights}"
+scenes="${MITSUBA_SCENES:-cornell spheres flight-helmet env-lit many-lights furnace grazing}"
 export_dir=/tmp/mitsuba-export
 scene_args=()
 for s in $scenes; do scene_args+=(--scene "$s"); done

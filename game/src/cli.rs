@@ -227,8 +227,8 @@ pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
 
 #[derive(Args, Debug)]
 pub struct BenchArgs {
-    /// Named bench scenes (cornell, flight-helmet, spheres, crowd, env-lit, many-lights: fixed cameras) or glTF files (automatic
-    /// camera); repeatable. Default: the suite's scenes.
+    /// Named bench scenes (cornell, flight-helmet, spheres, crowd, env-lit, many-lights, furnace, grazing: fixed
+    /// cameras) or glTF files (automatic camera); repeatable. Default: the suite's scenes.
     #[arg(long)]
     pub scene: Vec<String>,
     /// quick (tiny sizes, CI) or full (1920x1080 and 2560x1440 on a GPU; scaled down on a CPU adapter).

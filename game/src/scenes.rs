@@ -46,8 +46,9 @@ pub enum Source {
     SeedInterior,
     /// A file of this repository (the light tests' scenes, in tests/reference/lights).
     Repo(&'static str),
-    /// `raykin::scene::procedural::light_field(n)`: n x n small emissive squares over a floor.
-    LightField(usize),
+    /// A scene made in code by `raykin::scene::procedural` (the many-lights field, the furnace, the grazing
+    /// light).
+    Generated(fn() -> SceneAsset),
 }
 
 /// An environment map of this repository, turned by `rotation_degrees` (a scene's fixed environment).
@@ -167,13 +168,41 @@ pub const ENV_LIT: NamedScene = NamedScene {
 /// 400 emitters (800 triangles) of which a few light each point: power vs tree light sampling.
 pub const MANY_LIGHTS: NamedScene = NamedScene {
     name: "many-lights",
-    source: Source::LightField(20),
+    source: Source::Generated(|| raykin::scene::procedural::light_field(20)),
     view: FixedView {
         eye: [0.0, 9.0, 20.0],
         target: [0.0, 0.0, 2.0],
         yfov_deg: 45.0,
     },
     environment: Environment::Constant([0.0; 3]),
+    environment_map: None,
+};
+
+/// The white furnace (issue 17's scene classes): three spheres of base colour 1 under a constant environment of
+/// 1, every path's light from BSDF sampling.
+pub const FURNACE: NamedScene = NamedScene {
+    name: "furnace",
+    source: Source::Generated(raykin::scene::procedural::white_furnace),
+    view: FixedView {
+        eye: [0.0, 1.0, 7.0],
+        target: [0.0, 0.0, 0.0],
+        yfov_deg: 40.0,
+    },
+    environment: Environment::Constant([1.0; 3]),
+    environment_map: None,
+};
+
+/// Grazing light at 1e4 coordinates (issue 17's scene classes): objects on a floor lit by a panel 2-3.5 degrees
+/// above the horizon, all of it about 1e4 from the origin, under a dim sky.
+pub const GRAZING: NamedScene = NamedScene {
+    name: "grazing",
+    source: Source::Generated(raykin::scene::procedural::grazing_light),
+    view: FixedView {
+        eye: [10300.0, 10250.0, -9550.0],
+        target: [9980.0, 10020.0, -10040.0],
+        yfov_deg: 40.0,
+    },
+    environment: Environment::Constant([0.03; 3]),
     environment_map: None,
 };
 
@@ -196,6 +225,8 @@ const NAMED: &[&NamedScene] = &[
     &SPHERES,
     &ENV_LIT,
     &MANY_LIGHTS,
+    &FURNACE,
+    &GRAZING,
     &INTERIOR,
     &CROWD,
     &SEED_INTERIOR,
@@ -303,8 +334,8 @@ impl NamedScene {
                 }
             }
             // The generator's source stands in for a file: editing it invalidates cached references.
-            Source::LightField(n) => LoadedNamedScene {
-                scene: Arc::new(raykin::scene::procedural::light_field(n)),
+            Source::Generated(generate) => LoadedNamedScene {
+                scene: Arc::new(generate()),
                 players: Vec::new(),
                 source_files: vec![repo_path("engine/src/scene/procedural.rs")],
                 switchable_light: None,

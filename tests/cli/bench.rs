@@ -512,7 +512,8 @@ fn curve_selection_and_error_max_spp() {
 
 /// `--export-mitsuba` (issue 17's side by side): each scene's groups hold valid triangles whose arrays fill
 /// geometry.bin exactly, the camera is the named scene's, every texture and environment file it names exists,
-/// and nothing these two scenes use is reported as left out.
+/// and nothing these scenes use is reported as left out (the two made in code too: the furnace's constant
+/// environment goes as a map, the grazing scene stays at its 1e4 coordinates).
 #[test]
 fn mitsuba_export_writes_the_scene_as_rendered() {
     let out = std::env::temp_dir().join(format!("raykin-mitsuba-export-{}", std::process::id()));
@@ -525,13 +526,17 @@ fn mitsuba_export_writes_the_scene_as_rendered() {
             "cornell",
             "--scene",
             "flight-helmet",
+            "--scene",
+            "furnace",
+            "--scene",
+            "grazing",
             "--export-mitsuba",
             export.to_str().unwrap(),
         ],
     );
     let log = String::from_utf8_lossy(&output.stderr);
     assert!(output.status.success(), "export failed:\n{log}");
-    for scene in ["cornell", "flight-helmet"] {
+    for scene in ["cornell", "flight-helmet", "furnace", "grazing"] {
         let dir = export.join(scene);
         let desc: Value =
             serde_json::from_slice(&std::fs::read(dir.join("scene.json")).unwrap()).unwrap();
@@ -581,16 +586,30 @@ fn mitsuba_export_writes_the_scene_as_rendered() {
             .iter()
             .map(f)
             .collect();
+        let lit = materials
+            .iter()
+            .filter(|m| m["emission"].as_array().unwrap().iter().any(|c| f(c) > 0.0))
+            .count();
         if scene == "cornell" {
             assert_eq!(eye, [-278.0, 273.0, 800.0]);
             assert!(
                 desc["environment"].is_null(),
                 "the Cornell box's environment is black"
             );
-            let lit = materials
-                .iter()
-                .filter(|m| m["emission"].as_array().unwrap().iter().any(|c| f(c) > 0.0));
-            assert_eq!(lit.count(), 1, "one emissive material (the light)");
+            assert_eq!(lit, 1, "one emissive material (the light)");
+        } else if scene == "furnace" || scene == "grazing" {
+            let env = desc["environment"]["file"]
+                .as_str()
+                .expect("a constant as a map");
+            assert!(dir.join(env).is_file());
+            assert_eq!(
+                lit,
+                usize::from(scene == "grazing"),
+                "{scene}: emissive materials"
+            );
+            if scene == "grazing" {
+                assert!(eye.iter().all(|c| c.abs() > 9000.0), "{eye:?}");
+            }
         } else {
             let env = desc["environment"]["file"]
                 .as_str()

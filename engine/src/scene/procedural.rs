@@ -147,3 +147,206 @@ pub fn light_field(n: usize) -> SceneAsset {
     }
     scene_from_meshes("light field", meshes, materials)
 }
+
+/// An axis-aligned box `size` across, centred at the origin: six faces, each with its own flat normal and wound
+/// counter-clockwise seen from outside.
+pub fn cuboid(size: Vec3, material: u32) -> MeshData {
+    let mut mesh = MeshData {
+        name: "box".into(),
+        ..Default::default()
+    };
+    let (mut normals, mut uvs) = (Vec::new(), Vec::new());
+    let half = size * 0.5;
+    for axis in 0..3 {
+        for sign in [1.0f32, -1.0] {
+            let mut n = Vec3::ZERO;
+            n[axis] = sign;
+            // u x v = the axis, so (-u-v, +u-v, +u+v, -u+v) turns counter-clockwise about it; the face on the
+            // negative side takes the corners in the opposite order.
+            let (mut u, mut v) = (Vec3::ZERO, Vec3::ZERO);
+            u[(axis + 1) % 3] = half[(axis + 1) % 3];
+            v[(axis + 2) % 3] = half[(axis + 2) % 3];
+            let centre = n * half[axis];
+            let base = mesh.positions.len() as u32;
+            for (a, b) in [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)] {
+                mesh.positions.push(centre + u * a + v * b);
+                normals.push(n);
+                uvs.push(Vec2::new((a + 1.0) * 0.5, (b + 1.0) * 0.5));
+            }
+            let [p, q, r, s] = [base, base + 1, base + 2, base + 3];
+            if sign > 0.0 {
+                mesh.triangles.extend([[p, q, r], [p, r, s]]);
+            } else {
+                mesh.triangles.extend([[p, r, q], [p, s, r]]);
+            }
+        }
+    }
+    mesh.triangle_materials = vec![material; mesh.triangles.len()];
+    mesh.primitives.push(PrimitiveRange {
+        vertex_offset: 0,
+        vertex_count: mesh.positions.len() as u32,
+        material,
+    });
+    mesh.normals = Some(normals);
+    mesh.uv0 = Some(uvs);
+    mesh
+}
+
+/// A parallelogram centred at the origin with corners at +-`u` +-`v`, facing `u x v`: its two triangles wound
+/// counter-clockwise seen from that side.
+pub fn quad(name: &str, u: Vec3, v: Vec3, material: u32) -> MeshData {
+    let normal = u.cross(v).normalize();
+    MeshData {
+        name: name.into(),
+        positions: vec![-u - v, u - v, u + v, -u + v],
+        normals: Some(vec![normal; 4]),
+        uv0: Some(vec![Vec2::ZERO, Vec2::X, Vec2::ONE, Vec2::Y]),
+        triangles: vec![[0, 1, 2], [0, 2, 3]],
+        triangle_materials: vec![material; 2],
+        primitives: vec![PrimitiveRange {
+            vertex_offset: 0,
+            vertex_count: 4,
+            material,
+        }],
+        ..Default::default()
+    }
+}
+
+fn placed(translation: Vec3) -> NodeTransform {
+    NodeTransform {
+        translation,
+        ..Default::default()
+    }
+}
+
+fn plain(name: &str, rgb: [f32; 3], metallic: f32, roughness: f32) -> Material {
+    Material {
+        name: name.into(),
+        base_color: Vec3::from(rgb).extend(1.0),
+        metallic,
+        roughness,
+        ..Default::default()
+    }
+}
+
+/// The white furnace as a bench scene: three unit spheres of base colour 1 (a rough dielectric, a glossy metal,
+/// a fully rough dielectric) side by side, to be lit by a constant environment of 1. Every path ends in the
+/// environment; the light is all in the BSDF's sampling (and the spheres' small mutual reflections).
+pub fn white_furnace() -> SceneAsset {
+    let materials = vec![
+        plain("rough dielectric", [1.0; 3], 0.0, 0.5),
+        plain("glossy metal", [1.0; 3], 1.0, 0.3),
+        plain("matte dielectric", [1.0; 3], 0.0, 1.0),
+    ];
+    let meshes = (0..3)
+        .map(|i| {
+            let x = (i as f32 - 1.0) * 2.2;
+            (uv_sphere(1.0, 96, 48, i), placed(Vec3::new(x, 0.0, 0.0)))
+        })
+        .collect();
+    scene_from_meshes("white furnace", meshes, materials)
+}
+
+/// Where [`grazing_light`] stands: every coordinate about 1e4, where a float's spacing is 2^-10, so offsets
+/// that keep rays off their surfaces are a visible fraction of the scene's details.
+pub const GRAZING_LIGHT_ORIGIN: Vec3 = Vec3::new(1.0e4, 1.0e4, -1.0e4);
+
+/// A grazing-light scene far from the origin: boxes and spheres (tens of units) on an 800-unit floor, lit by
+/// one emissive panel 900 units to the side and 25-55 units above the floor (2-3.5 degrees of elevation), so the floor
+/// and the tops are lit at grazing incidence, the shadows run long and the spheres' shading normals meet the light
+/// at their terminators; a dim constant sky fills the shadows. All of it around [`GRAZING_LIGHT_ORIGIN`].
+pub fn grazing_light() -> SceneAsset {
+    let o = GRAZING_LIGHT_ORIGIN;
+    let materials = vec![
+        plain("floor", [0.6, 0.6, 0.6], 0.0, 0.8),
+        plain("plaster", [0.75, 0.72, 0.68], 0.0, 0.9),
+        plain("gold", [1.0, 0.78, 0.34], 1.0, 0.3),
+        plain("blue", [0.2, 0.3, 0.7], 0.0, 0.4),
+        Material {
+            name: "panel".into(),
+            base_color: glam::Vec4::new(0.0, 0.0, 0.0, 1.0),
+            emissive: Vec3::new(1.0, 0.9, 0.8),
+            emissive_strength: 4000.0,
+            ..Default::default()
+        },
+    ];
+    let tall = cuboid(Vec3::new(60.0, 120.0, 60.0), 1);
+    let flat = cuboid(Vec3::new(80.0, 40.0, 80.0), 1);
+    let turned = NodeTransform {
+        rotation: glam::Quat::from_rotation_y(30f32.to_radians()),
+        ..placed(o + Vec3::new(80.0, 20.0, 40.0))
+    };
+    // The panel: 400 wide (x), 30 tall (y), facing -z (towards the objects).
+    let panel = quad(
+        "panel",
+        Vec3::new(-200.0, 0.0, 0.0),
+        Vec3::new(0.0, 15.0, 0.0),
+        4,
+    );
+    let meshes = vec![
+        (ground_quad(800.0, 0), placed(o)),
+        (tall, placed(o + Vec3::new(-100.0, 60.0, -50.0))),
+        (flat, turned),
+        (
+            uv_sphere(40.0, 96, 48, 2),
+            placed(o + Vec3::new(0.0, 40.0, -150.0)),
+        ),
+        (
+            uv_sphere(25.0, 96, 48, 3),
+            placed(o + Vec3::new(150.0, 25.0, -60.0)),
+        ),
+        (panel, placed(o + Vec3::new(-900.0, 40.0, 100.0))),
+    ];
+    scene_from_meshes("grazing light at 1e4", meshes, materials)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Each face's winding agrees with its normal, and the normal points away from the centre.
+    #[test]
+    fn cuboid_faces_point_outwards() {
+        let mesh = cuboid(Vec3::new(2.0, 4.0, 6.0), 0);
+        assert_eq!(mesh.triangles.len(), 12);
+        let normals = mesh.normals.as_ref().unwrap();
+        for t in &mesh.triangles {
+            let [a, b, c] = t.map(|i| mesh.positions[i as usize]);
+            let geometric = (b - a).cross(c - a).normalize();
+            let n = normals[t[0] as usize];
+            assert!((geometric - n).length() < 1e-6, "{t:?}: {geometric} vs {n}");
+            assert!(((a + b + c) / 3.0).dot(n) > 0.0, "{t:?} faces inwards");
+        }
+        let extent = mesh
+            .positions
+            .iter()
+            .fold(Vec3::ZERO, |m, p| m.max(p.abs()));
+        assert_eq!(extent, Vec3::new(1.0, 2.0, 3.0));
+    }
+
+    /// The grazing scene's light reaches the objects within a few degrees of the floor's plane, from the
+    /// panel's front, and every vertex sits near 1e4.
+    #[test]
+    fn grazing_light_grazes() {
+        let scene = grazing_light();
+        let panel = scene.nodes.iter().find(|n| n.name == "panel").unwrap();
+        let mesh = &scene.meshes[panel.mesh.unwrap()];
+        assert_eq!(mesh.triangles.len(), 2);
+        let centre = panel.transform.translation;
+        for p in &mesh.positions {
+            let to_objects = GRAZING_LIGHT_ORIGIN - (centre + *p);
+            let elevation = (to_objects.y.abs() / to_objects.length())
+                .asin()
+                .to_degrees();
+            assert!(elevation > 1.0 && elevation < 4.0, "elevation {elevation}");
+        }
+        let [a, b, c] = mesh.triangles[0].map(|i| mesh.positions[i as usize]);
+        assert!(
+            (b - a).cross(c - a).z < 0.0,
+            "the panel faces -z, towards the objects"
+        );
+        for node in &scene.nodes {
+            assert!((node.transform.translation - GRAZING_LIGHT_ORIGIN).length() < 1000.0);
+        }
+    }
+}
