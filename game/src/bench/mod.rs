@@ -817,11 +817,13 @@ whose history (reprojection without gradients) is at most 8 frames long.\n";
         s += "\n### Mitsuba 3 side by side\n\n";
         s += &mitsuba::markdown(&r.mitsuba_side_by_side);
         s += "\n\nEach renderer's tone-mapped relMSE against its own two-half reference (its noise subtracted); \
-throughput at the largest common sample count; variance ratio = (relMSE x spp) raykin / Mitsuba there; time to equal \
-error = median over each curve's second half of relMSE x time, raykin / Mitsuba (below 1: raykin is faster), with \
+throughput at the largest common sample count; variance ratio = (relMSE x spp) raykin / Mitsuba there; relMSE x \
+time = median over each curve's second half of relMSE x time, raykin / Mitsuba (below 1: raykin is faster), with \
 raykin's time from GPU timestamps of the trace pass or the wall time of its frames, Mitsuba's the wall time of \
 `mi.render` after a warm-up render; steady = variance ratio x raykin's trace ms per sample over its last segment / \
-Mitsuba's ms per sample; references apart = relMSE of the two converged images against each other, both \
+Mitsuba's ms per sample (these three are the time to equal error where relMSE falls as 1/time); time at equal error \
+= raykin's trace time / Mitsuba's time to first reach the same relMSE, by log-log interpolation along each curve, \
+at the lowest relMSE both reach, and its least and greatest over nine levels from there up; references apart = relMSE of the two converged images against each other, both \
 noises subtracted, and the ratio of their means per channel, with the largest of its distances from 1 in \
 standard errors (from each reference's halves; beyond 5 and 0.2%, the run warns that the images differ).\n";
     }

@@ -15,6 +15,7 @@ pub mod export;
 
 use super::error_curves::{CurvePoint, CurveResult, SceneErrors, time_to_rel_mse};
 use super::metrics::{flip_mean, rel_mse, srgb8, tonemap};
+use crate::stats::time_to_reach;
 use anyhow::{Context, Result};
 use std::path::Path;
 
@@ -66,6 +67,16 @@ pub struct SideBySide {
     /// segment (where the GPU has settled) over Mitsuba's ms per sample at that count. The curve-based figures
     /// include every transient of the accumulation loop (on the H200 a 3-4x slower stretch mid-curve).
     pub time_to_equal_error_steady: f64,
+    /// Time to equal error as the words say, raykin (trace) / Mitsuba: the ratio of the times at which the two
+    /// curves first reach the same (relMSE - noise), read off each curve by log-log interpolation between its
+    /// points (never extrapolated), at the lowest error both reach (`equal_error_rel_mse`) and its least and
+    /// greatest over nine levels spread geometrically from there up to the higher of the two first points. The
+    /// products above equal it only where relMSE falls as 1/time; tone-mapped errors of scenes with rare bright
+    /// paths fall slower (log-log slopes -0.44 to -0.72) over the curves, so that raykin, at a lower error for
+    /// the same samples, is compared further down its flatter stretch. `None` where the curves share no error.
+    pub equal_error_rel_mse: Option<f64>,
+    pub time_at_equal_error: Option<f64>,
+    pub time_at_equal_error_range: Option<[f64; 2]>,
     /// Milliseconds to reach tone-mapped relMSE 0.01 (noise subtracted; extrapolated along the fitted power law
     /// where a curve stopped short): raykin (trace) and Mitsuba.
     pub raykin_ms_to_0_01: Option<f64>,
@@ -245,6 +256,11 @@ pub fn compare(
         .iter()
         .map(|p| (p.time_ms, excess(p, noise)))
         .collect();
+    let raykin_curve_excess: Vec<(f64, f64)> = raykin
+        .iter()
+        .map(|p| (p.time_ms, excess(p, reference_noise)))
+        .collect();
+    let equal_error = at_equal_error(&raykin_curve_excess, &mitsuba_curve);
     let result = SideBySide {
         scene: errors.scene.clone(),
         mitsuba_variant: run.variant.clone(),
@@ -263,14 +279,10 @@ pub fn compare(
         time_to_equal_error_steady: excess(&r, reference_noise) / excess(&m, noise)
             * steady_ms_per_spp(raykin)
             / (m.time_ms / m.spp.max(1) as f64),
-        raykin_ms_to_0_01: time_to_rel_mse(
-            &raykin
-                .iter()
-                .map(|p| (p.time_ms, excess(p, reference_noise)))
-                .collect::<Vec<_>>(),
-            0.01,
-        )
-        .0,
+        equal_error_rel_mse: equal_error.map(|e| e.0),
+        time_at_equal_error: equal_error.map(|e| e.1),
+        time_at_equal_error_range: equal_error.map(|e| e.2),
+        raykin_ms_to_0_01: time_to_rel_mse(&raykin_curve_excess, 0.01).0,
         mitsuba_ms_to_0_01: time_to_rel_mse(&mitsuba_curve, 0.01).0,
         references_rel_mse,
         reference_mean_ratio,
@@ -317,15 +329,40 @@ fn efficiency(curve: &[CurvePoint], noise: f64, time: fn(&CurvePoint) -> f64) ->
     crate::stats::Spread::of(&tail).median
 }
 
+/// Time-to-equal-error ratios of curve `a` to curve `b` ((time, error) points in time order): (the lowest error
+/// both reach, the ratio there, [least, greatest] ratio over nine levels from there up to the higher first point).
+fn at_equal_error(a: &[(f64, f64)], b: &[(f64, f64)]) -> Option<(f64, f64, [f64; 2])> {
+    let lowest = |c: &[(f64, f64)]| c.iter().map(|p| p.1).fold(f64::INFINITY, f64::min);
+    let (lo, hi) = (lowest(a).max(lowest(b)), a.first()?.1.min(b.first()?.1));
+    if !(lo > 0.0 && hi >= lo) {
+        return None;
+    }
+    let ratio = |e: f64| Some(time_to_reach(a, e)? / time_to_reach(b, e)?);
+    let levels: Vec<f64> = (0..9)
+        .filter_map(|k| ratio(lo * (hi / lo).powf(f64::from(k) / 8.0)))
+        .collect();
+    let least = levels.iter().copied().fold(f64::INFINITY, f64::min);
+    let greatest = levels.iter().copied().fold(0.0, f64::max);
+    Some((lo, ratio(lo)?, [least, greatest]))
+}
+
 /// The side-by-side table for summary.md and docs/BENCHMARKS.md.
 pub fn markdown(rows: &[SideBySide]) -> String {
     let mut s = String::from(
-        "| scene | raykin curve | Mitsuba | samples/s raykin (trace / wall) | samples/s Mitsuba | throughput | variance ratio | time to equal error (trace / wall / steady) | ms to relMSE 0.01 raykin / Mitsuba | references apart (relMSE; mean ratio, the largest in standard errors; Mitsuba's negative or non-finite pixels) |\n|---|---|---|---|---|---|---|---|---|---|\n",
+        "| scene | raykin curve | Mitsuba | samples/s raykin (trace / wall) | samples/s Mitsuba | throughput | variance ratio | relMSE x time (trace / wall / steady) | time at equal error: at the lowest common relMSE; range | ms to relMSE 0.01 raykin / Mitsuba | references apart (relMSE; mean ratio, the largest in standard errors; Mitsuba's negative or non-finite pixels) |\n|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     let ms = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.1}"));
+    let equal = |r: &SideBySide| match (
+        r.equal_error_rel_mse,
+        r.time_at_equal_error,
+        r.time_at_equal_error_range,
+    ) {
+        (Some(e), Some(t), Some([lo, hi])) => format!("**{t:.2}x** at {e:.1e}; {lo:.2}-{hi:.2}x"),
+        _ => "-".to_string(),
+    };
     for r in rows {
         s += &format!(
-            "| {} | {} | {} | {:.2} M / {:.2} M | {:.2} M | {:.2}x | {:.2} | **{:.2}x** / {:.2}x / {:.2}x | {} / {} | {:.1e}; {:.3} {:.3} {:.3} ({:+.0} s.e.); {} |\n",
+            "| {} | {} | {} | {:.2} M / {:.2} M | {:.2} M | {:.2}x | {:.2} | {:.2}x / {:.2}x / {:.2}x | {} | {} / {} | {:.1e}; {:.3} {:.3} {:.3} ({:+.0} s.e.); {} |\n",
             r.scene,
             r.raykin_curve,
             r.mitsuba_variant,
@@ -337,6 +374,7 @@ pub fn markdown(rows: &[SideBySide]) -> String {
             r.time_to_equal_error_trace,
             r.time_to_equal_error_wall,
             r.time_to_equal_error_steady,
+            equal(r),
             ms(r.raykin_ms_to_0_01),
             ms(r.mitsuba_ms_to_0_01),
             r.references_rel_mse,
@@ -359,4 +397,44 @@ pub fn markdown(rows: &[SideBySide]) -> String {
         );
     }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn curve(error: impl Fn(f64) -> f64) -> Vec<(f64, f64)> {
+        (0..11).map(|k| 2f64.powi(k)).map(|t| (t, error(t))).collect()
+    }
+
+    /// Two estimators at 1/t: the ratio is their constant, at every level.
+    #[test]
+    fn equal_error_of_parallel_curves_is_their_ratio() {
+        let (a, b) = (curve(|t| 1.0 / t), curve(|t| 4.0 / t));
+        let (lowest, ratio, [least, greatest]) = at_equal_error(&a, &b).unwrap();
+        assert!((lowest - 4.0 / 1024.0).abs() < 1e-12, "{lowest}");
+        for r in [ratio, least, greatest] {
+            assert!((r - 0.25).abs() < 1e-9, "{r}");
+        }
+    }
+
+    /// A flatter curve (t^-0.5) below a steeper one (t^-1): at the top they cross, further down the flatter one
+    /// needs ever more time. The products' ratio over equal times would say neither.
+    #[test]
+    fn equal_error_follows_curves_of_different_slopes() {
+        let (a, b) = (curve(|t| 0.5 / t.sqrt()), curve(|t| 1.0 / t));
+        let (lowest, ratio, [least, greatest]) = at_equal_error(&a, &b).unwrap();
+        // a reaches b's lowest error, 1/1024, at t = (512)^2: beyond its curve, so the lowest common error is a's
+        // own lowest, 0.5/32, which b reaches at t = 64 and a at 1024.
+        assert!((lowest - 0.5 / 32.0).abs() < 1e-12, "{lowest}");
+        assert!((ratio - 16.0).abs() < 1e-9, "{ratio}");
+        assert!((greatest - 16.0).abs() < 1e-9 && least < 1.0, "{least} {greatest}");
+    }
+
+    /// Curves that share no error have no ratio.
+    #[test]
+    fn disjoint_curves_have_no_equal_error() {
+        let (a, b) = (curve(|t| 1.0 / t), curve(|t| 100.0 + 1.0 / t));
+        assert!(at_equal_error(&a, &b).is_none());
+    }
 }
