@@ -192,8 +192,9 @@ pub const FURNACE: NamedScene = NamedScene {
     environment_map: None,
 };
 
-/// Grazing light at 1e4 coordinates (issue 17's scene classes): objects on a floor lit by a panel 2-3.5 degrees
-/// above the horizon, all of it about 1e4 from the origin, under a dim sky.
+/// Grazing light at 1e4 coordinates (issue 17's scene classes): objects on a floor lit by a panel seen edge-on,
+/// 1.3-4.5 degrees above the horizon, all of it about 1e4 from the origin, under a dim sky
+/// (`raykin::scene::procedural::grazing_light`).
 pub const GRAZING: NamedScene = NamedScene {
     name: "grazing",
     source: Source::Generated(raykin::scene::procedural::grazing_light),

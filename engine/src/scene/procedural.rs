@@ -252,9 +252,12 @@ pub fn white_furnace() -> SceneAsset {
 pub const GRAZING_LIGHT_ORIGIN: Vec3 = Vec3::new(1.0e4, 1.0e4, -1.0e4);
 
 /// A grazing-light scene far from the origin: boxes and spheres (tens of units) on an 800-unit floor, lit by
-/// one emissive panel 900 units to the side and 25-55 units above the floor (2-3.5 degrees of elevation), so the floor
-/// and the tops are lit at grazing incidence, the shadows run long and the spheres' shading normals meet the light
-/// at their terminators; a dim constant sky fills the shadows. All of it around [`GRAZING_LIGHT_ORIGIN`].
+/// one emissive panel 700-1100 units to the side and 25-55 units above the floor (1.3-4.5 degrees of elevation at
+/// the floor's centre), which faces along the floor's depth, so that its light leaves it 82-85 degrees from its
+/// normal: the floor and the tops are lit at grazing incidence, the shadows run long across the view, the spheres'
+/// shading normals meet the light at their terminators, and seen from the objects the panel's two triangles are
+/// thin slivers (what solid-angle sampling finds hardest); a dim constant sky fills the shadows. All of it around
+/// [`GRAZING_LIGHT_ORIGIN`].
 pub fn grazing_light() -> SceneAsset {
     let o = GRAZING_LIGHT_ORIGIN;
     let materials = vec![
@@ -276,7 +279,7 @@ pub fn grazing_light() -> SceneAsset {
         rotation: glam::Quat::from_rotation_y(30f32.to_radians()),
         ..placed(o + Vec3::new(80.0, 20.0, 40.0))
     };
-    // The panel: 400 wide (x), 30 tall (y), facing -z (towards the objects).
+    // The panel: 400 wide (x), 30 tall (y), facing -z: towards the objects' side of z = 100, edge-on to them.
     let panel = quad(
         "panel",
         Vec3::new(-200.0, 0.0, 0.0),
@@ -325,7 +328,7 @@ mod tests {
     }
 
     /// The grazing scene's light reaches the objects within a few degrees of the floor's plane, from the
-    /// panel's front, and every vertex sits near 1e4.
+    /// panel's front at 80-86 degrees from its normal, and every node sits near 1e4.
     #[test]
     fn grazing_light_grazes() {
         let scene = grazing_light();
@@ -338,13 +341,15 @@ mod tests {
             let elevation = (to_objects.y.abs() / to_objects.length())
                 .asin()
                 .to_degrees();
-            assert!(elevation > 1.0 && elevation < 4.0, "elevation {elevation}");
+            assert!(elevation > 1.0 && elevation < 5.0, "elevation {elevation}");
+            let from_normal = (-to_objects.normalize().z).acos().to_degrees();
+            assert!(
+                from_normal > 80.0 && from_normal < 86.0,
+                "{from_normal} degrees from the normal"
+            );
         }
         let [a, b, c] = mesh.triangles[0].map(|i| mesh.positions[i as usize]);
-        assert!(
-            (b - a).cross(c - a).z < 0.0,
-            "the panel faces -z, towards the objects"
-        );
+        assert!((b - a).cross(c - a).z < 0.0, "the panel faces -z");
         for node in &scene.nodes {
             assert!((node.transform.translation - GRAZING_LIGHT_ORIGIN).length() < 1000.0);
         }

@@ -404,7 +404,10 @@ mod tests {
     use super::*;
 
     fn curve(error: impl Fn(f64) -> f64) -> Vec<(f64, f64)> {
-        (0..11).map(|k| 2f64.powi(k)).map(|t| (t, error(t))).collect()
+        (0..11)
+            .map(|k| 2f64.powi(k))
+            .map(|t| (t, error(t)))
+            .collect()
     }
 
     /// Two estimators at 1/t: the ratio is their constant, at every level.
@@ -428,7 +431,10 @@ mod tests {
         // own lowest, 0.5/32, which b reaches at t = 64 and a at 1024.
         assert!((lowest - 0.5 / 32.0).abs() < 1e-12, "{lowest}");
         assert!((ratio - 16.0).abs() < 1e-9, "{ratio}");
-        assert!((greatest - 16.0).abs() < 1e-9 && least < 1.0, "{least} {greatest}");
+        assert!(
+            (greatest - 16.0).abs() < 1e-9 && least < 1.0,
+            "{least} {greatest}"
+        );
     }
 
     /// Curves that share no error have no ratio.
