@@ -44,7 +44,7 @@ def _vndf_sample(wi, alpha, u):
 
 def _vndf_pdf(wi, wo, a2):
     h = dr.normalize(wi + wo)
-    d = _ggx_d(h.z, a2)
+    d = _ggx_d(h, a2)
     pdf = d / (2.0 * (wi.z + dr.sqrt(a2 + (1.0 - a2) * wi.z * wi.z)))
     return dr.select((wi.z > 0.0) & (wo.z > 0.0), pdf, 0.0)
 
@@ -66,7 +66,7 @@ class GltfClearcoatBRDF(GltfBRDF):
         """coat_brdf |N.L|."""
         _, a2 = self._coat_a2()
         h = dr.normalize(wi + wo)
-        spec = _smith_vis(wo.z, wi.z, a2) * _ggx_d(h.z, a2)
+        spec = _smith_vis(wo.z, wi.z, a2) * _ggx_d(h, a2)
         return dr.select((wi.z > 0.0) & (wo.z > 0.0), spec * wo.z, 0.0)
 
     def _coated_f(self, wi, wo, bc):

@@ -44,9 +44,13 @@ W_SPEC_MIN = 0.1
 W_SPEC_MAX = 0.9
 
 
-def _ggx_d(nh, a2):
-    t = nh * nh * (a2 - 1.0) + 1.0
-    return dr.select(nh > 0.0, a2 / (dr.pi * t * t), 0.0)
+def _ggx_d(h, a2):
+    """GGX D of the unit half-vector h (shading frame). The denominator (N.H)^2 (alpha^2 - 1) + 1 is written as
+    h.x^2 + h.y^2 + alpha^2 h.z^2 (the same for unit h): at alpha = 1e-4 (roughness 0) the first form cancels to 0
+    in f32 next to the peak, D became infinite and the sampled weights NaN (the bench's smooth spheres rendered
+    dark, with non-finite pixels)."""
+    t = h.x * h.x + h.y * h.y + a2 * h.z * h.z
+    return dr.select(h.z > 0.0, a2 / (dr.pi * t * t), 0.0)
 
 
 def _smith_vis(nl, nv, a2):
@@ -109,8 +113,7 @@ class GltfBRDF(mi.BSDF):
         h = dr.normalize(wi + wo)
         vh = dr.dot(wi, h)
         lh = dr.dot(wo, h)
-        nh = h.z
-        d = _ggx_d(nh, a2)
+        d = _ggx_d(h, a2)
         vis = _smith_vis(wo.z, wi.z, a2)
         chi = (vh > 0.0) & (lh > 0.0)
         spec = dr.select(chi, vis * d, 0.0)
@@ -127,7 +130,7 @@ class GltfBRDF(mi.BSDF):
     def _pdf(self, wi, wo, w_s):
         alpha, a2 = self._alpha2()
         h = dr.normalize(wi + wo)
-        d = _ggx_d(h.z, a2)
+        d = _ggx_d(h, a2)
         pdf_vndf = d / (2.0 * (wi.z + dr.sqrt(a2 + (1.0 - a2) * wi.z * wi.z)))
         pdf_cos = wo.z * dr.inv_pi
         pdf = w_s * pdf_vndf + (1.0 - w_s) * pdf_cos
