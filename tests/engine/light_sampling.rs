@@ -521,8 +521,9 @@ fn triangle_lights_sample_their_solid_angle_near_and_far() {
         let tilted = (to_light * 15f32.to_radians().sin()
             + along.reject_from(to_light).normalize() * 15f32.to_radians().cos())
         .normalize();
-        for (what, n) in [("cos", to_light), ("tilted cos", tilted)] {
-            let estimates: Vec<f64> = samples
+        // Each sample's cos(theta) to `n` over its density (0 where the sampling failed).
+        let cos_over_pdf = |n: Vec3| -> Vec<f64> {
+            samples
                 .iter()
                 .map(|(a, _)| {
                     if a[3] > 0.0 {
@@ -531,8 +532,10 @@ fn triangle_lights_sample_their_solid_angle_near_and_far() {
                         0.0
                     }
                 })
-                .collect();
-            let (mean, error) = mean_and_error(&estimates);
+                .collect()
+        };
+        for (what, n) in [("cos", to_light), ("tilted cos", tilted)] {
+            let (mean, error) = mean_and_error(&cos_over_pdf(n));
             let exact = projected_solid_angle(p, v, n);
             eprintln!("{label}: E[{what}/pdf] = {mean:.6} +- {error:.6}, Lambert {exact:.6}");
             // The triangle must lie above the tilted normal's horizon for Lambert's formula to hold.
@@ -543,18 +546,8 @@ fn triangle_lights_sample_their_solid_angle_near_and_far() {
                 );
             }
         }
-        let n = to_light;
-        let exact = projected_solid_angle(p, v, n);
-        let estimates: Vec<f64> = samples
-            .iter()
-            .map(|(a, _)| {
-                if a[3] > 0.0 {
-                    (Vec3::new(a[0], a[1], a[2]).dot(n).max(0.0) / a[3]) as f64
-                } else {
-                    0.0
-                }
-            })
-            .collect();
+        let exact = projected_solid_angle(p, v, to_light);
+        let estimates = cos_over_pdf(to_light);
         // Solid-angle sampling keeps the estimator bounded next to the light.
         if label.starts_with("0.5") {
             let max = estimates.iter().cloned().fold(0.0, f64::max);

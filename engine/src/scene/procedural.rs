@@ -44,6 +44,16 @@ pub fn uv_sphere(radius: f32, segments: u32, rings: u32, material: u32) -> MeshD
             }
         }
     }
+    with_attributes(mesh, normals, uvs, material)
+}
+
+/// `mesh` (positions and triangles made) with its normals and UVs, one material, and one primitive over it all.
+fn with_attributes(
+    mut mesh: MeshData,
+    normals: Vec<Vec3>,
+    uvs: Vec<Vec2>,
+    material: u32,
+) -> MeshData {
     mesh.triangle_materials = vec![material; mesh.triangles.len()];
     mesh.primitives.push(PrimitiveRange {
         vertex_offset: 0,
@@ -181,15 +191,7 @@ pub fn cuboid(size: Vec3, material: u32) -> MeshData {
             }
         }
     }
-    mesh.triangle_materials = vec![material; mesh.triangles.len()];
-    mesh.primitives.push(PrimitiveRange {
-        vertex_offset: 0,
-        vertex_count: mesh.positions.len() as u32,
-        material,
-    });
-    mesh.normals = Some(normals);
-    mesh.uv0 = Some(uvs);
-    mesh
+    with_attributes(mesh, normals, uvs, material)
 }
 
 /// A parallelogram centred at the origin with corners at +-`u` +-`v`, facing `u x v`: its two triangles wound
