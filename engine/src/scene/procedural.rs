@@ -261,7 +261,11 @@ pub const GRAZING_LIGHT_ORIGIN: Vec3 = Vec3::new(1.0e4, 1.0e4, -1.0e4);
 /// thin slivers (what solid-angle sampling finds hardest); a dim constant sky fills the shadows. All of it around
 /// [`GRAZING_LIGHT_ORIGIN`].
 pub fn grazing_light() -> SceneAsset {
-    let o = GRAZING_LIGHT_ORIGIN;
+    grazing_light_at(GRAZING_LIGHT_ORIGIN)
+}
+
+/// [`grazing_light`] around `o` instead (the same scene anywhere: tests compare the two).
+pub fn grazing_light_at(o: Vec3) -> SceneAsset {
     let materials = vec![
         plain("floor", [0.6, 0.6, 0.6], 0.0, 0.8),
         plain("plaster", [0.75, 0.72, 0.68], 0.0, 0.9),
