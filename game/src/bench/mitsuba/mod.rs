@@ -77,6 +77,9 @@ pub struct SideBySide {
     pub equal_error_rel_mse: Option<f64>,
     pub time_at_equal_error: Option<f64>,
     pub time_at_equal_error_range: Option<[f64; 2]>,
+    /// Where raykin's first point is already below every error Mitsuba's curve reaches (no common error), an
+    /// upper bound instead: raykin's time at its first point over Mitsuba's at its lowest error.
+    pub time_at_equal_error_at_most: Option<f64>,
     /// Milliseconds to reach tone-mapped relMSE 0.01 (noise subtracted; extrapolated along the fitted power law
     /// where a curve stopped short): raykin (trace) and Mitsuba.
     pub raykin_ms_to_0_01: Option<f64>,
@@ -282,6 +285,7 @@ pub fn compare(
         equal_error_rel_mse: equal_error.map(|e| e.0),
         time_at_equal_error: equal_error.map(|e| e.1),
         time_at_equal_error_range: equal_error.map(|e| e.2),
+        time_at_equal_error_at_most: equal_error_bound(&raykin_curve_excess, &mitsuba_curve),
         raykin_ms_to_0_01: time_to_rel_mse(&raykin_curve_excess, 0.01).0,
         mitsuba_ms_to_0_01: time_to_rel_mse(&mitsuba_curve, 0.01).0,
         references_rel_mse,
@@ -346,6 +350,14 @@ fn at_equal_error(a: &[(f64, f64)], b: &[(f64, f64)]) -> Option<(f64, f64, [f64;
     Some((lo, ratio(lo)?, [least, greatest]))
 }
 
+/// Where `a`'s first point is already below every error `b` reaches, the curves share none, but `a` reached `b`'s
+/// lowest no later than that first point: the time-to-equal-error ratio is at most its time over `b`'s there.
+fn equal_error_bound(a: &[(f64, f64)], b: &[(f64, f64)]) -> Option<f64> {
+    let first = a.first()?;
+    let lowest = b.iter().min_by(|x, y| x.1.total_cmp(&y.1))?;
+    (first.1 < lowest.1 && lowest.0 > 0.0).then(|| first.0 / lowest.0)
+}
+
 /// The side-by-side table for summary.md and docs/BENCHMARKS.md.
 pub fn markdown(rows: &[SideBySide]) -> String {
     let mut s = String::from(
@@ -358,7 +370,9 @@ pub fn markdown(rows: &[SideBySide]) -> String {
         r.time_at_equal_error_range,
     ) {
         (Some(e), Some(t), Some([lo, hi])) => format!("**{t:.2}x** at {e:.1e}; {lo:.2}-{hi:.2}x"),
-        _ => "-".to_string(),
+        _ => r.time_at_equal_error_at_most.map_or("-".to_string(), |b| {
+            format!("**at most {b:.4}x** (raykin's first point below Mitsuba's whole curve)")
+        }),
     };
     for r in rows {
         s += &format!(
@@ -437,10 +451,22 @@ mod tests {
         );
     }
 
-    /// Curves that share no error have no ratio.
+    /// Curves that share no error have no ratio; where the first lies wholly below the second, a bound: its first
+    /// time over the second's time at its lowest error.
     #[test]
     fn disjoint_curves_have_no_equal_error() {
-        let (a, b) = (curve(|t| 1.0 / t), curve(|t| 100.0 + 1.0 / t));
-        assert!(at_equal_error(&a, &b).is_none());
+        let (low, high) = (curve(|t| 1.0 / t), curve(|t| 100.0 + 1.0 / t));
+        assert!(at_equal_error(&low, &high).is_none());
+        assert!(at_equal_error(&high, &low).is_none());
+        assert_eq!(equal_error_bound(&low, &high), Some(1.0 / 1024.0));
+        assert!(
+            equal_error_bound(&high, &low).is_none(),
+            "high is above low"
+        );
+        let (a, b) = (curve(|t| 1.0 / t), curve(|t| 4.0 / t));
+        assert!(
+            equal_error_bound(&a, &b).is_none(),
+            "curves that share errors"
+        );
     }
 }
