@@ -74,9 +74,9 @@ fn orthonormal_part(v: vec3<f32>, w: vec3<f32>) -> vec3<f32> {
 // triangle is degenerate. Arvo's formulas take the sub-triangle's angle sum, pi + its area, from the sum of the
 // triangle's three angles; with GPU asin (Mesa's is a cubic) that sum minus pi missed a 0.0007 sr triangle's area
 // entirely (and a 0.007 sr one by 5%), and the directions were not spread over the triangle that the density
-// 1 / area assumed: light from small and thin emitters came out dark (docs/ACCURACY.md). So the sub-area here is u.x times the given area
-// (Van Oosterom and Strackee's formula, accurate however small), and the formulas need only the angle at a, whose
-// sine and cosine come from the edge planes' normals without any transcendental.
+// 1 / area assumed: light from small and thin emitters came out dark (docs/ACCURACY.md). So the sub-area here is
+// u.x times the given area (Van Oosterom and Strackee's formula, accurate however small), and the formulas need
+// only the angle at a, whose sine and cosine come from the edge planes' normals without any transcendental.
 fn sample_spherical_triangle(a: vec3<f32>, b: vec3<f32>, c: vec3<f32>, area: f32, u: vec2<f32>) -> vec3<f32> {
     // Normals of the great circles through the edges at a; the angle at a is between them.
     var n_ab = cross(a, b);

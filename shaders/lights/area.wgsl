@@ -27,9 +27,15 @@ fn triangle_area(p: array<vec3<f32>, 3>) -> f32 {
     return 0.5 * length(cross(p[1] - p[0], p[2] - p[0]));
 }
 
-// Solid angle the triangle subtends from `origin`, or 0 when it is to be area-sampled from there.
-fn triangle_spherical_area(p: array<vec3<f32>, 3>, origin: vec3<f32>) -> f32 {
-    let omega = spherical_triangle_area(normalize(p[0] - origin), normalize(p[1] - origin), normalize(p[2] - origin));
+// The unit directions from `origin` to the triangle's corners (its spherical triangle seen from there).
+fn triangle_directions(p: array<vec3<f32>, 3>, origin: vec3<f32>) -> array<vec3<f32>, 3> {
+    return array<vec3<f32>, 3>(normalize(p[0] - origin), normalize(p[1] - origin), normalize(p[2] - origin));
+}
+
+// Solid angle of the spherical triangle `d` (triangle_directions), or 0 when the triangle is to be area-sampled
+// from there.
+fn triangle_spherical_area(d: array<vec3<f32>, 3>) -> f32 {
+    let omega = spherical_triangle_area(d[0], d[1], d[2]);
     return select(0.0, omega, omega >= MIN_SPHERICAL_SAMPLE_AREA && omega <= MAX_SPHERICAL_SAMPLE_AREA);
 }
 
@@ -77,9 +83,10 @@ fn triangle_light_sample_li(light: Light, ctx: LightSampleContext, u: vec2<f32>)
     var b: vec2<f32>;
     var pdf: f32;
     let n = cross(p[1] - p[0], p[2] - p[0]) / (2.0 * area);
-    let omega = triangle_spherical_area(p, ctx.p);
+    let d = triangle_directions(p, ctx.p);
+    let omega = triangle_spherical_area(d);
     if omega > 0.0 {
-        dir = sample_spherical_triangle(normalize(p[0] - ctx.p), normalize(p[1] - ctx.p), normalize(p[2] - ctx.p), omega, u);
+        dir = sample_spherical_triangle(d[0], d[1], d[2], omega, u);
         let h = triangle_plane_hit(p, ctx.p, dir);
         if h.x <= 0.0 || !is_finite(h.x) { return no_light_sample(); }
         distance = h.x;
@@ -107,7 +114,7 @@ fn triangle_light_pdf(light: Light, ctx: LightSampleContext, wi: vec3<f32>, dist
     let p = world_triangle(light.index_a, light.index_b);
     let area = triangle_area(p);
     if area <= 0.0 || !triangle_emits_towards(area_light_material(light), p, ctx.p) { return 0.0; }
-    let omega = triangle_spherical_area(p, ctx.p);
+    let omega = triangle_spherical_area(triangle_directions(p, ctx.p));
     if omega > 0.0 { return 1.0 / omega; }
     let n = cross(p[1] - p[0], p[2] - p[0]) / (2.0 * area);
     let cos_l = abs(dot(n, wi));

@@ -79,7 +79,7 @@ struct RaySegment {
 fn spawn_ray_to(p_from: vec3<f32>, n_from: vec3<f32>, p_to: vec3<f32>, n_to: vec3<f32>) -> RaySegment {
     let origin = offset_ray_origin(p_from, n_from);
     let d = offset_ray_origin(p_to, n_to) - origin;
-    let length = length(d);
-    if !(length > 0.0) { return RaySegment(Ray(origin, vec3<f32>(0.0, 0.0, 1.0)), 0.0); }
-    return RaySegment(Ray(origin, d / length), length * (1.0 - 1e-4));
+    let distance = length(d);
+    if !(distance > 0.0) { return RaySegment(Ray(origin, vec3<f32>(0.0, 0.0, 1.0)), 0.0); }
+    return RaySegment(Ray(origin, d / distance), distance * (1.0 - 1e-4));
 }
