@@ -823,9 +823,9 @@ raykin's time from GPU timestamps of the trace pass or the wall time of its fram
 `mi.render` after a warm-up render; steady = variance ratio x raykin's trace ms per sample over its last segment / \
 Mitsuba's ms per sample (these three are the time to equal error where relMSE falls as 1/time); time at equal error \
 = raykin's trace time / Mitsuba's time to first reach the same relMSE, by log-log interpolation along each curve, \
-at the lowest relMSE both reach, and its least and greatest over nine levels from there up; references apart = relMSE of the two converged images against each other, both \
-noises subtracted, and the ratio of their means per channel, with the largest of its distances from 1 in \
-standard errors (from each reference's halves; beyond 5 and 0.2%, the run warns that the images differ).\n";
+at the lowest relMSE both reach, and its least and greatest over nine levels from there up; references apart = \
+relMSE of the two converged images against each other, both noises subtracted, and the ratio of their means per \
+channel, with the largest of its distances from 1 in standard errors (from each reference's halves; beyond 5 and 0.2%, the run warns that the images differ).\n";
     }
     s += &oidn_markdown(r);
     s

@@ -69,14 +69,12 @@ pub struct SideBySide {
     pub time_to_equal_error_steady: f64,
     /// Time to equal error as the words say, raykin (trace) / Mitsuba: the ratio of the times at which the two
     /// curves first reach the same (relMSE - noise), read off each curve by log-log interpolation between its
-    /// points (never extrapolated), at the lowest error both reach (`equal_error_rel_mse`) and its least and
+    /// points (never extrapolated), at the lowest error both reach (`EqualError::rel_mse`) and its least and
     /// greatest over nine levels spread geometrically from there up to the higher of the two first points. The
     /// products above equal it only where relMSE falls as 1/time; tone-mapped errors of scenes with rare bright
     /// paths fall slower (log-log slopes -0.44 to -0.72) over the curves, so that raykin, at a lower error for
     /// the same samples, is compared further down its flatter stretch. `None` where the curves share no error.
-    pub equal_error_rel_mse: Option<f64>,
-    pub time_at_equal_error: Option<f64>,
-    pub time_at_equal_error_range: Option<[f64; 2]>,
+    pub time_at_equal_error: Option<EqualError>,
     /// Where raykin's first point is already below every error Mitsuba's curve reaches (no common error), an
     /// upper bound instead: raykin's time at its first point over Mitsuba's at its lowest error.
     pub time_at_equal_error_at_most: Option<f64>,
@@ -97,6 +95,17 @@ pub struct SideBySide {
     pub raykin_curve: String,
     /// What the export could not give Mitsuba (scene.json's `unsupported`).
     pub unsupported: Vec<String>,
+}
+
+/// Time-to-equal-error ratios of one curve to another over the errors both reach.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct EqualError {
+    /// The lowest error both curves reach.
+    pub rel_mse: f64,
+    /// The ratio of their times to first reach it.
+    pub ratio: f64,
+    /// The least and greatest ratio over nine levels from there up to the higher of the two first points.
+    pub range: [f64; 2],
 }
 
 /// Beyond this many standard errors (and `MEAN_RATIO_TOLERANCE`), the converged images' means differ by more than
@@ -263,7 +272,6 @@ pub fn compare(
         .iter()
         .map(|p| (p.time_ms, excess(p, reference_noise)))
         .collect();
-    let equal_error = at_equal_error(&raykin_curve_excess, &mitsuba_curve);
     let result = SideBySide {
         scene: errors.scene.clone(),
         mitsuba_variant: run.variant.clone(),
@@ -282,9 +290,7 @@ pub fn compare(
         time_to_equal_error_steady: excess(&r, reference_noise) / excess(&m, noise)
             * steady_ms_per_spp(raykin)
             / (m.time_ms / m.spp.max(1) as f64),
-        equal_error_rel_mse: equal_error.map(|e| e.0),
-        time_at_equal_error: equal_error.map(|e| e.1),
-        time_at_equal_error_range: equal_error.map(|e| e.2),
+        time_at_equal_error: at_equal_error(&raykin_curve_excess, &mitsuba_curve),
         time_at_equal_error_at_most: equal_error_bound(&raykin_curve_excess, &mitsuba_curve),
         raykin_ms_to_0_01: time_to_rel_mse(&raykin_curve_excess, 0.01).0,
         mitsuba_ms_to_0_01: time_to_rel_mse(&mitsuba_curve, 0.01).0,
@@ -333,21 +339,26 @@ fn efficiency(curve: &[CurvePoint], noise: f64, time: fn(&CurvePoint) -> f64) ->
     crate::stats::Spread::of(&tail).median
 }
 
-/// Time-to-equal-error ratios of curve `a` to curve `b` ((time, error) points in time order): (the lowest error
-/// both reach, the ratio there, [least, greatest] ratio over nine levels from there up to the higher first point).
-fn at_equal_error(a: &[(f64, f64)], b: &[(f64, f64)]) -> Option<(f64, f64, [f64; 2])> {
+/// Time-to-equal-error ratios of curve `a` to curve `b` ((time, error) points in time order).
+fn at_equal_error(a: &[(f64, f64)], b: &[(f64, f64)]) -> Option<EqualError> {
     let lowest = |c: &[(f64, f64)]| c.iter().map(|p| p.1).fold(f64::INFINITY, f64::min);
     let (lo, hi) = (lowest(a).max(lowest(b)), a.first()?.1.min(b.first()?.1));
     if !(lo > 0.0 && hi >= lo) {
         return None;
     }
-    let ratio = |e: f64| Some(time_to_reach(a, e)? / time_to_reach(b, e)?);
-    let levels: Vec<f64> = (0..9)
-        .filter_map(|k| ratio(lo * (hi / lo).powf(f64::from(k) / 8.0)))
+    let ratio_at = |e: f64| Some(time_to_reach(a, e)? / time_to_reach(b, e)?);
+    let ratio = ratio_at(lo)?;
+    let levels: Vec<f64> = (1..9)
+        .filter_map(|k| ratio_at(lo * (hi / lo).powf(f64::from(k) / 8.0)))
+        .chain([ratio])
         .collect();
     let least = levels.iter().copied().fold(f64::INFINITY, f64::min);
     let greatest = levels.iter().copied().fold(0.0, f64::max);
-    Some((lo, ratio(lo)?, [least, greatest]))
+    Some(EqualError {
+        rel_mse: lo,
+        ratio,
+        range: [least, greatest],
+    })
 }
 
 /// Where `a`'s first point is already below every error `b` reaches, the curves share none, but `a` reached `b`'s
@@ -364,15 +375,15 @@ pub fn markdown(rows: &[SideBySide]) -> String {
         "| scene | raykin curve | Mitsuba | samples/s raykin (trace / wall) | samples/s Mitsuba | throughput | variance ratio | relMSE x time (trace / wall / steady) | time at equal error: at the lowest common relMSE; range | ms to relMSE 0.01 raykin / Mitsuba | references apart (relMSE; mean ratio, the largest in standard errors; Mitsuba's negative or non-finite pixels) |\n|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     let ms = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.1}"));
-    let equal = |r: &SideBySide| match (
-        r.equal_error_rel_mse,
-        r.time_at_equal_error,
-        r.time_at_equal_error_range,
-    ) {
-        (Some(e), Some(t), Some([lo, hi])) => format!("**{t:.2}x** at {e:.1e}; {lo:.2}-{hi:.2}x"),
-        _ => r.time_at_equal_error_at_most.map_or("-".to_string(), |b| {
+    let equal = |r: &SideBySide| match (r.time_at_equal_error, r.time_at_equal_error_at_most) {
+        (Some(e), _) => format!(
+            "**{:.2}x** at {:.1e}; {:.2}-{:.2}x",
+            e.ratio, e.rel_mse, e.range[0], e.range[1]
+        ),
+        (None, Some(b)) => {
             format!("**at most {b:.4}x** (raykin's first point below Mitsuba's whole curve)")
-        }),
+        }
+        (None, None) => "-".to_string(),
     };
     for r in rows {
         s += &format!(
@@ -428,7 +439,11 @@ mod tests {
     #[test]
     fn equal_error_of_parallel_curves_is_their_ratio() {
         let (a, b) = (curve(|t| 1.0 / t), curve(|t| 4.0 / t));
-        let (lowest, ratio, [least, greatest]) = at_equal_error(&a, &b).unwrap();
+        let EqualError {
+            rel_mse: lowest,
+            ratio,
+            range: [least, greatest],
+        } = at_equal_error(&a, &b).unwrap();
         assert!((lowest - 4.0 / 1024.0).abs() < 1e-12, "{lowest}");
         for r in [ratio, least, greatest] {
             assert!((r - 0.25).abs() < 1e-9, "{r}");
@@ -440,7 +455,11 @@ mod tests {
     #[test]
     fn equal_error_follows_curves_of_different_slopes() {
         let (a, b) = (curve(|t| 0.5 / t.sqrt()), curve(|t| 1.0 / t));
-        let (lowest, ratio, [least, greatest]) = at_equal_error(&a, &b).unwrap();
+        let EqualError {
+            rel_mse: lowest,
+            ratio,
+            range: [least, greatest],
+        } = at_equal_error(&a, &b).unwrap();
         // a reaches b's lowest error, 1/1024, at t = (512)^2: beyond its curve, so the lowest common error is a's
         // own lowest, 0.5/32, which b reaches at t = 64 and a at 1024.
         assert!((lowest - 0.5 / 32.0).abs() < 1e-12, "{lowest}");
