@@ -398,3 +398,42 @@ fn switching_backend_mid_run_redeforms_everything() {
     assert_eq!(app.deformation().backend, DeformBackend::Gpu);
     assert_eq!(words(&app, &app.gpu_scene().vertex_pool), gpu_pool);
 }
+
+/// Deformable meshes' trees take `gpu_deformed_bvh_quality` where the GPU deforms them (their rebuilds run on a
+/// worker thread) and `bvh_quality` where the CPU does (its rebuilds run inside the frame), at upload as at every
+/// rebuild, so that a rebuild from the upload pose gives the upload's tree.
+#[test]
+fn deformable_trees_take_their_backends_preset() {
+    use raykin::bvh::{BvhQuality, MeshBvh};
+    let _device = crate::common::gpu().1;
+    let scene = load(shared_assets().join("CesiumMan/glTF-Binary/CesiumMan.glb"));
+    let defaults = RenderSettings::default();
+    let (gpu_preset, cpu_preset) = (defaults.gpu_deformed_bvh_quality, defaults.bvh_quality);
+    assert_eq!(
+        (gpu_preset, cpu_preset),
+        (BvhQuality::VerySlow, BvhQuality::Medium)
+    );
+    let mut checked = 0;
+    for (backend, preset, other) in [
+        (DeformBackend::Gpu, gpu_preset, cpu_preset),
+        (DeformBackend::Cpu, cpu_preset, gpu_preset),
+    ] {
+        let app = app(&scene, backend);
+        let gpu_scene = app.gpu_scene();
+        assert_eq!(gpu_scene.deformable_quality(), preset, "{backend:?}");
+        for (m, mesh) in scene.meshes.iter().enumerate() {
+            if !mesh.is_deformable() {
+                continue;
+            }
+            let want = MeshBvh::build(&mesh.positions, &mesh.triangles, preset).unwrap();
+            let not = MeshBvh::build(&mesh.positions, &mesh.triangles, other).unwrap();
+            // The two presets give this mesh different trees, so the check below tells them apart.
+            assert_ne!(want.flat.order, not.flat.order);
+            let got = gpu_scene.mesh_slots[m].blas.binary().unwrap();
+            assert_eq!(got.flat.order, want.flat.order, "{backend:?}, mesh {m}");
+            assert_eq!(got.build_sah, want.build_sah, "{backend:?}, mesh {m}");
+            checked += 1;
+        }
+    }
+    assert_eq!(checked, 2);
+}

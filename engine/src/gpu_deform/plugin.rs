@@ -127,7 +127,6 @@ pub fn sync_deform_backend(
 pub fn deform_on_gpu(
     ctx: Res<GpuContext>,
     assets: Res<SceneAssets>,
-    settings: Res<RenderSettings>,
     poses: Res<MeshPoses>,
     mut stats: ResMut<BvhStats>,
     mut state: ResMut<GpuDeformation>,
@@ -138,14 +137,9 @@ pub fn deform_on_gpu(
     let Some(deformer) = state.deformer.as_mut() else {
         return;
     };
-    let frame = deformer.frame(
-        &ctx,
-        &assets.0,
-        &mut gpu_scene,
-        &poses,
-        &mut stats,
-        settings.bvh_quality,
-    );
+    // Rebuilds take the upload's preset.
+    let quality = gpu_scene.deformable_quality();
+    let frame = deformer.frame(&ctx, &assets.0, &mut gpu_scene, &poses, &mut stats, quality);
     geometry.0 |= frame.geometry_changed;
     commands.0.extend(frame.commands);
     stats.last_upload_seconds += frame.upload_seconds;

@@ -76,6 +76,7 @@ pub fn insert_resources(
         ctx,
         scene,
         settings.bvh_quality,
+        settings.deformable_bvh_quality(ctx.info.device_type),
         settings.static_bvh,
         settings.merge_static.then_some(settings.merged_bvh_quality),
         binding_limit,

@@ -102,7 +102,6 @@ pub fn update_instances(
 pub fn refit_deformed(
     ctx: Res<GpuContext>,
     assets: Res<SceneAssets>,
-    settings: Res<super::RenderSettings>,
     deformed: Res<DeformedMeshes>,
     elsewhere: Res<DeformedElsewhere>,
     mut stats: ResMut<BvhStats>,
@@ -129,7 +128,7 @@ pub fn refit_deformed(
     // Meshes the GPU deforms are rebuilt by the GPU deformer, from their GPU positions.
     let cpu_owned = |m: usize| !elsewhere.0.get(m).copied().unwrap_or(false);
     for m in stats.due(cpu_owned) {
-        match scene.rebuild_mesh(&ctx, asset, m, settings.bvh_quality) {
+        match scene.rebuild_mesh(&ctx, asset, m) {
             Ok(()) => {
                 stats.sah_ratio[m] = scene.mesh_slots[m]
                     .blas

@@ -52,6 +52,7 @@ pub fn presets(
         let settings = RenderSettings {
             bvh_quality: preset,
             merged_bvh_quality: preset,
+            gpu_deformed_bvh_quality: preset,
             ..base.clone()
         };
         let mut app = super::open_app(ctx, scene, settings)?;

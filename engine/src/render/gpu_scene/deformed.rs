@@ -33,7 +33,8 @@ impl GpuScene {
             restored: Option<OrderedTriangles>,
         }
         self.written |= SceneWrites::VERTEX_POOL | SceneWrites::BLAS_NODES | SceneWrites::TRIANGLES;
-        let (materials, quality, variant) = (&self.material_data, self.bvh_quality, self.variant);
+        let (materials, quality, variant) =
+            (&self.material_data, self.deformable_quality, self.variant);
         let mut changed = vec![false; self.mesh_slots.len()];
         for &m in &deformed.changed {
             if deformed.meshes.get(m).is_some_and(Option::is_some) && m < changed.len() {
@@ -139,14 +140,14 @@ impl GpuScene {
     }
 
     /// Rebuilds a mesh's BLAS from its current positions inside its reserved node range, and rewrites its
-    /// triangle range in the new BVH order (same triangles, same count).
+    /// triangle range in the new BVH order (same triangles, same count), with the upload's preset.
     pub fn rebuild_mesh(
         &mut self,
         ctx: &GpuContext,
         scene: &SceneAsset,
         mesh: usize,
-        quality: crate::bvh::BvhQuality,
     ) -> Result<(), crate::bvh::BvhTooDeep> {
+        let quality = self.deformable_quality;
         let slot = &self.mesh_slots[mesh];
         let positions = slot
             .positions

@@ -225,8 +225,9 @@ pub struct GpuScene {
     /// The buffers written since the kernels' texture copies were last made (CPU adapters only read those:
     /// `render::scene_texels`); every method that writes a buffer marks it.
     pub written: SceneWrites,
-    /// Build quality of the upload (rebuilds of the upload tree use it).
-    bvh_quality: crate::bvh::BvhQuality,
+    /// Build preset of deformable meshes' trees, at upload and at every rebuild (so that a rebuild from the
+    /// upload pose gives the upload's tree back).
+    deformable_quality: crate::bvh::BvhQuality,
     /// The static instances traced through one tree, while at least two are.
     pub merge: Option<static_merge::StaticMerge>,
     /// A material edit or variant switch may have given a member an alpha-masked material.
@@ -235,13 +236,19 @@ pub struct GpuScene {
 }
 
 impl GpuScene {
-    /// Builds every mesh's BVH and uploads the static data; with `merge_quality`, the static instances' merged
-    /// tree too, of that preset. `binding_limit` overrides the adapter's storage binding limit (tests use it to
+    /// The build preset of deformable meshes' trees (every rebuild takes the upload's).
+    pub fn deformable_quality(&self) -> crate::bvh::BvhQuality {
+        self.deformable_quality
+    }
+
+    /// Builds every mesh's BVH and uploads the static data: static meshes' trees with `quality`, deformable ones'
+    /// with `deformable_quality`; with `merge_quality`, the static instances' merged tree too, of that preset. `binding_limit` overrides the adapter's storage binding limit (tests use it to
     /// exercise the over-limit path).
     pub fn new(
         ctx: &GpuContext,
         scene: &SceneAsset,
         quality: crate::bvh::BvhQuality,
+        deformable_quality: crate::bvh::BvhQuality,
         layout: StaticLayout,
         merge_quality: Option<crate::bvh::BvhQuality>,
         binding_limit: Option<u64>,
@@ -285,12 +292,17 @@ impl GpuScene {
             .meshes
             .par_iter()
             .map(|mesh| {
+                let deformable = mesh.is_deformable();
                 Blas::build(
                     &mesh.positions,
                     &mesh.triangles,
-                    quality,
+                    if deformable {
+                        deformable_quality
+                    } else {
+                        quality
+                    },
                     layout,
-                    mesh.is_deformable(),
+                    deformable,
                 )
                 .map_err(|source| UploadError::Bvh {
                     scene: scene.source.clone(),
@@ -436,7 +448,7 @@ impl GpuScene {
             generation: 1,
             written: SceneWrites::ALL,
             binding_limit: limit,
-            bvh_quality: quality,
+            deformable_quality,
             merge,
             merge_materials_changed: false,
             build_seconds: start.elapsed().as_secs_f64(),

@@ -149,7 +149,16 @@ pub struct RenderSettings {
     /// How next-event estimation picks the light.
     #[serde(default)]
     pub light_sampler: LightSampler,
+    /// Build preset of the trees built while the scene plays on the render thread: deformable meshes' where the
+    /// CPU deforms them (their rebuilds run inside the frame), static meshes' outside the merged tree.
     pub bvh_quality: crate::bvh::BvhQuality,
+    /// Build preset of deformable meshes' trees where the GPU deforms them (`deform` resolves to `Gpu`): built at
+    /// upload and rebuilt on a worker thread as the meshes deform, so a slower build costs latency, not frame
+    /// time. `VerySlow` traced the seed-like interior in 0.966x and the crowd in 0.949x `Medium`'s time on an
+    /// H100 (docs/BENCHMARKS.md, "Deforming meshes' trees built with the slowest preset"). Settings saved
+    /// before it existed load with that default.
+    #[serde(default = "gpu_deformed_bvh_quality_default")]
+    pub gpu_deformed_bvh_quality: crate::bvh::BvhQuality,
     /// Show the denoised image (display-side: turning it on or off keeps the accumulated samples).
     #[serde(default)]
     pub denoise: bool,
@@ -192,6 +201,10 @@ fn merged_bvh_quality_default() -> crate::bvh::BvhQuality {
     crate::bvh::BvhQuality::VerySlow
 }
 
+fn gpu_deformed_bvh_quality_default() -> crate::bvh::BvhQuality {
+    crate::bvh::BvhQuality::VerySlow
+}
+
 impl Default for RenderSettings {
     fn default() -> Self {
         Self {
@@ -218,6 +231,7 @@ impl Default for RenderSettings {
             static_bvh: crate::bvh::StaticLayout::Wide,
             merge_static: true,
             merged_bvh_quality: merged_bvh_quality_default(),
+            gpu_deformed_bvh_quality: gpu_deformed_bvh_quality_default(),
             deform: DeformBackend::Auto,
             mode: RenderMode::Accumulate,
             realtime: RealtimeSettings::default(),
@@ -227,6 +241,15 @@ impl Default for RenderSettings {
 }
 
 impl RenderSettings {
+    /// The build preset of deformable meshes' trees on an adapter of this type: every build of such a tree (at
+    /// upload and each rebuild) takes the same one, so that a tree rebuilt from the upload pose is the upload's.
+    pub fn deformable_bvh_quality(&self, device_type: wgpu::DeviceType) -> crate::bvh::BvhQuality {
+        match self.deform.resolve(device_type) {
+            DeformBackend::Gpu => self.gpu_deformed_bvh_quality,
+            _ => self.bvh_quality,
+        }
+    }
+
     /// Whether the display shows the denoised image (colour view with the denoiser on).
     pub fn shows_denoised(&self) -> bool {
         self.denoise && self.view == AovView::Color
