@@ -36,7 +36,10 @@ const STEADY_SPREAD: f64 = 0.10;
 /// [`MOST_TRIALS`]: a count alone ended small frames' trials inside the clocks' ramp (40 frames of the Cornell
 /// box at 960x540 and one sample are 20-25 ms of a ramp that lasts about 0.3 s on the H200): the likely reason
 /// why the bench's error curves chose the wavefront at 1.22x the megakernel's time (H100, 2026-12-05; the trial's
-/// frame times were not recorded).
+/// frame times were not recorded). No trial decides before [`CLOCK_RAMP_MS`] of trace time, steady or not: clocks
+/// can also hold low and steady for a while, and a trial inside that decides by times the steady state does not
+/// have (the grazing scene's 16-spp frames on an H100, 2026-12-06: 14.1 ms for the megakernel and 11.3 ms for the
+/// wavefront in a steady second trial, 3.9 and 4.4 ms once the clocks were up, so the slower form traced).
 const LEAST_TRIALS: u32 = 4;
 const CLOCK_RAMP_MS: f64 = 500.0;
 const MOST_TRIALS: u32 = 100;
@@ -178,8 +181,9 @@ impl IntegratorChoice {
             hi <= lo * (1.0 + STEADY_SPREAD)
         });
         self.trial_ms += self.frames.iter().sum::<f64>();
-        let may_run_again = self.trials_run < LEAST_TRIALS || self.trial_ms < CLOCK_RAMP_MS;
-        if !steady && may_run_again && self.trials_run < MOST_TRIALS {
+        let ramp_passed = self.trial_ms >= CLOCK_RAMP_MS;
+        let may_run_again = self.trials_run < LEAST_TRIALS || !ramp_passed;
+        if !(steady && ramp_passed) && may_run_again && self.trials_run < MOST_TRIALS {
             self.frames.clear();
             return;
         }
@@ -258,13 +262,14 @@ mod tests {
         }
     }
 
+    /// Frames of 60 ms: one trial is past the clocks' ramp and decides.
     #[test]
     fn the_faster_form_is_kept_after_both_were_timed() {
         for (waves_ms, expected) in [
-            (0.7, Integrator::Wavefront),
-            (1.3, Integrator::Megakernel),
+            (42.0, Integrator::Wavefront),
+            (78.0, Integrator::Megakernel),
             // Within 2%: the megakernel, which holds no path state.
-            (0.99, Integrator::Megakernel),
+            (59.4, Integrator::Megakernel),
         ] {
             let mut choice = IntegratorChoice::new(true);
             let forms = std::cell::RefCell::new(Vec::new());
@@ -273,8 +278,8 @@ mod tests {
                 |form, frame| {
                     forms.borrow_mut().push(form);
                     // The warm-up frame of each form is slow and must not count.
-                    let ms = speeds(form, (1.0, waves_ms));
-                    if frame <= WARM_UP_FRAMES { 50.0 } else { ms }
+                    let ms = speeds(form, (60.0, waves_ms));
+                    if frame <= WARM_UP_FRAMES { 500.0 } else { ms }
                 },
                 100,
             );
@@ -284,7 +289,7 @@ mod tests {
             assert_eq!(decision.chosen, expected, "wavefront at {waves_ms} ms");
             assert_eq!(
                 (decision.megakernel_ms, decision.wavefront_ms),
-                (1.0, waves_ms)
+                (60.0, waves_ms)
             );
             // The frames after the trial are the chosen form's, untimed.
             assert_eq!(choice.form(Integrator::Auto, workload(8), true), expected);
@@ -293,14 +298,14 @@ mod tests {
         }
     }
 
-    /// Clocks rising steadily over the trial (each frame 0.05 ms faster than the one before) do not favour the
+    /// Clocks rising steadily over the trial (each frame 0.5 ms faster than the one before) do not favour the
     /// form timed later: equal forms stay a tie, so the megakernel.
     #[test]
     fn a_drift_over_the_trial_favours_neither_form() {
         let mut choice = IntegratorChoice::new(true);
-        let frames = trial(&mut choice, |_, frame| 10.0 - 0.05 * frame as f64, 100);
+        let frames = trial(&mut choice, |_, frame| 100.0 - 0.5 * frame as f64, 100);
         assert_eq!(frames, TRIAL.len(), "one trial");
-        // The order alone decides this: alternating forms would have timed the wavefront 0.05 ms faster, and
+        // The order alone decides this: alternating forms would have timed the wavefront 0.5 ms faster, and
         // each form's fastest frame is the wavefront's last.
         assert_eq!(choice.decision().unwrap().chosen, Integrator::Megakernel);
     }
@@ -313,14 +318,41 @@ mod tests {
         let mut choice = IntegratorChoice::new(true);
         let frames = trial(
             &mut choice,
-            |form, frame| speeds(form, (4.0, 4.6)) * if frame <= 3 { 3.0 } else { 1.0 },
+            |form, frame| speeds(form, (40.0, 46.0)) * if frame <= 3 { 3.0 } else { 1.0 },
             100,
         );
         assert_eq!(frames, 2 * TRIAL.len(), "a second trial");
         let d = choice.decision().unwrap();
         assert_eq!(d.trials, 2);
         assert_eq!(d.chosen, Integrator::Megakernel);
-        assert_eq!((d.megakernel_ms, d.wavefront_ms), (4.0, 4.6));
+        assert_eq!((d.megakernel_ms, d.wavefront_ms), (40.0, 46.0));
+    }
+
+    /// Clocks that hold low and steady at first, where the forms' order is not the steady state's (the grazing
+    /// scene's 16-spp frames on an H100: 14.1 and 11.3 ms, then 3.9 and 4.4 ms), do not decide: trials run on
+    /// until the ramp's time has passed, and the last chooses the megakernel.
+    #[test]
+    fn a_steady_trial_inside_the_clocks_ramp_does_not_decide() {
+        let mut choice = IntegratorChoice::new(true);
+        let elapsed = std::cell::Cell::new(0.0);
+        let frames = trial(
+            &mut choice,
+            |form, _| {
+                let ms = if elapsed.get() < 300.0 {
+                    speeds(form, (14.1, 11.3))
+                } else {
+                    speeds(form, (3.9, 4.4))
+                };
+                elapsed.set(elapsed.get() + ms);
+                ms
+            },
+            10_000,
+        );
+        assert!(frames > 2 * TRIAL.len());
+        let d = choice.decision().unwrap();
+        assert_eq!(d.chosen, Integrator::Megakernel);
+        assert_eq!((d.megakernel_ms, d.wavefront_ms), (3.9, 4.4));
+        assert!(choice.trial_ms >= CLOCK_RAMP_MS);
     }
 
     /// Where the times never settle, the last trial decides by each form's fastest frame: one frame timed across
@@ -410,7 +442,7 @@ mod tests {
     #[test]
     fn a_new_workload_times_both_forms_again() {
         let mut choice = IntegratorChoice::new(true);
-        trial(&mut choice, |form, _| speeds(form, (1.0, 0.5)), 100);
+        trial(&mut choice, |form, _| speeds(form, (1.0, 0.5)), 10_000);
         assert_eq!(
             choice.decision().map(|d| d.chosen),
             Some(Integrator::Wavefront)

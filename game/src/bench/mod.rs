@@ -91,12 +91,25 @@ struct Results {
 
 /// Untimed frames before anything is timed: at least `frames`, and on a GPU 0.6 s of them, long enough for its
 /// clocks to come back from idle (the H200 drops to 345 of 1980 MHz after about 1.5 s without work and needs
-/// ~0.3 s of work to climb back); a CPU adapter has no such state.
+/// ~0.3 s of work to climb back); a CPU adapter has no such state. Under `--integrator auto` also until its
+/// trial has decided (at most 10 s), so that every timed frame is of the form it chose: the trial takes at least
+/// half a second of trace time (`IntegratorChoice`), more than 0.6 s of wall time holds for small frames.
 fn warm_up(app: &mut HeadlessApp, frames: usize) {
     let gpu = app.ctx.info.device_type != raykin::gpu::DeviceType::Cpu;
     let start = std::time::Instant::now();
     let mut done = 0;
-    while done < frames || (gpu && start.elapsed() < std::time::Duration::from_millis(600)) {
+    let trial_pending = |app: &HeadlessApp| {
+        let auto = app
+            .app
+            .world()
+            .resource::<raykin::render::RenderSettings>()
+            .integrator
+            == raykin::render::settings::Integrator::Auto;
+        let choice = app.integrator_choice();
+        auto && choice.trials() && choice.decision().is_none()
+    };
+    let elapsed = |ms: u64| start.elapsed() >= std::time::Duration::from_millis(ms);
+    while done < frames || (gpu && (!elapsed(600) || (trial_pending(app) && !elapsed(10_000)))) {
         app.step();
         app.ctx.wait_idle();
         done += 1;
