@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # What a device call carries, made on this machine (scripts/gpu-unpack.sh unpacks it there):
 #   relb/head.xz   the stripped release binary of the working tree, xz-compressed;
+#   relb/commit    the commit it was built from (`-dirty` with uncommitted changes): the device's copy of the
+#                  repository's history can lag behind the working tree, so the figures name this one;
 #   relb/assets/   the bench's glTF assets from ../shared/assets (CornellBox, FlightHelmet, the spheres, CesiumMan,
 #                  Fox: what the static scenes, the crowd and the seed-like interior load);
 #   .gl/           the Vulkan loader and GL dispatch packages for amd64 (the device README's recipe: the machine
@@ -16,6 +18,7 @@ cargo build --release -p raykin
 mkdir -p relb
 strip -o relb/head target/release/raykin
 xz -T2 -6 -f relb/head
+echo "$(git rev-parse --short HEAD)$(git diff --quiet HEAD -- || echo -dirty)" > relb/commit
 mkdir -p relb/assets
 for asset in CornellBox FlightHelmet MetalRoughSpheresNoTextures CesiumMan Fox; do
   rm -rf "relb/assets/$asset"

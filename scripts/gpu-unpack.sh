@@ -28,6 +28,8 @@ if ls .whl/drjit-*.whl >/dev/null 2>&1; then
 fi
 for b in "$@"; do (cd rel && xz -dkf "$b.xz" && chmod +x "$b"); done
 if [ -f relb/head.xz ]; then (cd relb && xz -dkf head.xz && chmod +x head); fi
+# The commit relb/head was built from (scripts/gpu-pack.sh), which the bench records.
+if [ -f relb/commit ]; then export RAYKIN_COMMIT="$(cat relb/commit)"; fi
 export VK_DRIVER_FILES=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
 if [ -n "${OUT:-}" ]; then
   nvidia-smi --query-gpu=name,driver_version,clocks.sm,clocks.max.sm --format=csv > "$OUT/gpu.txt"
