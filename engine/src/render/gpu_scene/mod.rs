@@ -242,8 +242,9 @@ impl GpuScene {
     }
 
     /// Builds every mesh's BVH and uploads the static data: static meshes' trees with `quality`, deformable ones'
-    /// with `deformable_quality`; with `merge_quality`, the static instances' merged tree too, of that preset. `binding_limit` overrides the adapter's storage binding limit (tests use it to
-    /// exercise the over-limit path).
+    /// with `deformable_quality`; with `merge_quality`, the static instances' merged tree too, of that preset.
+    /// `binding_limit` overrides the adapter's storage binding limit (tests use it to exercise the over-limit
+    /// path).
     pub fn new(
         ctx: &GpuContext,
         scene: &SceneAsset,
