@@ -267,10 +267,7 @@ pub fn measure(
                 }
             })
             .collect();
-        let reached: Vec<(f64, f64)> = points
-            .iter()
-            .map(|p| (p.time_ms, (p.rel_mse - r.noise).max(1e-12)))
-            .collect();
+        let reached = excess_curve(&points, r.noise);
         curves.push(CurveResult {
             // The default curve runs at the bench's samples per frame (`--spp-per-frame`).
             name: if index == 0 {
@@ -321,11 +318,7 @@ pub fn measure(
     };
     let slope = fit_slope(|p| p.rel_mse, r.noise);
     let slope_linear = fit_slope(|p| p.rel_mse_linear, r.noise_linear);
-    let time_curve: Vec<(f64, f64)> = curves[0]
-        .points
-        .iter()
-        .map(|p| (p.time_ms, (p.rel_mse - r.noise).max(1e-12)))
-        .collect();
+    let time_curve = excess_curve(&curves[0].points, r.noise);
     let (t2, t2x) = time_to_rel_mse(&time_curve, 0.01);
     let (t3, t3x) = time_to_rel_mse(&time_curve, 0.001);
     Ok(SceneErrors {
@@ -358,6 +351,19 @@ pub fn checkpoints(spp_per_frame: u32, max_spp: u32) -> Vec<u32> {
     (0..20)
         .map(|k| 1u32 << k)
         .filter(|&s| s >= spp_per_frame && s <= max_spp.max(spp_per_frame))
+        .collect()
+}
+
+/// A point's relMSE above a reference's own `noise` (kept positive for log-log fits and interpolation).
+pub fn excess(p: &CurvePoint, noise: f64) -> f64 {
+    (p.rel_mse - noise).max(1e-12)
+}
+
+/// A curve's (trace time, relMSE above `noise`) points.
+pub fn excess_curve(curve: &[CurvePoint], noise: f64) -> Vec<(f64, f64)> {
+    curve
+        .iter()
+        .map(|p| (p.time_ms, excess(p, noise)))
         .collect()
 }
 

@@ -13,7 +13,9 @@
 
 pub mod export;
 
-use super::error_curves::{CurvePoint, CurveResult, SceneErrors, time_to_rel_mse};
+use super::error_curves::{
+    CurvePoint, CurveResult, SceneErrors, excess, excess_curve, time_to_rel_mse,
+};
 use super::metrics::{flip_mean, rel_mse, srgb8, tonemap};
 use crate::stats::time_to_reach;
 use anyhow::{Context, Result};
@@ -323,10 +325,6 @@ fn steady_ms_per_spp(curve: &[CurvePoint]) -> f64 {
 }
 
 /// relMSE above the reference's noise.
-fn excess(p: &CurvePoint, noise: f64) -> f64 {
-    (p.rel_mse - noise).max(1e-12)
-}
-
 /// (relMSE - noise) x time over a curve's second half (median): constant for an estimator converging at 1/t,
 /// so the ratio of two curves' is their time to equal error.
 fn efficiency(curve: &[CurvePoint], noise: f64, time: fn(&CurvePoint) -> f64) -> f64 {
@@ -335,14 +333,6 @@ fn efficiency(curve: &[CurvePoint], noise: f64, time: fn(&CurvePoint) -> f64) ->
         .map(|p| excess(p, noise) * time(p))
         .collect();
     crate::stats::Spread::of(&tail).median
-}
-
-/// A curve's (time, relMSE - noise) points.
-fn excess_curve(curve: &[CurvePoint], noise: f64) -> Vec<(f64, f64)> {
-    curve
-        .iter()
-        .map(|p| (p.time_ms, excess(p, noise)))
-        .collect()
 }
 
 /// Which of raykin's `curves` (relMSE against a reference of noise `noise`) reaches Mitsuba's errors (`mitsuba`,
