@@ -75,27 +75,23 @@ pub fn ground_quad(size: f32, material: u32) -> MeshData {
 fn horizontal_square(name: String, centre: Vec3, size: f32, up: bool, material: u32) -> MeshData {
     let h = size * 0.5;
     let normal = if up { Vec3::Y } else { Vec3::NEG_Y };
-    MeshData {
+    let mesh = MeshData {
         name,
         positions: [(-h, -h), (h, -h), (h, h), (-h, h)]
             .map(|(x, z)| centre + Vec3::new(x, 0.0, z))
             .to_vec(),
-        normals: Some(vec![normal; 4]),
-        uv0: Some(vec![Vec2::ZERO, Vec2::X, Vec2::ONE, Vec2::Y]),
         triangles: if up {
             vec![[0, 2, 1], [0, 3, 2]]
         } else {
             vec![[0, 1, 2], [0, 2, 3]]
         },
-        triangle_materials: vec![material; 2],
-        primitives: vec![PrimitiveRange {
-            vertex_offset: 0,
-            vertex_count: 4,
-            material,
-        }],
         ..Default::default()
-    }
+    };
+    with_attributes(mesh, vec![normal; 4], QUAD_UVS.to_vec(), material)
 }
+
+/// UVs of a four-corner mesh's corners, in the order its corners are made.
+const QUAD_UVS: [Vec2; 4] = [Vec2::ZERO, Vec2::X, Vec2::ONE, Vec2::Y];
 
 /// A scene of one node per mesh, each placed by its transform, no camera.
 pub fn scene_from_meshes(
@@ -198,20 +194,13 @@ pub fn cuboid(size: Vec3, material: u32) -> MeshData {
 /// counter-clockwise seen from that side.
 pub fn quad(name: &str, u: Vec3, v: Vec3, material: u32) -> MeshData {
     let normal = u.cross(v).normalize();
-    MeshData {
+    let mesh = MeshData {
         name: name.into(),
         positions: vec![-u - v, u - v, u + v, -u + v],
-        normals: Some(vec![normal; 4]),
-        uv0: Some(vec![Vec2::ZERO, Vec2::X, Vec2::ONE, Vec2::Y]),
         triangles: vec![[0, 1, 2], [0, 2, 3]],
-        triangle_materials: vec![material; 2],
-        primitives: vec![PrimitiveRange {
-            vertex_offset: 0,
-            vertex_count: 4,
-            material,
-        }],
         ..Default::default()
-    }
+    };
+    with_attributes(mesh, vec![normal; 4], QUAD_UVS.to_vec(), material)
 }
 
 fn placed(translation: Vec3) -> NodeTransform {
