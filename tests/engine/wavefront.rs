@@ -9,6 +9,7 @@ use crate::common::cornell::{self, SIZE, camera};
 use crate::common::*;
 use raykin::camera::CameraChoice;
 use raykin::headless::HeadlessApp;
+use raykin::render::integrator_choice::IntegratorChoice;
 use raykin::render::{Environment, Integrator, RenderSettings};
 use std::sync::Arc;
 
@@ -43,12 +44,21 @@ fn waves_trace_the_megakernels_paths() {
         "AttenuationTest/glTF/AttenuationTest.gltf",
     ] {
         let scene = shared_scene(file);
-        let render = |integrator: Integrator, spp: u32, chunk: u32| {
+        let render_sorted = |integrator: Integrator, spp: u32, chunk: u32, sorted: bool| {
             let mut app = small_app(&ctx, &scene, integrator);
+            app.app
+                .world_mut()
+                .resource_mut::<IntegratorChoice>()
+                .force_ray_sort(Some(sorted));
             app.accumulate(spp, chunk, |_| {});
+            assert_eq!(
+                app.integrator_choice().rays_sorted(),
+                sorted && integrator == Integrator::Wavefront
+            );
             let rays = app.view().read_ray_count(&app.ctx);
             (app.radiance(), rays)
         };
+        let render = |integrator, spp, chunk| render_sorted(integrator, spp, chunk, false);
         let (waves, wave_rays) = render(Integrator::Wavefront, 6, 1);
         let (mega, mega_rays) = render(Integrator::Megakernel, 6, 1);
         assert_forms_render_the_same_image(&waves, &mega, file);
@@ -56,6 +66,10 @@ fn waves_trace_the_megakernels_paths() {
             wave_rays, mega_rays,
             "{file}: rays traced by the last dispatch"
         );
+        // Each bounce's rays sorted before extend traces them: the same paths in another order.
+        let (sorted, sorted_rays) = render_sorted(Integrator::Wavefront, 6, 1, true);
+        assert_forms_render_the_same_image(&sorted, &mega, file);
+        assert_eq!(sorted_rays, mega_rays, "{file}: rays traced, sorted");
         // Several samples per dispatch: the megakernel sums a pixel's samples before adding them, the waves
         // (here 3 samples of each pixel in one wave) add a wave's at its end.
         let worst = worst_relative_difference;
@@ -73,6 +87,8 @@ fn waves_trace_the_megakernels_paths() {
             differ < 1e-4,
             "{file}: 20 samples in waves of 16 and 4 differ by {differ} (relative)"
         );
+        let (sorted20, _) = render_sorted(Integrator::Wavefront, 20, 20, true);
+        assert_eq!(sorted20, waves20, "{file}: 20 samples in sorted waves");
     }
     // The adapter check at start-up asks for the storage buffers the engine's kernels bind: the waves' kernels
     // bind no more (tests/engine/realtime.rs, `the_adapter_check_asks_for_what_the_kernels_bind`).

@@ -19,11 +19,16 @@ fn integrator_line(world: &World) -> String {
         return "-".into();
     };
     let requested = world.resource::<RenderSettings>().integrator;
-    let form = choice.last_form().map_or("-", Integrator::name);
+    let form = choice.last_form_name().unwrap_or_else(|| "-".into());
     match (requested, choice.decision()) {
         (Integrator::Auto, Some(d)) => format!(
-            "{form} (auto: megakernel {:.2} ms, wavefront {:.2} ms per frame)",
-            d.megakernel_ms, d.wavefront_ms
+            "{form} (auto: megakernel {:.2} ms, wavefront {:.2} ms per frame{})",
+            d.megakernel_ms,
+            d.wavefront_ms,
+            choice.sort_decision().map_or(String::new(), |s| format!(
+                "; rays unsorted {:.2} ms, sorted {:.2} ms",
+                s.unsorted_ms, s.sorted_ms
+            ))
         ),
         (Integrator::Auto, None) if choice.trials() => format!("{form} (auto: timing both forms)"),
         (Integrator::Auto, None) => {

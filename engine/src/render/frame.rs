@@ -176,7 +176,7 @@ pub fn render_frame(
                 .0
                 .get_or_insert_with(|| WavefrontPass::new(&ctx, layout));
             // Where the GPU's memory holds no wave's path state (the pass has said so), the megakernel traces.
-            in_waves = pass.prepare(&ctx, &view, needs, spp);
+            in_waves = pass.prepare(&ctx, &view, needs, spp, choice.rays_sorted());
         }
         if !in_waves {
             trace.prepare(&ctx, &view, needs, aovs);
@@ -189,6 +189,7 @@ pub fn render_frame(
                 group,
                 &view,
                 (spp, settings.max_depth),
+                choice.rays_sorted(),
                 timestamps,
             ),
             None => trace.encode(&mut encoder, group, &view, frame.sample_lanes, timestamps),

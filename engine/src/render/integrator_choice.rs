@@ -5,6 +5,11 @@
 //! and 16 samples per frame 0.73-0.88x on every bench scene; docs/BENCHMARKS.md). So the first frames of each
 //! workload time both forms with the trace pass's GPU timestamps, interleaved, and the faster traces the rest.
 //!
+//! Where the waves trace, a second trial then times them with each bounce's rays sorted before they are traced
+//! and without (`wavefront.wgsl`, `WAVE_SORT`): the same paths again, faster only where the scene's trees are
+//! too large for the caches (on an H100 the seed-like interior's trace 0.93x, the Cornell box's and the
+//! environment-lit scene's 1.2x; docs/BENCHMARKS.md). `RAYKIN_WAVE_SORT=on|off` forces it, for any waves.
+//!
 //! CPU adapters (lavapipe) keep the megakernel without a trial: it is the faster form there on every scene
 //! measured, their timestamps can miss compute work, and a trial would compile the wavefront's kernels, seconds
 //! of the start-up, for nothing. So do adapters without timestamp queries.
@@ -22,11 +27,15 @@ use bevy_ecs::prelude::Resource;
 /// fastest frame decides: the clocks only ever make a frame slower than the steady state, so a frame that follows
 /// an idle GPU (the bench reads images back between frames) cannot decide it. The median of the pairs' ratios,
 /// used before, could, where such frames fell on one form in two of the four pairs.
-const TRIAL: [Integrator; 10] = [M, W, M, W, W, M, W, M, M, W];
+/// (Arms 0 and 1 of a trial: the megakernel and the waves, or the waves unsorted and sorted.)
+const ORDER: [usize; 10] = [0, 1, 0, 1, 1, 0, 1, 0, 0, 1];
+const FORMS: [Integrator; 2] = [M, W];
 const WARM_UP_FRAMES: usize = 2;
 /// The wavefront form must be at least this much faster to be chosen: on a tie the megakernel, which holds no
 /// path state between kernels, traces.
 const WAVES_MUST_SAVE: f64 = 0.02;
+/// Likewise the sorted waves, whose sort is work of its own.
+const SORT_MUST_SAVE: f64 = 0.02;
 /// GPU timestamps of a pass vary by well under 1% from frame to frame once the clocks are up; a form whose timed
 /// frames spread wider than this (slowest / fastest - 1) was timed while they were still rising, and the trial
 /// runs again (the bench's first 10 frames after an idle GPU: FlightHelmet's trial chose the wavefront at 4.6 ms
@@ -66,22 +75,86 @@ pub struct Decision {
     pub trials: u32,
 }
 
-#[derive(Resource, Debug)]
-pub struct IntegratorChoice {
-    /// Whether `Auto` times the forms at all (a GPU adapter with timestamp queries).
-    trials: bool,
-    workload: Option<Workload>,
-    /// Trace ms of the trial's frames so far, in [`TRIAL`]'s order, warm-up frames included.
+/// The outcome of the ray sort's trial, once the waves were chosen.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct SortDecision {
+    pub sorted: bool,
+    /// The waves' fastest trace ms per frame unsorted and sorted among the deciding trial's timed frames.
+    pub unsorted_ms: f64,
+    pub sorted_ms: f64,
+    pub trials: u32,
+}
+
+/// Which trial the frame being traced is part of.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Timing {
+    Forms,
+    Sorting,
+}
+
+/// One trial between two arms: the frames so far in [`ORDER`], and how long the trials of this workload ran.
+#[derive(Debug, Default)]
+struct Trial {
+    /// Trace ms of the trial's frames so far, warm-up frames included.
     frames: Vec<f64>,
     /// Trials of this workload so far (a trial timed while the clocks moved runs again).
     trials_run: u32,
     /// Trace ms of every trial frame of this workload so far.
     trial_ms: f64,
+}
+
+impl Trial {
+    fn next_arm(&self) -> usize {
+        ORDER[self.frames.len()]
+    }
+
+    /// Adds a frame's trace ms; once the trial decides, each arm's fastest timed frame.
+    fn record(&mut self, ms: f64) -> Option<[f64; 2]> {
+        self.frames.push(ms);
+        if self.frames.len() < ORDER.len() {
+            return None;
+        }
+        self.trials_run += 1;
+        let timed = |arm: usize| -> Vec<f64> {
+            (WARM_UP_FRAMES..ORDER.len())
+                .filter(|&i| ORDER[i] == arm)
+                .map(|i| self.frames[i])
+                .collect()
+        };
+        let arms = [timed(0), timed(1)];
+        let steady = arms.iter().all(|t| {
+            let (lo, hi) = (min(t), t.iter().copied().fold(0.0, f64::max));
+            hi <= lo * (1.0 + STEADY_SPREAD)
+        });
+        self.trial_ms += self.frames.iter().sum::<f64>();
+        let ramp_passed = self.trial_ms >= CLOCK_RAMP_MS;
+        let may_run_again = self.trials_run < LEAST_TRIALS || !ramp_passed;
+        if !(steady && ramp_passed) && may_run_again && self.trials_run < MOST_TRIALS {
+            self.frames.clear();
+            return None;
+        }
+        Some([min(&arms[0]), min(&arms[1])])
+    }
+}
+
+#[derive(Resource, Debug)]
+pub struct IntegratorChoice {
+    /// Whether `Auto` times the forms at all (a GPU adapter with timestamp queries).
+    trials: bool,
+    workload: Option<Workload>,
+    /// The megakernel against the waves.
+    forms: Trial,
     decision: Option<Decision>,
-    /// Whether the frame being traced is the trial's next (`TRIAL[frames.len()]`), its time still to record.
-    timing: bool,
-    /// The form that traced the last frame.
+    /// The waves unsorted against sorted, once the waves were chosen.
+    sorting: Trial,
+    sort_decision: Option<SortDecision>,
+    /// `RAYKIN_WAVE_SORT`, or a test's choice: the waves sorted or not, without a trial.
+    sort_forced: Option<bool>,
+    /// The trial whose next frame is being traced, its time still to record.
+    timing: Option<Timing>,
+    /// The form that traced the last frame, and whether its rays were sorted.
     last: Option<Integrator>,
+    sorted: bool,
     /// The last view size found too large for the waves, so that the user is told once.
     too_large: Option<(u32, u32)>,
 }
@@ -89,7 +162,12 @@ pub struct IntegratorChoice {
 impl IntegratorChoice {
     /// Trials where the adapter is a GPU with timestamp queries (module documentation).
     pub fn for_adapter(ctx: &GpuContext) -> Self {
-        Self::new(ctx.info.device_type != wgpu::DeviceType::Cpu && ctx.supports_timestamps())
+        let mut choice =
+            Self::new(ctx.info.device_type != wgpu::DeviceType::Cpu && ctx.supports_timestamps());
+        if std::env::var_os("RAYKIN_WAVE_SORT").is_some() {
+            choice.sort_forced = Some(crate::gpu::switch_on("RAYKIN_WAVE_SORT", false));
+        }
+        choice
     }
 
     /// `trials`: whether `Auto` times both forms (tests run trials on CPU adapters too).
@@ -97,14 +175,21 @@ impl IntegratorChoice {
         Self {
             trials,
             workload: None,
-            frames: Vec::new(),
-            trials_run: 0,
-            trial_ms: 0.0,
+            forms: Trial::default(),
             decision: None,
-            timing: false,
+            sorting: Trial::default(),
+            sort_decision: None,
+            sort_forced: None,
+            timing: None,
             last: None,
+            sorted: false,
             too_large: None,
         }
+    }
+
+    /// Sorts the waves' rays (`Some(true)`), never (`Some(false)`), or as the trial decides (`None`).
+    pub fn force_ray_sort(&mut self, sort: Option<bool>) {
+        self.sort_forced = sort;
     }
 
     /// Whether a view of this size is reported too large for the waves for the first time.
@@ -122,7 +207,7 @@ impl IntegratorChoice {
         workload: Workload,
         waves_possible: bool,
     ) -> Integrator {
-        self.timing = false;
+        self.timing = None;
         let form = match requested {
             _ if !waves_possible => Integrator::Megakernel,
             Integrator::Megakernel | Integrator::Wavefront => requested,
@@ -130,75 +215,91 @@ impl IntegratorChoice {
             Integrator::Auto => {
                 if self.workload != Some(workload) {
                     self.workload = Some(workload);
-                    self.frames.clear();
-                    self.trials_run = 0;
-                    self.trial_ms = 0.0;
+                    self.forms = Trial::default();
                     self.decision = None;
+                    self.sorting = Trial::default();
+                    self.sort_decision = None;
                 }
                 match self.decision {
                     Some(d) => d.chosen,
                     None => {
-                        self.timing = true;
-                        TRIAL[self.frames.len()]
+                        self.timing = Some(Timing::Forms);
+                        FORMS[self.forms.next_arm()]
                     }
                 }
             }
         };
+        self.sorted = form == Integrator::Wavefront && self.sort_rays(requested);
         self.last = Some(form);
         form
     }
 
+    /// Whether this frame's waves sort their rays: forced, or under `Auto` once the waves were chosen, the sort's
+    /// trial (the forms' trial times the waves unsorted).
+    fn sort_rays(&mut self, requested: Integrator) -> bool {
+        if let Some(forced) = self.sort_forced {
+            return forced;
+        }
+        if requested != Integrator::Auto || self.timing.is_some() {
+            return false;
+        }
+        match self.sort_decision {
+            Some(d) => d.sorted,
+            None => {
+                self.timing = Some(Timing::Sorting);
+                self.sorting.next_arm() == 1
+            }
+        }
+    }
+
+    /// Whether the frame [`Self::form`] chose traces waves with their rays sorted.
+    pub fn rays_sorted(&self) -> bool {
+        self.sorted
+    }
+
     /// Whether the frame [`Self::form`] chose is part of a trial: its trace time goes to [`Self::record`].
     pub fn timing(&self) -> bool {
-        self.timing
+        self.timing.is_some()
     }
 
     /// The trace pass's GPU time of the frame in trial; `None` (no timestamp could be read) ends the trial with
     /// the megakernel.
     pub fn record(&mut self, trace_ms: Option<f64>) {
-        if !std::mem::take(&mut self.timing) {
+        let Some(timing) = self.timing.take() else {
             return;
-        }
+        };
         let Some(ms) = trace_ms.filter(|ms| ms.is_finite()) else {
             self.trials = false;
             self.decision = None;
             return;
         };
-        self.frames.push(ms);
-        if self.frames.len() < TRIAL.len() {
-            return;
+        match timing {
+            Timing::Forms => {
+                if let Some([megakernel, wavefront]) = self.forms.record(ms) {
+                    let chosen = if wavefront / megakernel < 1.0 - WAVES_MUST_SAVE {
+                        Integrator::Wavefront
+                    } else {
+                        Integrator::Megakernel
+                    };
+                    self.decision = Some(Decision {
+                        chosen,
+                        megakernel_ms: megakernel,
+                        wavefront_ms: wavefront,
+                        trials: self.forms.trials_run,
+                    });
+                }
+            }
+            Timing::Sorting => {
+                if let Some([unsorted, sorted]) = self.sorting.record(ms) {
+                    self.sort_decision = Some(SortDecision {
+                        sorted: sorted / unsorted < 1.0 - SORT_MUST_SAVE,
+                        unsorted_ms: unsorted,
+                        sorted_ms: sorted,
+                        trials: self.sorting.trials_run,
+                    });
+                }
+            }
         }
-        self.trials_run += 1;
-        let timed = |form: Integrator| -> Vec<f64> {
-            (WARM_UP_FRAMES..TRIAL.len())
-                .filter(|&i| TRIAL[i] == form)
-                .map(|i| self.frames[i])
-                .collect()
-        };
-        let (megakernel, wavefront) = (timed(M), timed(W));
-        let steady = [&megakernel, &wavefront].iter().all(|t| {
-            let (lo, hi) = (min(t), t.iter().copied().fold(0.0, f64::max));
-            hi <= lo * (1.0 + STEADY_SPREAD)
-        });
-        self.trial_ms += self.frames.iter().sum::<f64>();
-        let ramp_passed = self.trial_ms >= CLOCK_RAMP_MS;
-        let may_run_again = self.trials_run < LEAST_TRIALS || !ramp_passed;
-        if !(steady && ramp_passed) && may_run_again && self.trials_run < MOST_TRIALS {
-            self.frames.clear();
-            return;
-        }
-        let ratio = min(&wavefront) / min(&megakernel);
-        let chosen = if ratio < 1.0 - WAVES_MUST_SAVE {
-            Integrator::Wavefront
-        } else {
-            Integrator::Megakernel
-        };
-        self.decision = Some(Decision {
-            chosen,
-            megakernel_ms: min(&megakernel),
-            wavefront_ms: min(&wavefront),
-            trials: self.trials_run,
-        });
     }
 
     /// Whether `Auto` times the forms on this adapter.
@@ -211,9 +312,35 @@ impl IntegratorChoice {
         self.decision
     }
 
+    /// The ray sort's trial outcome, once the waves were chosen and timed both ways.
+    pub fn sort_decision(&self) -> Option<SortDecision> {
+        self.sort_decision
+    }
+
+    /// Whether `Auto` has nothing left to time for the current workload: no trials on this adapter, or the
+    /// megakernel chosen, or the waves chosen and their sort decided (or forced).
+    pub fn settled(&self) -> bool {
+        !self.trials
+            || self.decision.is_some_and(|d| {
+                d.chosen == Integrator::Megakernel
+                    || self.sort_forced.is_some()
+                    || self.sort_decision.is_some()
+            })
+    }
+
     /// The form that traced the last frame (`None` before the first).
     pub fn last_form(&self) -> Option<Integrator> {
         self.last
+    }
+
+    /// The last frame's form by name, "wavefront (rays sorted)" where the waves sorted their rays.
+    pub fn last_form_name(&self) -> Option<String> {
+        let form = self.last?;
+        Some(if form == Integrator::Wavefront && self.sorted {
+            format!("{} (rays sorted)", form.name())
+        } else {
+            form.name().to_string()
+        })
     }
 }
 
@@ -283,17 +410,17 @@ mod tests {
                 },
                 100,
             );
-            assert_eq!(frames, TRIAL.len());
-            assert_eq!(forms.into_inner(), TRIAL);
+            assert_eq!(frames, ORDER.len());
+            assert_eq!(forms.into_inner(), ORDER.map(|arm| FORMS[arm]));
             let decision = choice.decision().expect("decided");
             assert_eq!(decision.chosen, expected, "wavefront at {waves_ms} ms");
             assert_eq!(
                 (decision.megakernel_ms, decision.wavefront_ms),
                 (60.0, waves_ms)
             );
-            // The frames after the trial are the chosen form's, untimed.
+            // The frames after the trial are the chosen form's, untimed (the waves' then time their ray sort).
             assert_eq!(choice.form(Integrator::Auto, workload(8), true), expected);
-            assert!(!choice.timing());
+            assert_eq!(choice.timing(), expected == Integrator::Wavefront);
             assert_eq!(choice.last_form(), Some(expected));
         }
     }
@@ -304,7 +431,7 @@ mod tests {
     fn a_drift_over_the_trial_favours_neither_form() {
         let mut choice = IntegratorChoice::new(true);
         let frames = trial(&mut choice, |_, frame| 100.0 - 0.5 * frame as f64, 100);
-        assert_eq!(frames, TRIAL.len(), "one trial");
+        assert_eq!(frames, ORDER.len(), "one trial");
         // The order alone decides this: alternating forms would have timed the wavefront 0.5 ms faster, and
         // each form's fastest frame is the wavefront's last.
         assert_eq!(choice.decision().unwrap().chosen, Integrator::Megakernel);
@@ -321,7 +448,7 @@ mod tests {
             |form, frame| speeds(form, (40.0, 46.0)) * if frame <= 3 { 3.0 } else { 1.0 },
             100,
         );
-        assert_eq!(frames, 2 * TRIAL.len(), "a second trial");
+        assert_eq!(frames, 2 * ORDER.len(), "a second trial");
         let d = choice.decision().unwrap();
         assert_eq!(d.trials, 2);
         assert_eq!(d.chosen, Integrator::Megakernel);
@@ -348,11 +475,11 @@ mod tests {
             },
             10_000,
         );
-        assert!(frames > 2 * TRIAL.len());
+        assert!(frames > 2 * ORDER.len());
         let d = choice.decision().unwrap();
         assert_eq!(d.chosen, Integrator::Megakernel);
         assert_eq!((d.megakernel_ms, d.wavefront_ms), (3.9, 4.4));
-        assert!(choice.trial_ms >= CLOCK_RAMP_MS);
+        assert!(choice.forms.trial_ms >= CLOCK_RAMP_MS);
     }
 
     /// Where the times never settle, the last trial decides by each form's fastest frame: one frame timed across
@@ -365,7 +492,7 @@ mod tests {
         let frames = trial(
             &mut choice,
             |form, frame| {
-                speeds(form, (4.6, 4.0)) * if frame % TRIAL.len() == 4 { 3.0 } else { 1.0 }
+                speeds(form, (4.6, 4.0)) * if frame % ORDER.len() == 4 { 3.0 } else { 1.0 }
             },
             10_000,
         );
@@ -375,17 +502,18 @@ mod tests {
 
     /// Trials that never settle end with the first trial after [`LEAST_TRIALS`] and [`CLOCK_RAMP_MS`].
     fn assert_ramp_passed(choice: &IntegratorChoice, frames: usize) {
-        assert_eq!(frames % TRIAL.len(), 0, "whole trials");
+        assert_eq!(frames % ORDER.len(), 0, "whole trials");
         assert_eq!(
             choice.decision().map(|d| d.trials as usize),
-            Some(frames / TRIAL.len())
+            Some(frames / ORDER.len())
         );
-        assert!(choice.trials_run >= LEAST_TRIALS);
-        let per_trial = choice.trial_ms / choice.trials_run as f64;
+        assert!(choice.forms.trials_run >= LEAST_TRIALS);
+        let per_trial = choice.forms.trial_ms / choice.forms.trials_run as f64;
         assert!(
-            choice.trial_ms >= CLOCK_RAMP_MS && choice.trial_ms < CLOCK_RAMP_MS + per_trial,
+            choice.forms.trial_ms >= CLOCK_RAMP_MS
+                && choice.forms.trial_ms < CLOCK_RAMP_MS + per_trial,
             "{} ms of trials",
-            choice.trial_ms
+            choice.forms.trial_ms
         );
     }
 
@@ -412,7 +540,7 @@ mod tests {
             },
             10_000,
         );
-        assert!(elapsed.get() > 300.0 && frames > LEAST_TRIALS as usize * TRIAL.len());
+        assert!(elapsed.get() > 300.0 && frames > LEAST_TRIALS as usize * ORDER.len());
         let d = choice.decision().unwrap();
         assert_eq!(d.chosen, Integrator::Megakernel);
         assert_eq!((d.megakernel_ms, d.wavefront_ms), (0.5, 0.6));
@@ -428,7 +556,7 @@ mod tests {
         let frames = trial(
             &mut choice,
             |form, frame| {
-                let after_gap = [2, 3, 5, 9].contains(&(1 + (frame - 1) % TRIAL.len()));
+                let after_gap = [2, 3, 5, 9].contains(&(1 + (frame - 1) % ORDER.len()));
                 speeds(form, (4.0, 4.6)) * if after_gap { 1.5 } else { 1.0 }
             },
             10_000,
@@ -472,13 +600,91 @@ mod tests {
         }
         // A record with no frame in trial changes nothing.
         choice.record(Some(1.0));
-        assert!(choice.frames.is_empty());
+        assert!(choice.forms.frames.is_empty());
         let mut cpu = IntegratorChoice::new(false);
         assert_eq!(
             cpu.form(Integrator::Auto, workload(8), true),
             Integrator::Megakernel
         );
         assert!(!cpu.timing());
+    }
+
+    /// Once `Auto` chose the waves, it times them unsorted and sorted (the same frame order, arm 1 sorted) and
+    /// keeps the sort only where it saves more than [`SORT_MUST_SAVE`]; then nothing is timed.
+    #[test]
+    fn the_waves_sort_their_rays_where_a_trial_finds_it_faster() {
+        for (sorted_ms, expected) in [(80.0, true), (99.0, false), (120.0, false)] {
+            let mut choice = IntegratorChoice::new(true);
+            trial(&mut choice, |form, _| speeds(form, (200.0, 100.0)), 100);
+            assert_eq!(choice.decision().unwrap().chosen, Integrator::Wavefront);
+            assert!(!choice.settled());
+            let mut sorted_frames = Vec::new();
+            while choice.sort_decision().is_none() {
+                assert_eq!(
+                    choice.form(Integrator::Auto, workload(8), true),
+                    Integrator::Wavefront
+                );
+                assert!(choice.timing());
+                sorted_frames.push(choice.rays_sorted());
+                choice.record(Some(if choice.rays_sorted() {
+                    sorted_ms
+                } else {
+                    100.0
+                }));
+                assert!(sorted_frames.len() <= 100);
+            }
+            assert_eq!(sorted_frames, ORDER.map(|arm| arm == 1), "one trial");
+            let d = choice.sort_decision().unwrap();
+            assert_eq!(
+                (d.sorted, d.unsorted_ms, d.sorted_ms),
+                (expected, 100.0, sorted_ms)
+            );
+            assert!(choice.settled());
+            assert_eq!(
+                choice.form(Integrator::Auto, workload(8), true),
+                Integrator::Wavefront
+            );
+            assert!(!choice.timing());
+            assert_eq!(choice.rays_sorted(), expected);
+            // A new workload times the forms, and then the sort, again.
+            choice.form(Integrator::Auto, workload(16), true);
+            assert!(choice.timing() && !choice.rays_sorted());
+            assert_eq!((choice.decision(), choice.sort_decision()), (None, None));
+        }
+    }
+
+    /// The megakernel chosen, nothing more is timed; a forced sort takes no trial and applies to any waves,
+    /// explicit ones included; the megakernel never sorts.
+    #[test]
+    fn a_forced_sort_or_the_megakernel_takes_no_sort_trial() {
+        let mut choice = IntegratorChoice::new(true);
+        trial(&mut choice, |form, _| speeds(form, (50.0, 100.0)), 100);
+        assert!(choice.settled());
+        assert_eq!(
+            choice.form(Integrator::Auto, workload(8), true),
+            Integrator::Megakernel
+        );
+        assert!(!choice.timing() && !choice.rays_sorted());
+        for forced in [true, false] {
+            let mut choice = IntegratorChoice::new(true);
+            choice.force_ray_sort(Some(forced));
+            trial(&mut choice, |form, _| speeds(form, (100.0, 50.0)), 100);
+            assert!(choice.settled());
+            assert_eq!(
+                choice.form(Integrator::Auto, workload(8), true),
+                Integrator::Wavefront
+            );
+            assert!(!choice.timing());
+            assert_eq!(choice.rays_sorted(), forced);
+            choice.form(Integrator::Wavefront, workload(8), true);
+            assert_eq!(choice.rays_sorted(), forced);
+            choice.form(Integrator::Megakernel, workload(8), true);
+            assert!(!choice.rays_sorted());
+        }
+        // Explicit waves are not sorted unless forced, and not timed.
+        let mut choice = IntegratorChoice::new(true);
+        choice.form(Integrator::Wavefront, workload(8), true);
+        assert!(!choice.timing() && !choice.rays_sorted());
     }
 
     #[test]

@@ -12,7 +12,7 @@ use crate::stats::{log_log_fit, time_to_reach};
 use anyhow::{Context, Result};
 use raykin::gpu::GpuContext;
 use raykin::oidn::Quality;
-use raykin::render::integrator_choice::Decision;
+use raykin::render::integrator_choice::{Decision, SortDecision};
 use raykin::render::{DenoiserKind, RenderSettings};
 use sha2::Digest;
 use std::path::Path;
@@ -96,6 +96,8 @@ pub struct CurveResult {
     /// Per repeat, auto's decision: each form's fastest trace ms a frame and the trials it took (`None`: no
     /// trial ran).
     pub auto_trials: Vec<Option<Decision>>,
+    /// Per repeat, auto's decision on the waves' ray sort (`None`: no trial ran).
+    pub sort_trials: Vec<Option<SortDecision>>,
 }
 
 #[derive(Clone, Debug, serde::Serialize)]
@@ -161,6 +163,7 @@ pub fn measure(
         let mut frame_trace_ms = Vec::new();
         let mut forms = Vec::new();
         let mut auto_trials = Vec::new();
+        let mut sort_trials = Vec::new();
         let oidn = settings.denoise && settings.denoiser == DenoiserKind::Oidn;
         for repeat in 0..suite.error_repeats {
             settings.seed = 1000 + 100 * index as u32 + repeat as u32;
@@ -218,10 +221,11 @@ pub fn measure(
                 denoise_times.push(denoise_ms);
                 images.push((elapsed_ms, wall_ms, image));
             }
-            if let Some(form) = app.integrator_choice().last_form() {
-                forms.push(form.name());
+            if let Some(form) = app.integrator_choice().last_form_name() {
+                forms.push(form);
             }
             auto_trials.push(app.integrator_choice().decision());
+            sort_trials.push(app.integrator_choice().sort_decision());
             drop(app);
             frame_trace_ms.push(frame_times);
             let mut run: Vec<[f64; 5]> = images
@@ -278,8 +282,9 @@ pub fn measure(
             ms_to_rel_mse_0_01: time_to_reach(&reached, 0.01),
             points,
             frame_trace_ms,
-            integrator: forms_of_repeats(&forms),
+            integrator: forms_of_repeats(&forms.iter().map(String::as_str).collect::<Vec<_>>()),
             auto_trials,
+            sort_trials,
         });
         let curve = curves.last().expect("pushed");
         let trials: Vec<String> = curve
@@ -292,6 +297,12 @@ pub fn measure(
                     t.megakernel_ms, t.wavefront_ms, t.trials
                 )
             })
+            .chain(curve.sort_trials.iter().flatten().map(|t| {
+                format!(
+                    "waves unsorted {:.3} ms, sorted {:.3} ms after {} trials",
+                    t.unsorted_ms, t.sorted_ms, t.trials
+                )
+            }))
             .collect();
         eprintln!(
             "raykin bench: {}: curve `{}` traced by the {} integrator{}",

@@ -72,6 +72,10 @@ pub struct FrameRow {
     pub integrator: String,
     /// `auto`'s trial: the fastest trace ms of a timed frame of the megakernel and of the wavefront form.
     pub auto_trial_ms: Option<[f64; 2]>,
+    /// Whether the waves sorted their rays, and `auto`'s trial of that: the fastest trace ms of a timed frame
+    /// of the waves unsorted and sorted.
+    pub rays_sorted: bool,
+    pub sort_trial_ms: Option<[f64; 2]>,
     pub frames: usize,
     pub bvh_build_and_upload_ms: f64,
     pub gpu_memory_geometry_bvh_mib: f64,
@@ -222,6 +226,9 @@ pub fn measure(
         .map_or("none", raykin::render::Integrator::name)
         .to_string();
     let auto_trial_ms = choice.decision().map(|d| [d.megakernel_ms, d.wavefront_ms]);
+    let rays_sorted =
+        choice.last_form() == Some(raykin::render::Integrator::Wavefront) && choice.rays_sorted();
+    let sort_trial_ms = choice.sort_decision().map(|d| [d.unsorted_ms, d.sorted_ms]);
     let stats = app.bvh_stats();
     Ok(FrameRow {
         scene: scene.name.clone(),
@@ -232,6 +239,8 @@ pub fn measure(
         max_depth: settings.max_depth,
         integrator,
         auto_trial_ms,
+        rays_sorted,
+        sort_trial_ms,
         frames,
         bvh_build_and_upload_ms: app.gpu_scene().build_seconds * 1e3,
         gpu_memory_geometry_bvh_mib: memory.geometry_and_bvh() as f64 / 1048576.0,

@@ -92,7 +92,8 @@ struct Results {
 /// Untimed frames before anything is timed: at least `frames`, and on a GPU 0.6 s of them, long enough for its
 /// clocks to come back from idle (the H200 drops to 345 of 1980 MHz after about 1.5 s without work and needs
 /// ~0.3 s of work to climb back); a CPU adapter has no such state. Under `--integrator auto` also until its
-/// trial has decided (at most 10 s), so that every timed frame is of the form it chose: the trial takes at least
+/// trials have decided (the forms', then where the waves won the ray sort's; at most 10 s), so that every timed
+/// frame is of the form it chose: a trial takes at least
 /// half a second of trace time (`IntegratorChoice`), more than 0.6 s of wall time holds for small frames.
 fn warm_up(app: &mut HeadlessApp, frames: usize) {
     let gpu = app.ctx.info.device_type != raykin::gpu::DeviceType::Cpu;
@@ -106,7 +107,7 @@ fn warm_up(app: &mut HeadlessApp, frames: usize) {
             .integrator
             == raykin::render::settings::Integrator::Auto;
         let choice = app.integrator_choice();
-        auto && choice.trials() && choice.decision().is_none()
+        auto && !choice.settled()
     };
     let elapsed = |ms: u64| start.elapsed() >= std::time::Duration::from_millis(ms);
     while done < frames || (gpu && (!elapsed(600) || (trial_pending(app) && !elapsed(10_000)))) {
@@ -289,11 +290,15 @@ pub fn run(args: &BenchArgs) -> Result<()> {
                     row.raycast_diffuse_rays_per_s / 1e6
                 );
                 eprintln!(
-                    "raykin bench: {} {width}x{height}: traced by the {} integrator{}",
+                    "raykin bench: {} {width}x{height}: traced by the {} integrator{}{}{}",
                     row.scene,
                     row.integrator,
+                    if row.rays_sorted { ", rays sorted" } else { "" },
                     row.auto_trial_ms.map_or(String::new(), |[m, w]| format!(
                         " (auto's trial: megakernel {m:.3} ms, wavefront {w:.3} ms)"
+                    )),
+                    row.sort_trial_ms.map_or(String::new(), |[u, s]| format!(
+                        " (the sort's trial: unsorted {u:.3} ms, sorted {s:.3} ms)"
                     ))
                 );
                 let (c, b) = (&row.traversal_per_camera_ray, &row.traversal_per_bounce_ray);

@@ -311,6 +311,7 @@ pub fn compare(
         frame_trace_ms: Vec::new(),
         integrator: format!("Mitsuba's path ({})", run.variant),
         auto_trials: Vec::new(),
+        sort_trials: Vec::new(),
     });
     Ok(Some(result))
 }

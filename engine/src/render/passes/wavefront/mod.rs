@@ -21,19 +21,25 @@ pub const KERNEL: ShaderModule = ShaderModule {
 
 /// `CONTROL_RAYS` in the WGSL: the rays traced, copied to the view's ray counter.
 const CONTROL_RAYS: u64 = 7;
-/// The counters' bytes at the start of the queues' buffer (`Queues::control` in the WGSL).
-const CONTROL_BYTES: u64 = 16 * 4;
+/// `SORT_WORDS`, `SORT_BLOCKS` in the WGSL: the ray sort's bins, and the workgroups of its prefix kernel.
+const SORT_WORDS: u64 = 2 * 32768 + 128;
+const SORT_BLOCKS: u32 = 128;
+/// The counters' and the sort's bytes at the start of the queues' buffer (`Queues::control`, `Queues::sort` in
+/// the WGSL), zeroed before each dispatch.
+const CONTROL_BYTES: u64 = 16 * 4 + SORT_WORDS * 4;
 const QUEUE_ENTRY: u64 = 4;
+/// Entries per path in the queues' buffer: the two queues, the sort's keys and the sorted queue.
+const QUEUE_ENTRIES: u64 = 4;
 const STATE_ENTRY: u64 = 16;
 /// `ShadowRay` in the WGSL: origin, direction, light.
 const SHADOW_ENTRY: u64 = 48;
 /// Bytes of state a path holds: the six per-path arrays and the hits, its two queue entries, its shadow ray.
-const PATH_BYTES: u64 = 7 * STATE_ENTRY + 2 * QUEUE_ENTRY + SHADOW_ENTRY;
+const PATH_BYTES: u64 = 7 * STATE_ENTRY + QUEUE_ENTRIES * QUEUE_ENTRY + SHADOW_ENTRY;
 /// Paths a wave should hold when the view has fewer pixels: every bounce's dispatch waits for the one before it,
 /// and once most paths have ended a bounce's few survivors cost that wait alone, so a wave's fixed cost is paid
 /// per wave. At 960x540 and 16 samples per pixel a dispatch in one wave of 8.4 M paths took 0.54-0.95x the time
 /// of four waves of 2.1 M on an H100 (FlightHelmet 0.54x, the spheres 0.63x, the Cornell box 0.95x;
-/// docs/BENCHMARKS.md, "Sample lanes"), for [`PATH_BYTES`] of state a path (168: 1.4 GB at most, released when the
+/// docs/BENCHMARKS.md, "Sample lanes"), for [`PATH_BYTES`] of state a path (176: 1.5 GB at most, released when the
 /// megakernel traces the view; smaller waves where the GPU's memory cannot hold it).
 const WAVE_PATHS: u64 = 1 << 23;
 /// The most samples of a pixel one wave holds.
@@ -72,17 +78,22 @@ fn wave_paths() -> u64 {
 /// hold two entries per path after the counters.
 fn max_paths(ctx: &GpuContext) -> u64 {
     let binding = crate::gpu::limits::max_binding_bytes(&ctx.limits);
-    (binding / SHADOW_ENTRY).min(binding.saturating_sub(CONTROL_BYTES) / (2 * QUEUE_ENTRY))
+    (binding / SHADOW_ENTRY)
+        .min(binding.saturating_sub(CONTROL_BYTES) / (QUEUE_ENTRIES * QUEUE_ENTRY))
 }
 
 /// The kernels a wave runs, in order.
 struct Kernels {
     begin_wave: LobeKernels,
-    /// These two without and with the pass-throughs of alpha-blended surfaces (`WAVE_PASS_THROUGHS`).
-    first_bounce: [LobeKernels; 2],
-    extend: [LobeKernels; 2],
-    shade: LobeKernels,
+    /// These three unsorted and sorted (`WAVE_SORT`); the first two also without and with the pass-throughs
+    /// of alpha-blended surfaces (`WAVE_PASS_THROUGHS`): `[sort][pass-throughs]`.
+    first_bounce: [[LobeKernels; 2]; 2],
+    extend: [[LobeKernels; 2]; 2],
+    shade: [LobeKernels; 2],
     advance: LobeKernels,
+    /// The ray sort's two kernels (`WAVE_SORT`), run after each `advance` where the rays are sorted.
+    sort_prefix: LobeKernels,
+    sort_scatter: LobeKernels,
     finish: LobeKernels,
 }
 
@@ -199,27 +210,31 @@ impl WavefrontPass {
                 .with_constants(constants)
         };
         let kernel = |entry, layouts: &[_]| kernel_with(entry, layouts, constants);
-        let passing = |entry| {
-            [
+        let sorted = |entry, sort: f64| {
+            kernel_with(entry, &queue, &[("PATH_AOVS", 0.0), ("WAVE_SORT", sort)])
+        };
+        let passing = |entry, sort: f64| {
+            [0.0, 1.0].map(|passes| {
                 kernel_with(
                     entry,
                     &queue,
-                    &[("PATH_AOVS", 0.0), ("WAVE_PASS_THROUGHS", 0.0)],
-                ),
-                kernel_with(
-                    entry,
-                    &queue,
-                    &[("PATH_AOVS", 0.0), ("WAVE_PASS_THROUGHS", 1.0)],
-                ),
-            ]
+                    &[
+                        ("PATH_AOVS", 0.0),
+                        ("WAVE_PASS_THROUGHS", passes),
+                        ("WAVE_SORT", sort),
+                    ],
+                )
+            })
         };
         Self {
             kernels: Kernels {
                 begin_wave: kernel("begin_wave", &sizing),
-                first_bounce: passing("first_bounce"),
-                extend: passing("extend"),
-                shade: kernel("shade", &queue),
+                first_bounce: [0.0, 1.0].map(|sort| passing("first_bounce", sort)),
+                extend: [0.0, 1.0].map(|sort| passing("extend", sort)),
+                shade: [0.0, 1.0].map(|sort| sorted("shade", sort)),
                 advance: kernel("advance", &sizing),
+                sort_prefix: kernel("sort_prefix", &queue),
+                sort_scatter: kernel("sort_scatter", &queue),
                 finish: kernel("finish", &queue),
             },
             needs: KernelNeeds::default(),
@@ -232,7 +247,7 @@ impl WavefrontPass {
     }
 
     /// Compiles the kernels for `needs` (the first time; with the pass-throughs of alpha-blended surfaces where
-    /// some material blends) and makes the paths' state for the view's size and dispatches of `spp` samples per
+    /// some material blends, and sorting the rays where `sort`) and makes the paths' state for the view's size and dispatches of `spp` samples per
     /// pixel (again only when the view's targets were replaced or a wave's samples per pixel change). Where the
     /// GPU's memory cannot hold the state, waves of half as many samples are tried, down to one; returns false
     /// where even that does not fit (the megakernel must trace the frame).
@@ -242,18 +257,23 @@ impl WavefrontPass {
         view: &ViewTargets,
         needs: KernelNeeds,
         spp: u32,
+        sort: bool,
     ) -> bool {
-        let alpha_blend = needs.materials.alpha_blend;
+        let (passing, sorted) = (needs.materials.alpha_blend as usize, sort as usize);
         let k = &mut self.kernels;
         for kernels in [
             &mut k.begin_wave,
-            &mut k.first_bounce[alpha_blend as usize],
-            &mut k.extend[alpha_blend as usize],
-            &mut k.shade,
+            &mut k.first_bounce[sorted][passing],
+            &mut k.extend[sorted][passing],
+            &mut k.shade[sorted],
             &mut k.advance,
             &mut k.finish,
         ] {
             kernels.get(needs);
+        }
+        if sort {
+            k.sort_prefix.get(needs);
+            k.sort_scatter.get(needs);
         }
         self.needs = needs;
         if let Some(profile) = &self.profile {
@@ -315,7 +335,7 @@ impl WavefrontPass {
         let queues = storage_buffer(
             ctx,
             "wavefront queues",
-            CONTROL_BYTES + 2 * paths * QUEUE_ENTRY,
+            CONTROL_BYTES + QUEUE_ENTRIES * paths * QUEUE_ENTRY,
         );
         let shadows = storage_buffer(ctx, "wavefront shadow rays", paths * SHADOW_ENTRY);
         let args = ctx.device.create_buffer(&wgpu::BufferDescriptor {
@@ -347,15 +367,17 @@ impl WavefrontPass {
         })
     }
 
-    /// Records the pass (after [`Self::prepare`] for this view and `spp`): `spp` samples per pixel in waves of
-    /// the prepared samples per pixel, each `max_depth + 1` bounces, in one compute pass. The view's frame
-    /// uniform must hold this dispatch's constants; its ray counter gets the rays traced.
+    /// Records the pass (after [`Self::prepare`] for this view, `spp` and `sort`): `spp` samples per pixel in
+    /// waves of the prepared samples per pixel, each `max_depth + 1` bounces, in one compute pass, each bounce's
+    /// rays sorted where `sort`. The view's frame uniform must hold this dispatch's constants; its ray counter
+    /// gets the rays traced.
     pub fn encode(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         scene: &wgpu::BindGroup,
         view: &ViewTargets,
         (spp, max_depth): (u32, u32),
+        sort: bool,
         timestamp_writes: Option<wgpu::ComputePassTimestampWrites>,
     ) {
         let buffers = self
@@ -371,24 +393,33 @@ impl WavefrontPass {
         let pipeline = |k| compiled(k, needs);
         let k = &self.kernels;
         encoder.clear_buffer(&buffers.queues, 0, Some(CONTROL_BYTES));
-        // The kernels with or without the pass-throughs of alpha-blended surfaces.
-        let passing = self.needs.materials.alpha_blend as usize;
-        let extend = pipeline(&k.extend[passing]);
+        // The kernels with or without the pass-throughs of alpha-blended surfaces, sorting or not.
+        let (passing, sorted) = (self.needs.materials.alpha_blend as usize, sort as usize);
+        let extend = pipeline(&k.extend[sorted][passing]);
         let (x, y) = view.workgroups();
         let samples_per_wave = buffers.samples_per_wave as u32;
-        let advance = (pipeline(&k.advance), Step::Direct(1, 1, 1));
+        // After a shading kernel: the next bounce's counts, and where the rays are sorted, the sort (its
+        // scatter sized like the shading kernel, by the paths queued).
+        let mut advance = vec![(pipeline(&k.advance), Step::Direct(1, 1, 1))];
+        if sort {
+            advance.push((pipeline(&k.sort_prefix), Step::Direct(SORT_BLOCKS, 1, 1)));
+            advance.push((pipeline(&k.sort_scatter), Step::Indirect(12)));
+        }
         // A wave's dispatches by stage (the stages `RAYKIN_WAVE_PROFILE` times apart).
-        let mut stages = vec![vec![
+        let mut first = vec![
             (pipeline(&k.begin_wave), Step::Direct(1, 1, 1)),
             (
-                pipeline(&k.first_bounce[passing]),
+                pipeline(&k.first_bounce[sorted][passing]),
                 Step::Direct(x, y, samples_per_wave),
             ),
-            advance,
-        ]];
+        ];
+        first.extend(advance.iter().copied());
+        let mut stages = vec![first];
         for _ in 1..=max_depth {
             stages.push(vec![(extend, Step::Indirect(0))]);
-            stages.push(vec![(pipeline(&k.shade), Step::Indirect(12)), advance]);
+            let mut shade = vec![(pipeline(&k.shade[sorted]), Step::Indirect(12))];
+            shade.extend(advance.iter().copied());
+            stages.push(shade);
         }
         // The last bounce's shadow rays, then the wave's radiance into the accumulation.
         stages.push(vec![(extend, Step::Indirect(0))]);

@@ -35,8 +35,11 @@
 // this bounce, the other filled for the next. One binding for both, and the shadow rays one array of a struct,
 // so that the sizing kernels, which bind the scene's group too (`WavefrontPass::new` says why), stay within the
 // storage buffers a stage may bind (`MIN_STORAGE_BUFFERS_PER_STAGE`).
+// With WAVE_SORT the entries go on with each queued ray's sort key, [2N, 3N), and the queue read this bounce in
+// the keys' order, [3N, 4N); `sort` holds the counting sort's bins (see `sort_key`).
 struct Queues {
     control: array<atomic<u32>, 16>,
+    sort: array<atomic<u32>, SORT_WORDS>,
     entries: array<u32>,
 }
 @group(1) @binding(9) var<storage, read_write> queues: Queues;
@@ -71,6 +74,22 @@ const CONTROL_RAYS: u32 = 7u;
 // Alpha-blended surfaces (stochastic coverage) are passed through where the ray is traced, so that a
 // pass-through does not take a bounce of the wave; compiled in only for scenes with such materials.
 override WAVE_PASS_THROUGHS: bool = true;
+
+// Ray sorting (Meister et al. 2020, "On Ray Reordering Techniques for Faster GPU Ray Tracing"): each bounce's
+// queue is copied in the order of its rays' keys (where the ray starts, then which octant it points into), and
+// extend traces it in that order, so that a warp's rays walk the same nodes and the caches hold them. Shade keeps
+// the queue's own order, which follows the paths' (the state arrays are read in runs; in the keys' order every
+// path's state was a scattered read: the first form, which sorted the queue itself, lost more in shade than
+// extend gained, docs/BENCHMARKS.md). A counting sort over SORT_BINS keys: the shading kernels count the rays
+// they queue per key (`sort` [0, SORT_BINS)) and keep each one's key; `sort_prefix` turns the counts into each
+// key's first slot within its block of SORT_BLOCK keys ([SORT_BINS, 2 SORT_BINS)) and each block's total
+// ([2 SORT_BINS, + SORT_BLOCKS)), zeroing the counts for the next bounce; `sort_scatter` copies each entry to its
+// key's next slot. A pipeline constant, so that scenes which do not gain compile none of it.
+override WAVE_SORT: bool = false;
+const SORT_BINS: u32 = 32768u;
+const SORT_BLOCK: u32 = 256u;
+const SORT_BLOCKS: u32 = 128u;
+const SORT_WORDS: u32 = 65664u; // 2 x SORT_BINS + SORT_BLOCKS
 
 // Queue kernels run 128 paths a workgroup over a 2D grid of workgroups (65535 per side at most).
 const QUEUE_GROUP: u32 = 128u;
@@ -201,6 +220,8 @@ struct BounceStep {
     continues: bool,
     shadow: bool,
     direct: DirectLight,
+    // WAVE_SORT: the next ray's sort key.
+    key: u32,
 }
 
 fn shade_bounce(path: u32, state: WavePath, hit: Hit) -> BounceStep {
@@ -251,6 +272,7 @@ fn shade_bounce(path: u32, state: WavePath, hit: Hit) -> BounceStep {
     p.last_vertex = LightSampleContext(s.p, s.ng);
     store_path(path, p);
     step.continues = true;
+    if WAVE_SORT { step.key = sort_key(p.ray); }
     return step;
 }
 
@@ -288,6 +310,10 @@ fn queue_step(step: BounceStep, path: u32, lid: u32) {
     if step.continues {
         let out = (1u - atomicLoad(&queues.control[CONTROL_PARITY])) * path_count();
         queues.entries[out + workgroup_next_base + next_slot] = path;
+        if WAVE_SORT {
+            queues.entries[2u * path_count() + workgroup_next_base + next_slot] = step.key;
+            atomicAdd(&queues.sort[step.key], 1u);
+        }
     }
     if step.shadow {
         shadow_rays[workgroup_shadows_base + shadow_slot] = ShadowRay(
@@ -298,7 +324,85 @@ fn queue_step(step: BounceStep, path: u32, lid: u32) {
 }
 
 fn no_step() -> BounceStep {
-    return BounceStep(false, false, no_direct_light());
+    return BounceStep(false, false, no_direct_light(), 0u);
+}
+
+// Bits 0-3 of `v` at bits 0, 3, 6 and 9 (one axis of a Morton code).
+fn spread_4_bits(v: u32) -> u32 {
+    var x = v & 0xfu;
+    x = (x | (x << 4u)) & 0xc3u;
+    return (x | (x << 2u)) & 0x249u;
+}
+
+// A ray's sort key: the Morton code of its origin's cell in a 16^3 grid over the scene's box (the top level's
+// root), then the octant of its direction. Any origin, NaN included, gets a key below SORT_BINS.
+fn sort_key(ray: Ray) -> u32 {
+    let root = read_tlas_node(0u);
+    var lo = vec3<f32>(3.0e38);
+    var hi = vec3<f32>(-3.0e38);
+    for (var k = 0u; k < 2u; k++) {
+        var c = root.a;
+        if k == 1u { c = root.b; }
+        if c.count != 0u || c.index != NONE {
+            lo = min(lo, c.min);
+            hi = max(hi, c.max);
+        }
+    }
+    let cell = (ray.origin - lo) * (16.0 / max(hi - lo, vec3<f32>(1e-30)));
+    let q = min(vec3<u32>(clamp(cell, vec3<f32>(0.0), vec3<f32>(15.0))), vec3<u32>(15u));
+    let morton = spread_4_bits(q.x) | (spread_4_bits(q.y) << 1u) | (spread_4_bits(q.z) << 2u);
+    let octant = u32(ray.dir.x < 0.0) | (u32(ray.dir.y < 0.0) << 1u) | (u32(ray.dir.z < 0.0) << 2u);
+    return ((morton << 3u) | octant) & (SORT_BINS - 1u);
+}
+
+var<workgroup> sort_sums: array<u32, SORT_BLOCK>;
+
+// In place over `sort_sums[0 .. n)` (n a power of two, every invocation of the workgroup calling, lid < n or not):
+// each entry becomes the sum of itself and those before it.
+fn inclusive_scan(lid: u32, n: u32) {
+    workgroupBarrier();
+    for (var offset = 1u; offset < SORT_BLOCK; offset <<= 1u) {
+        var v = 0u;
+        if lid < n {
+            v = sort_sums[lid];
+            if lid >= offset && offset < n { v += sort_sums[lid - offset]; }
+        }
+        workgroupBarrier();
+        if lid < n { sort_sums[lid] = v; }
+        workgroupBarrier();
+    }
+}
+
+// The counts of block `group.x`'s keys into their first slots within the block, and the block's total; the
+// counts zeroed.
+@compute @workgroup_size(256)
+fn sort_prefix(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
+    let bin = group.x * SORT_BLOCK + lid;
+    let count = atomicExchange(&queues.sort[bin], 0u);
+    sort_sums[lid] = count;
+    inclusive_scan(lid, SORT_BLOCK);
+    atomicStore(&queues.sort[SORT_BINS + bin], sort_sums[lid] - count);
+    if lid == SORT_BLOCK - 1u {
+        atomicStore(&queues.sort[2u * SORT_BINS + group.x], sort_sums[lid]);
+    }
+}
+
+// Each path of the queue read this bounce to its key's next slot (the blocks' totals summed before it) in the
+// sorted copy, which extend reads.
+@compute @workgroup_size(128)
+fn sort_scatter(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
+                @builtin(local_invocation_index) lid: u32) {
+    sort_sums[lid] = atomicLoad(&queues.sort[2u * SORT_BINS + lid]);
+    inclusive_scan(lid, SORT_BLOCKS);
+    let i = queue_index(group, groups, lid);
+    if i < atomicLoad(&queues.control[CONTROL_LIVE]) {
+        let n = path_count();
+        let key = queues.entries[2u * n + i] & (SORT_BINS - 1u);
+        let block = key / SORT_BLOCK;
+        var slot = atomicAdd(&queues.sort[SORT_BINS + key], 1u);
+        if block > 0u { slot += sort_sums[block - 1u]; }
+        queues.entries[3u * n + min(slot, n - 1u)] = live_path(i);
+    }
 }
 
 // Depth 0, per 8x8 tile and sample of the wave (z): the camera ray, what it meets, and the next ray and shadow ray
@@ -344,7 +448,11 @@ fn extend(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgroups) grou
     var p: WavePath;
     var t_max = MISS;
     if is_path {
-        path = live_path(i);
+        if WAVE_SORT {
+            path = queues.entries[3u * path_count() + i];
+        } else {
+            path = live_path(i);
+        }
         p = load_path(path);
     } else if is_shadow {
         let origin = shadow_rays[i - live].origin;
