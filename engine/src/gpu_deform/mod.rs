@@ -312,8 +312,9 @@ impl GpuDeformer {
         self.index_of.iter().map(Option::is_some).collect()
     }
 
-    /// One frame: applies arrived SAH costs and finished rebuilds, writes the changed poses, and encodes
-    /// the deform and refit passes (plus this frame's readbacks) for submission before the trace.
+    /// One frame: applies arrived SAH costs and finished rebuilds (built with the upload's preset,
+    /// [`GpuScene::deformable_quality`]), writes the changed poses, and encodes the deform and refit passes (plus
+    /// this frame's readbacks) for submission before the trace.
     pub fn frame(
         &mut self,
         ctx: &GpuContext,
@@ -321,8 +322,8 @@ impl GpuDeformer {
         gpu: &mut GpuScene,
         poses: &MeshPoses,
         stats: &mut BvhStats,
-        quality: BvhQuality,
     ) -> DeformFrame {
+        let quality = gpu.deformable_quality();
         let mut out = DeformFrame::default();
         stats.ensure_len(scene.meshes.len());
         // Runs map callbacks of earlier submissions; never blocks.

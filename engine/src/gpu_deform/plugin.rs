@@ -137,9 +137,7 @@ pub fn deform_on_gpu(
     let Some(deformer) = state.deformer.as_mut() else {
         return;
     };
-    // Rebuilds take the upload's preset.
-    let quality = gpu_scene.deformable_quality();
-    let frame = deformer.frame(&ctx, &assets.0, &mut gpu_scene, &poses, &mut stats, quality);
+    let frame = deformer.frame(&ctx, &assets.0, &mut gpu_scene, &poses, &mut stats);
     geometry.0 |= frame.geometry_changed;
     commands.0.extend(frame.commands);
     stats.last_upload_seconds += frame.upload_seconds;

@@ -252,7 +252,7 @@ impl IntegratorChoice {
         }
     }
 
-    /// Whether the frame [`Self::form`] chose traces waves with their rays sorted.
+    /// Whether the frame [`Self::form`] chose traces waves with their rays sorted (never true of the megakernel).
     pub fn rays_sorted(&self) -> bool {
         self.sorted
     }
@@ -336,7 +336,7 @@ impl IntegratorChoice {
     /// The last frame's form by name, "wavefront (rays sorted)" where the waves sorted their rays.
     pub fn last_form_name(&self) -> Option<String> {
         let form = self.last?;
-        Some(if form == Integrator::Wavefront && self.sorted {
+        Some(if self.sorted {
             format!("{} (rays sorted)", form.name())
         } else {
             form.name().to_string()

@@ -239,6 +239,16 @@ pub const DEFORM_GROUP: u32 = 64;
 /// Workgroup size of the refit pass (`refit.wgsl`): one workgroup sweeps one mesh.
 pub const REFIT_GROUP: u32 = 256;
 
+/// The wavefront's ray sort (`passes/wavefront/wavefront.wgsl`, `WAVE_SORT`): its keys, the keys one
+/// `sort_prefix` workgroup sums and that kernel's workgroups, and the words of its bins at the head of the
+/// queues' buffer (each key's count and first slot, each block's total). `sort_scatter` reads one block total
+/// per invocation of its 128.
+pub const SORT_BINS: u32 = 32768;
+pub const SORT_BLOCK: u32 = 256;
+pub const SORT_BLOCKS: u32 = SORT_BINS / SORT_BLOCK;
+pub const SORT_WORDS: u32 = 2 * SORT_BINS + SORT_BLOCKS;
+const _: () = assert!(SORT_BLOCKS == 128);
+
 /// Every constant the WGSL library shares with Rust, by its WGSL name; `render::shaders` writes them as the
 /// `constants` module, so a kernel can never disagree with the code that fills its buffers.
 pub const WGSL_CONSTANTS: &[(&str, u32)] = &[
@@ -293,6 +303,10 @@ pub const WGSL_CONSTANTS: &[(&str, u32)] = &[
     ("TLAS_STACK_SIZE", crate::bvh::MAX_TRAVERSAL_DEPTH),
     ("WIDE_STACK_SIZE", crate::bvh::wide::MAX_WIDE_DEPTH),
     ("DEFORM_GROUP", DEFORM_GROUP),
+    ("SORT_BINS", SORT_BINS),
+    ("SORT_BLOCK", SORT_BLOCK),
+    ("SORT_BLOCKS", SORT_BLOCKS),
+    ("SORT_WORDS", SORT_WORDS),
     ("REFIT_GROUP", REFIT_GROUP),
     ("RT_TEMPORAL", RT_TEMPORAL),
     ("RT_HISTORY", RT_HISTORY),

@@ -226,8 +226,7 @@ pub fn measure(
         .map_or("none", raykin::render::Integrator::name)
         .to_string();
     let auto_trial_ms = choice.decision().map(|d| [d.megakernel_ms, d.wavefront_ms]);
-    let rays_sorted =
-        choice.last_form() == Some(raykin::render::Integrator::Wavefront) && choice.rays_sorted();
+    let rays_sorted = choice.rays_sorted();
     let sort_trial_ms = choice.sort_decision().map(|d| [d.unsorted_ms, d.sorted_ms]);
     let stats = app.bvh_stats();
     Ok(FrameRow {

@@ -8,6 +8,7 @@
 use crate::gpu::GpuContext;
 use crate::gpu::PassTimestamps;
 use crate::gpu::bind::{Binding, bind_group, compute_layout, storage_buffer};
+use crate::render::layout::{SORT_BLOCKS, SORT_WORDS};
 use crate::render::material_lobes::{KernelNeeds, LobeKernels};
 use crate::render::shaders::{ShaderModule, compose};
 use crate::render::view::ViewTargets;
@@ -21,19 +22,16 @@ pub const KERNEL: ShaderModule = ShaderModule {
 
 /// `CONTROL_RAYS` in the WGSL: the rays traced, copied to the view's ray counter.
 const CONTROL_RAYS: u64 = 7;
-/// `SORT_WORDS`, `SORT_BLOCKS` in the WGSL: the ray sort's bins, and the workgroups of its prefix kernel.
-const SORT_WORDS: u64 = 2 * 32768 + 128;
-const SORT_BLOCKS: u32 = 128;
 /// The counters' and the sort's bytes at the start of the queues' buffer (`Queues::control`, `Queues::sort` in
 /// the WGSL), zeroed before each dispatch.
-const CONTROL_BYTES: u64 = 16 * 4 + SORT_WORDS * 4;
+const CONTROL_BYTES: u64 = 16 * 4 + SORT_WORDS as u64 * 4;
 const QUEUE_ENTRY: u64 = 4;
 /// Entries per path in the queues' buffer: the two queues, the sort's keys and the sorted queue.
 const QUEUE_ENTRIES: u64 = 4;
 const STATE_ENTRY: u64 = 16;
 /// `ShadowRay` in the WGSL: origin, direction, light.
 const SHADOW_ENTRY: u64 = 48;
-/// Bytes of state a path holds: the six per-path arrays and the hits, its two queue entries, its shadow ray.
+/// Bytes of state a path holds: the six per-path arrays and the hits, its queue entries, its shadow ray.
 const PATH_BYTES: u64 = 7 * STATE_ENTRY + QUEUE_ENTRIES * QUEUE_ENTRY + SHADOW_ENTRY;
 /// Paths a wave should hold when the view has fewer pixels: every bounce's dispatch waits for the one before it,
 /// and once most paths have ended a bounce's few survivors cost that wait alone, so a wave's fixed cost is paid
@@ -75,7 +73,7 @@ fn wave_paths() -> u64 {
 }
 
 /// The paths one binding of each state array holds: the shadow rays' entries are the largest, and the queues
-/// hold two entries per path after the counters.
+/// hold [`QUEUE_ENTRIES`] entries per path after the counters and the sort's bins.
 fn max_paths(ctx: &GpuContext) -> u64 {
     let binding = crate::gpu::limits::max_binding_bytes(&ctx.limits);
     (binding / SHADOW_ENTRY)
@@ -247,8 +245,8 @@ impl WavefrontPass {
     }
 
     /// Compiles the kernels for `needs` (the first time; with the pass-throughs of alpha-blended surfaces where
-    /// some material blends, and sorting the rays where `sort`) and makes the paths' state for the view's size and dispatches of `spp` samples per
-    /// pixel (again only when the view's targets were replaced or a wave's samples per pixel change). Where the
+    /// some material blends, and sorting the rays where `sort`) and makes the paths' state for the view's size
+    /// and dispatches of `spp` samples per pixel (again only when the view's targets were replaced or a wave's samples per pixel change). Where the
     /// GPU's memory cannot hold the state, waves of half as many samples are tried, down to one; returns false
     /// where even that does not fit (the megakernel must trace the frame).
     pub fn prepare(

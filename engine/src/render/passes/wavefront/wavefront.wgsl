@@ -84,12 +84,9 @@ override WAVE_PASS_THROUGHS: bool = true;
 // they queue per key (`sort` [0, SORT_BINS)) and keep each one's key; `sort_prefix` turns the counts into each
 // key's first slot within its block of SORT_BLOCK keys ([SORT_BINS, 2 SORT_BINS)) and each block's total
 // ([2 SORT_BINS, + SORT_BLOCKS)), zeroing the counts for the next bounce; `sort_scatter` copies each entry to its
-// key's next slot. A pipeline constant, so that scenes which do not gain compile none of it.
+// key's next slot. The sizes come from the generated constants (engine/src/render/layout.rs), which the pass
+// sizes the buffer by. A pipeline constant, so that scenes which do not gain compile none of it.
 override WAVE_SORT: bool = false;
-const SORT_BINS: u32 = 32768u;
-const SORT_BLOCK: u32 = 256u;
-const SORT_BLOCKS: u32 = 128u;
-const SORT_WORDS: u32 = 65664u; // 2 x SORT_BINS + SORT_BLOCKS
 
 // Queue kernels run 128 paths a workgroup over a 2D grid of workgroups (65535 per side at most).
 const QUEUE_GROUP: u32 = 128u;
@@ -375,7 +372,7 @@ fn inclusive_scan(lid: u32, n: u32) {
 
 // The counts of block `group.x`'s keys into their first slots within the block, and the block's total; the
 // counts zeroed.
-@compute @workgroup_size(256)
+@compute @workgroup_size(SORT_BLOCK)
 fn sort_prefix(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
     let bin = group.x * SORT_BLOCK + lid;
     let count = atomicExchange(&queues.sort[bin], 0u);
