@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Twenty-seventh session, call 4 (cut to what the device time left allowed, after many starts failed).
-# rel/paths.xz = dad62d8 (the path rays sorted, extend reading a sorted copy of the queue; auto's sort trial);
-# relb/head.xz = dad62d8 + sort-shadows.patch (the shadow rays sorted too).
+# rel/paths.xz = dad62d8 or later (the path rays sorted, extend reading a sorted copy of the queue; auto's sort trial);
+# relb/head.xz = 174bb3c + sort-shadows.patch (the shadow rays sorted too).
 # 1. The seed-like interior and the crowd at 2560x1440, 1 spp, depth 6, waves fixed: unsorted, paths sorted,
 #    paths and shadows sorted (`RAYKIN_WAVE_SORT` forcing it); the seed twice -> forced.txt.
 # 2. `--integrator auto` with the sort's trial (head) against the sort forced off: the seed-like interior, the
