@@ -239,6 +239,12 @@ pub const DEFORM_GROUP: u32 = 64;
 /// Workgroup size of the refit pass (`refit.wgsl`): one workgroup sweeps one mesh.
 pub const REFIT_GROUP: u32 = 256;
 
+/// The wavefront's counters at the head of its queues' buffer (`Queues::control` in
+/// `passes/wavefront/wavefront.wgsl`), and the one of them the pass copies to the view's ray counter.
+pub const WAVE_CONTROL_WORDS: u32 = 16;
+pub const WAVE_CONTROL_RAYS: u32 = 7;
+const _: () = assert!(WAVE_CONTROL_RAYS < WAVE_CONTROL_WORDS);
+
 /// The wavefront's ray sort (`passes/wavefront/wavefront.wgsl`, `WAVE_SORT`): its keys, the keys one
 /// `sort_prefix` workgroup sums and that kernel's workgroups, and the words of its bins at the head of the
 /// queues' buffer (each key's count and first slot, each block's total). `sort_scatter` reads one block total
@@ -303,6 +309,8 @@ pub const WGSL_CONSTANTS: &[(&str, u32)] = &[
     ("TLAS_STACK_SIZE", crate::bvh::MAX_TRAVERSAL_DEPTH),
     ("WIDE_STACK_SIZE", crate::bvh::wide::MAX_WIDE_DEPTH),
     ("DEFORM_GROUP", DEFORM_GROUP),
+    ("WAVE_CONTROL_WORDS", WAVE_CONTROL_WORDS),
+    ("WAVE_CONTROL_RAYS", WAVE_CONTROL_RAYS),
     ("SORT_BINS", SORT_BINS),
     ("SORT_BLOCK", SORT_BLOCK),
     ("SORT_BLOCKS", SORT_BLOCKS),

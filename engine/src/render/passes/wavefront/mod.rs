@@ -8,7 +8,7 @@
 use crate::gpu::GpuContext;
 use crate::gpu::PassTimestamps;
 use crate::gpu::bind::{Binding, bind_group, compute_layout, storage_buffer};
-use crate::render::layout::{SORT_BLOCKS, SORT_WORDS};
+use crate::render::layout::{SORT_BLOCKS, SORT_WORDS, WAVE_CONTROL_RAYS, WAVE_CONTROL_WORDS};
 use crate::render::material_lobes::{KernelNeeds, LobeKernels};
 use crate::render::shaders::{ShaderModule, compose};
 use crate::render::view::ViewTargets;
@@ -20,11 +20,9 @@ pub const KERNEL: ShaderModule = ShaderModule {
     requires: &["constants", "sampler", "integrator/path"],
 };
 
-/// `CONTROL_RAYS` in the WGSL: the rays traced, copied to the view's ray counter.
-const CONTROL_RAYS: u64 = 7;
 /// The counters' and the sort's bytes at the start of the queues' buffer (`Queues::control`, `Queues::sort` in
 /// the WGSL), zeroed before each dispatch.
-const CONTROL_BYTES: u64 = 16 * 4 + SORT_WORDS as u64 * 4;
+const CONTROL_BYTES: u64 = (WAVE_CONTROL_WORDS + SORT_WORDS) as u64 * 4;
 const QUEUE_ENTRY: u64 = 4;
 /// Entries per path in the queues' buffer: the two queues, the sort's keys and the sorted queue.
 const QUEUE_ENTRIES: u64 = 4;
@@ -467,7 +465,13 @@ impl WavefrontPass {
             None => run(&stages, waves, timestamp_writes),
         }
         encoder.clear_buffer(&view.ray_counter, 0, None);
-        encoder.copy_buffer_to_buffer(&buffers.queues, CONTROL_RAYS * 4, &view.ray_counter, 0, 4);
+        encoder.copy_buffer_to_buffer(
+            &buffers.queues,
+            WAVE_CONTROL_RAYS as u64 * 4,
+            &view.ray_counter,
+            0,
+            4,
+        );
     }
 }
 

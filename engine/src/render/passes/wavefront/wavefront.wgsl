@@ -38,7 +38,7 @@
 // With WAVE_SORT the entries go on with each queued ray's sort key, [2N, 3N), and the queue read this bounce in
 // the keys' order, [3N, 4N); `sort` holds the counting sort's bins (see `sort_key`).
 struct Queues {
-    control: array<atomic<u32>, 16>,
+    control: array<atomic<u32>, WAVE_CONTROL_WORDS>,
     sort: array<atomic<u32>, SORT_WORDS>,
     entries: array<u32>,
 }
@@ -68,8 +68,8 @@ const CONTROL_PARITY: u32 = 4u;
 // This wave, counted from the dispatch's first; and the next.
 const CONTROL_WAVE: u32 = 5u;
 const CONTROL_NEXT_WAVE: u32 = 6u;
-// Rays traced (camera, bounce and shadow), copied to the view's ray counter after the pass.
-const CONTROL_RAYS: u32 = 7u;
+// Rays traced (camera, bounce and shadow), copied to the view's ray counter after the pass: WAVE_CONTROL_RAYS,
+// from the shared constants.
 
 // Alpha-blended surfaces (stochastic coverage) are passed through where the ray is traced, so that a
 // pass-through does not take a bounce of the wave; compiled in only for scenes with such materials.
@@ -301,7 +301,7 @@ fn queue_step(step: BounceStep, path: u32, lid: u32) {
     if lid == 0u {
         workgroup_next_base = atomicAdd(&queues.control[CONTROL_NEXT], atomicLoad(&workgroup_next));
         workgroup_shadows_base = atomicAdd(&queues.control[CONTROL_SHADOWS_QUEUED], atomicLoad(&workgroup_shadows));
-        atomicAdd(&queues.control[CONTROL_RAYS], atomicLoad(&workgroup_rays));
+        atomicAdd(&queues.control[WAVE_CONTROL_RAYS], atomicLoad(&workgroup_rays));
     }
     workgroupBarrier();
     if step.continues {
@@ -479,7 +479,7 @@ fn extend(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgroups) grou
     atomicAdd(&workgroup_rays, rays_traced);
     workgroupBarrier();
     if lid == 0u {
-        atomicAdd(&queues.control[CONTROL_RAYS], atomicLoad(&workgroup_rays));
+        atomicAdd(&queues.control[WAVE_CONTROL_RAYS], atomicLoad(&workgroup_rays));
     }
 }
 
