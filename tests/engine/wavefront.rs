@@ -70,6 +70,17 @@ fn waves_trace_the_megakernels_paths() {
         let (sorted, sorted_rays) = render_sorted(Integrator::Wavefront, 6, 1, true);
         assert_forms_render_the_same_image(&sorted, &mega, file);
         assert_eq!(sorted_rays, mega_rays, "{file}: rays traced, sorted");
+        // The sort switched on and off between one accumulation's dispatches, as auto's trial does: the queues
+        // are made again with and without the sort's entries each time, and the paths stay the same.
+        let mut app = small_app(&ctx, &scene, Integrator::Wavefront);
+        for frame in 0..6 {
+            app.app
+                .world_mut()
+                .resource_mut::<IntegratorChoice>()
+                .force_ray_sort(Some(frame % 2 == 1));
+            app.accumulate(1, 1, |_| {});
+        }
+        assert_eq!(app.radiance(), waves, "{file}: sorted every other dispatch");
         // Several samples per dispatch: the megakernel sums a pixel's samples before adding them, the waves
         // (here 3 samples of each pixel in one wave) add a wave's at its end.
         let worst = worst_relative_difference;

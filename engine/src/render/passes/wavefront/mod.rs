@@ -24,13 +24,17 @@ pub const KERNEL: ShaderModule = ShaderModule {
 /// the WGSL), zeroed before each dispatch.
 const CONTROL_BYTES: u64 = (WAVE_CONTROL_WORDS + SORT_WORDS) as u64 * 4;
 const QUEUE_ENTRY: u64 = 4;
-/// Entries per path in the queues' buffer: the two queues, the sort's keys and the sorted queue.
-const QUEUE_ENTRIES: u64 = 4;
+/// Entries per path in the queues' buffer: the two queues, and where the rays are sorted the sort's keys and the
+/// sorted queue (allocated only then: 8 bytes a path, 67 MB for the largest wave).
+const fn queue_entries(sort: bool) -> u64 {
+    if sort { 4 } else { 2 }
+}
 const STATE_ENTRY: u64 = 16;
 /// `ShadowRay` in the WGSL: origin, direction, light.
 const SHADOW_ENTRY: u64 = 48;
-/// Bytes of state a path holds: the six per-path arrays and the hits, its queue entries, its shadow ray.
-const PATH_BYTES: u64 = 7 * STATE_ENTRY + QUEUE_ENTRIES * QUEUE_ENTRY + SHADOW_ENTRY;
+/// Bytes of state a path holds at most: the six per-path arrays and the hits, its queue entries with the rays
+/// sorted, its shadow ray.
+const PATH_BYTES: u64 = 7 * STATE_ENTRY + queue_entries(true) * QUEUE_ENTRY + SHADOW_ENTRY;
 /// Paths a wave should hold when the view has fewer pixels: every bounce's dispatch waits for the one before it,
 /// and once most paths have ended a bounce's few survivors cost that wait alone, so a wave's fixed cost is paid
 /// per wave. At 960x540 and 16 samples per pixel a dispatch in one wave of 8.4 M paths took 0.54-0.95x the time
@@ -71,11 +75,12 @@ fn wave_paths() -> u64 {
 }
 
 /// The paths one binding of each state array holds: the shadow rays' entries are the largest, and the queues
-/// hold [`QUEUE_ENTRIES`] entries per path after the counters and the sort's bins.
+/// hold their entries per path with the rays sorted after the counters and the sort's bins (sorted or not, so
+/// that the sort's trial never changes a wave's size).
 fn max_paths(ctx: &GpuContext) -> u64 {
     let binding = crate::gpu::limits::max_binding_bytes(&ctx.limits);
     (binding / SHADOW_ENTRY)
-        .min(binding.saturating_sub(CONTROL_BYTES) / (QUEUE_ENTRIES * QUEUE_ENTRY))
+        .min(binding.saturating_sub(CONTROL_BYTES) / (queue_entries(true) * QUEUE_ENTRY))
 }
 
 /// The kernels a wave runs, in order.
@@ -102,12 +107,13 @@ struct PathBuffers {
     /// memory held fewer).
     made_for: (u64, u64),
     view_group: wgpu::BindGroup,
-    /// The counters, then the queues.
+    /// The counters, then the queues: with the sort's entries where `sorted_queues`.
     queues: wgpu::Buffer,
+    sorted_queues: bool,
     args_group: wgpu::BindGroup,
     args: wgpu::Buffer,
-    /// Kept alive for the bind group.
-    _state: Vec<wgpu::Buffer>,
+    /// The path arrays and the hits, then the shadow rays: bound beside the queues.
+    state: Vec<wgpu::Buffer>,
 }
 
 /// A dispatch's size: workgroups, or the offset of its sizes in the dispatch-sizes buffer.
@@ -278,7 +284,19 @@ impl WavefrontPass {
         let pixels = view.pixels();
         let wanted = samples_per_wave(pixels, spp, max_paths(ctx));
         let key = (view.generation, wanted);
-        if self.buffers.as_ref().is_some_and(|b| b.made_for == key) {
+        if let Some(buffers) = self.buffers.as_mut().filter(|b| b.made_for == key) {
+            if buffers.sorted_queues == sort {
+                return true;
+            }
+            // The sort's trial or decision changed what the queues hold: only they are made again.
+            let Some(queues) = make_queues(ctx, buffers.pixels * buffers.samples_per_wave, sort)
+            else {
+                tracing::warn!("the wavefront's queues do not fit the GPU's memory");
+                return false;
+            };
+            buffers.view_group = view_group(ctx, &self.view_layout, view, &buffers.state, &queues);
+            buffers.queues = queues;
+            buffers.sorted_queues = sort;
             return true;
         }
         if self.no_room == Some(key) {
@@ -287,7 +305,7 @@ impl WavefrontPass {
         // Release the old state before making the new one.
         self.buffers = None;
         self.buffers = halving_until(wanted, |samples| {
-            let made = self.make_buffers(ctx, view, samples, key);
+            let made = self.make_buffers(ctx, view, samples, key, sort);
             if made.is_none() {
                 tracing::warn!(
                     "the wavefront's path state for {samples} samples of {pixels} pixels a wave ({} MB) does not \
@@ -309,6 +327,7 @@ impl WavefrontPass {
         view: &ViewTargets,
         samples_per_wave: u64,
         made_for: (u64, u64),
+        sort: bool,
     ) -> Option<PathBuffers> {
         let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
         let pixels = view.pixels();
@@ -328,11 +347,7 @@ impl WavefrontPass {
             "wavefront path radiance",
             "wavefront hits",
         ]);
-        let queues = storage_buffer(
-            ctx,
-            "wavefront queues",
-            CONTROL_BYTES + QUEUE_ENTRIES * paths * QUEUE_ENTRY,
-        );
+        let queues = queues_buffer(ctx, paths, sort);
         let shadows = storage_buffer(ctx, "wavefront shadow rays", paths * SHADOW_ENTRY);
         let args = ctx.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("wavefront dispatch sizes"),
@@ -344,22 +359,19 @@ impl WavefrontPass {
         if pollster::block_on(scope.pop()).is_some() {
             return None;
         }
-        let mut group: Vec<&wgpu::Buffer> = vec![&view.frame, &view.accum];
-        group.extend(states.iter());
-        group.push(&queues);
-        group.push(&shadows);
-        let view_group = bind_group(ctx, "wavefront view", &self.view_layout, &group);
+        let state: Vec<wgpu::Buffer> = states.into_iter().chain([shadows]).collect();
+        let view_group = view_group(ctx, &self.view_layout, view, &state, &queues);
         let args_group = bind_group(ctx, "wavefront dispatch sizes", &self.args_layout, &[&args]);
-        let state = states.into_iter().chain([shadows]).collect();
         Some(PathBuffers {
             pixels,
             samples_per_wave,
             made_for,
             view_group,
             queues,
+            sorted_queues: sort,
             args_group,
             args,
-            _state: state,
+            state,
         })
     }
 
@@ -473,6 +485,36 @@ impl WavefrontPass {
             4,
         );
     }
+}
+
+/// The counters and queues for `paths` paths, with the sort's entries where `sort`.
+fn queues_buffer(ctx: &GpuContext, paths: u64, sort: bool) -> wgpu::Buffer {
+    let bytes = CONTROL_BYTES + queue_entries(sort) * paths * QUEUE_ENTRY;
+    storage_buffer(ctx, "wavefront queues", bytes)
+}
+
+/// [`queues_buffer`], or `None` where the GPU's memory cannot hold it.
+fn make_queues(ctx: &GpuContext, paths: u64, sort: bool) -> Option<wgpu::Buffer> {
+    let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+    let queues = queues_buffer(ctx, paths, sort);
+    pollster::block_on(scope.pop()).is_none().then_some(queues)
+}
+
+/// Group 1 of the wave kernels: the view's frame and accumulation, `state` (the path arrays and hits, then the
+/// shadow rays) with `queues` before the shadow rays.
+fn view_group(
+    ctx: &GpuContext,
+    layout: &wgpu::BindGroupLayout,
+    view: &ViewTargets,
+    state: &[wgpu::Buffer],
+    queues: &wgpu::Buffer,
+) -> wgpu::BindGroup {
+    let (shadows, arrays) = state.split_last().expect("path state and shadow rays");
+    let mut group: Vec<&wgpu::Buffer> = vec![&view.frame, &view.accum];
+    group.extend(arrays);
+    group.push(queues);
+    group.push(shadows);
+    bind_group(ctx, "wavefront view", layout, &group)
 }
 
 #[cfg(test)]
