@@ -1,6 +1,8 @@
 // The scene as every ray-tracing kernel reads it: group 0, read only (engine/src/render/scene_bindings.rs).
 
-@group(0) @binding(0) var<storage, read> tlas_nodes: array<BvhNode>;
+// The top level in 16-byte words: its BVH2 (4 words a node), then where the waves asked for one its wide tree
+// (engine/src/bvh/tlas.rs: 5 words a node, then a word per leaf slot).
+@group(0) @binding(0) var<storage, read> tlas_nodes: array<vec4<u32>>;
 @group(0) @binding(1) var<storage, read> blas_nodes: array<BvhNode>;
 @group(0) @binding(2) var<storage, read> instances: array<Instance>;
 @group(0) @binding(3) var<storage, read> meshes: array<Mesh>;
@@ -24,7 +26,14 @@
 // Every read of the scene goes through these functions. On CPU adapters the composer replaces this module with
 // scene/bindings_texels.wgsl, which reads the same bytes from textures: lavapipe turns each storage-buffer load
 // into a loop over the SIMD lanes, several times slower than a texel fetch (docs/BENCHMARKS.md).
-fn read_tlas_node(i: u32) -> BvhNode { return tlas_nodes[i]; }
+fn read_tlas_word(i: u32) -> vec4<u32> { return tlas_nodes[i]; }
+fn tlas_child(lo: vec4<u32>, hi: vec4<u32>) -> BvhChild {
+    return BvhChild(bitcast<vec3<f32>>(lo.xyz), lo.w, bitcast<vec3<f32>>(hi.xyz), hi.w);
+}
+fn read_tlas_node(i: u32) -> BvhNode {
+    let t = 4u * i;
+    return BvhNode(tlas_child(tlas_nodes[t], tlas_nodes[t + 1u]), tlas_child(tlas_nodes[t + 2u], tlas_nodes[t + 3u]));
+}
 fn read_blas_node(i: u32) -> BvhNode { return blas_nodes[i]; }
 fn read_instance(i: u32) -> Instance { return instances[i]; }
 fn read_mesh(i: u32) -> Mesh { return meshes[i]; }

@@ -44,6 +44,7 @@ fn scene_bvh_node(buffer: texture_storage_2d<rgba32uint, read>, i: u32) -> BvhNo
 }
 
 fn read_tlas_node(i: u32) -> BvhNode { return scene_bvh_node(tlas_nodes, i); }
+fn read_tlas_word(i: u32) -> vec4<u32> { return scene_texel(tlas_nodes, i); }
 fn read_blas_node(i: u32) -> BvhNode { return scene_bvh_node(blas_nodes, i); }
 
 fn read_instance(i: u32) -> Instance {

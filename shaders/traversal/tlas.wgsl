@@ -47,11 +47,79 @@ fn member_hit(hit: Hit) -> Hit {
 // top-level loop compiled away; NONE keeps the loop.
 override SOLE_INSTANCE: u32 = NONE;
 
+// The top level as a compressed wide tree (engine/src/bvh/tlas.rs), which the waves' kernels traverse where the
+// scene holds one: its first 16-byte word in the top level's buffer (after the BVH2), or NONE for the BVH2. The
+// waves' extend is bound by dependent node fetches, and a ray visits a third as many wide nodes; the megakernel
+// keeps the BVH2, which visits nearer instances first (docs/BENCHMARKS.md, "The top level as a wide tree").
+override WIDE_TOP_LEVEL: u32 = NONE;
+
+// The wide top level's node-group stack (module scope for the reason `tlas_stack` is), one entry per level.
+var<private> wide_tlas_stack: array<vec2<u32>, WIDE_TLAS_STACK_SIZE>;
+
+fn read_wide_tlas_node(i: u32) -> WideNode {
+    let t = WIDE_TOP_LEVEL + 5u * i;
+    return WideNode(read_tlas_word(t), read_tlas_word(t + 1u), read_tlas_word(t + 2u), read_tlas_word(t + 3u),
+        read_tlas_word(t + 4u));
+}
+
+// The instance in 32-bit word `i` of the top level's buffer (a wide leaf slot's).
+fn read_tlas_slot(i: u32) -> u32 {
+    return read_tlas_word(i >> 2u)[i & 3u];
+}
+
+fn trace_wide_top_level(ray: Ray, t_max: f32, any_hit: bool) -> Hit {
+    var hit = Hit(t_max, NONE, 0u, vec2<f32>(0.0));
+    let inv_d = safe_inverse(ray.dir);
+    let oct_inv4 = select(0u, 0x04040404u, inv_d.x >= 0.0)
+        | select(0u, 0x02020202u, inv_d.y >= 0.0)
+        | select(0u, 0x01010101u, inv_d.z >= 0.0);
+    var sp = 0u;
+    // A node group, as in cwbvh.wgsl `trace_blas_wide`: the root is the one hit child of a group with an empty mask.
+    var group = vec2<u32>(0u, 0x80000000u);
+    loop {
+        var first_slot = 0u;
+        var leaf_bits = 0u;
+        if group.y > 0x00ffffffu {
+            let bit = firstLeadingBit(group.y);
+            group.y &= ~(1u << bit);
+            let slot = (bit - 24u) ^ (oct_inv4 & 0xffu);
+            let child = group.x + countOneBits(group.y & 0xffu & ((1u << slot) - 1u));
+            if group.y > 0x00ffffffu && sp < WIDE_TLAS_STACK_SIZE {
+                wide_tlas_stack[sp] = group;
+                sp++;
+            }
+            let n = read_wide_tlas_node(child);
+            count_work(WORK_TLAS_NODE);
+            let mask = intersect_wide(n, ray.origin, inv_d, oct_inv4, hit.t);
+            group = vec2<u32>(n.w1.x, (mask & 0xff000000u) | (n.w0.w >> 24u));
+            // The node's leaf slots name their instances from this word on (the CPU moved it past the nodes).
+            first_slot = n.w1.y;
+            leaf_bits = mask & 0x00ffffffu;
+        }
+        // Every instance hit through one call site: the compiled kernel holds a copy of the BLAS traversal per
+        // call (drivers inline every function).
+        while leaf_bits != 0u {
+            let k = firstTrailingBit(leaf_bits);
+            leaf_bits &= leaf_bits - 1u;
+            if trace_blas(read_tlas_slot(first_slot + k), ray, &hit, any_hit) && any_hit { return member_hit(hit); }
+        }
+        if group.y <= 0x00ffffffu {
+            if sp == 0u { break; }
+            sp--;
+            group = wide_tlas_stack[sp];
+        }
+    }
+    return member_hit(hit);
+}
+
 fn trace(ray: Ray, t_max: f32, any_hit: bool) -> Hit {
     var hit = Hit(t_max, NONE, 0u, vec2<f32>(0.0));
     if SOLE_INSTANCE != NONE {
         trace_blas(SOLE_INSTANCE, ray, &hit, any_hit);
         return member_hit(hit);
+    }
+    if WIDE_TOP_LEVEL != NONE {
+        return trace_wide_top_level(ray, t_max, any_hit);
     }
     let inv_d = safe_inverse(ray.dir);
     var sp = 0u;

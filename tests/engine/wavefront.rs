@@ -32,6 +32,37 @@ fn small_app(
     app
 }
 
+/// The waves' wide top level (`raykin::bvh::tlas`, built beside the BVH2 while they trace): the interior scene's
+/// three top-level leaves (the box's merged tree, CesiumMan and the Fox) traced through it give the megakernel's
+/// image bit for bit, with the scene read from storage buffers and from textures; the megakernel keeps the BVH2.
+#[test]
+fn waves_through_the_wide_top_level_trace_the_megakernels_paths() {
+    use raykin::render::gpu_scene::GpuScene;
+    let (ctx, _gpu) = gpu();
+    let interior = raykin::animation::interior_scene(shared_assets()).expect("the interior scene");
+    let scene = Arc::new(interior.scene);
+    for textures in [true, false] {
+        let mut ctx = ctx.clone();
+        ctx.scene_in_textures = textures;
+        ctx.wide_top_level = true;
+        let render = |integrator: Integrator| {
+            let mut app = small_app(&ctx, &scene, integrator);
+            app.accumulate(4, 1, |_| {});
+            let wide = app.app.world().resource::<GpuScene>().wide_top_level();
+            (app.radiance(), wide)
+        };
+        let what = format!("the interior, textures {textures}");
+        let (waves, wide) = render(Integrator::Wavefront);
+        assert!(wide.is_some(), "{what}: the waves traced no wide top level");
+        let (mega, mega_wide) = render(Integrator::Megakernel);
+        assert_eq!(
+            mega_wide, None,
+            "{what}: the megakernel asked for the wide top level"
+        );
+        assert_forms_render_the_same_image(&waves, &mega, &what);
+    }
+}
+
 #[test]
 fn waves_trace_the_megakernels_paths() {
     let (ctx, _gpu) = gpu();

@@ -7,6 +7,7 @@
 
 mod balanced;
 pub mod refit;
+pub mod tlas;
 pub mod wide;
 
 pub use wide::{WideBvh, WideBvhError};

@@ -113,7 +113,7 @@ fn sah_costs_stay_finite(tris: &[obvhs::triangle::Triangle]) -> bool {
 }
 
 /// Levels of inner nodes on the longest root-to-leaf path.
-fn tree_depth(nodes: &[CwBvhNode]) -> u32 {
+pub(super) fn tree_depth(nodes: &[CwBvhNode]) -> u32 {
     let mut deepest = 0;
     let mut stack = vec![(0u32, 1u32)];
     while let Some((index, depth)) = stack.pop() {

@@ -89,6 +89,9 @@ pub struct GpuContext {
     /// in-cell bilinear sampling only where a map uses it (`ENVIRONMENT_BILINEAR`). On by default;
     /// `RAYKIN_SCENE_SHAPE_KERNELS=off` keeps the general kernel (A/B runs).
     pub scene_shape_kernels: bool,
+    /// The waves traverse a wide top-level tree built beside the BVH2 (`crate::bvh::tlas`) where the scene has
+    /// more than one top-level leaf. On by default; `RAYKIN_WIDE_TOP_LEVEL=off` keeps the BVH2 (A/B runs).
+    pub wide_top_level: bool,
     /// The staging buffer of the last readback, kept for the next: allocating (and on discrete GPUs pinning)
     /// host memory for every readback cost more than the copy.
     readback_staging: Arc<std::sync::Mutex<Option<wgpu::Buffer>>>,
@@ -158,6 +161,7 @@ impl GpuContext {
                 info.device_type != wgpu::DeviceType::Cpu,
             ),
             scene_shape_kernels: switch_on("RAYKIN_SCENE_SHAPE_KERNELS", true),
+            wide_top_level: switch_on("RAYKIN_WIDE_TOP_LEVEL", true),
             readback_staging: Arc::default(),
             device,
             queue,

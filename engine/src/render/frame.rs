@@ -170,13 +170,19 @@ pub fn render_frame(
             // Auto settled on the megakernel: the waves' path state is memory nothing uses.
             wavefront.0 = None;
         }
+        // The waves traverse the wide top level, built beside the BVH2 while they trace.
+        let wide_top_level = scene.want_wide_top_level(&ctx, in_waves && ctx.wide_top_level);
         if in_waves {
             let layout = &bindings.layout;
             let pass = wavefront
                 .0
                 .get_or_insert_with(|| WavefrontPass::new(&ctx, layout));
+            let wave_needs = KernelNeeds {
+                wide_top_level,
+                ..needs
+            };
             // Where the GPU's memory holds no wave's path state (the pass has said so), the megakernel traces.
-            in_waves = pass.prepare(&ctx, &view, needs, spp, choice.rays_sorted());
+            in_waves = pass.prepare(&ctx, &view, wave_needs, spp, choice.rays_sorted());
         }
         if !in_waves {
             trace.prepare(&ctx, &view, needs, aovs);
@@ -263,6 +269,8 @@ fn kernel_needs(ctx: &GpuContext, scene: &GpuScene) -> KernelNeeds {
         blas_layouts: scene.blas_layouts,
         environment_cells_uniform: scene.lights.environment_cells_uniform(),
         next_event_light_kinds: Some(scene.lights.next_event_kinds),
+        // Only the waves' kernels traverse the wide top level: set where they are prepared.
+        wide_top_level: None,
     }
 }
 

@@ -308,6 +308,10 @@ pub const WGSL_CONSTANTS: &[(&str, u32)] = &[
     ("BLAS_STACK_SIZE", crate::bvh::MAX_TRAVERSAL_DEPTH),
     ("TLAS_STACK_SIZE", crate::bvh::MAX_TRAVERSAL_DEPTH),
     ("WIDE_STACK_SIZE", crate::bvh::wide::MAX_WIDE_DEPTH),
+    (
+        "WIDE_TLAS_STACK_SIZE",
+        crate::bvh::tlas::MAX_WIDE_TLAS_DEPTH,
+    ),
     ("DEFORM_GROUP", DEFORM_GROUP),
     ("WAVE_CONTROL_WORDS", WAVE_CONTROL_WORDS),
     ("WAVE_CONTROL_RAYS", WAVE_CONTROL_RAYS),

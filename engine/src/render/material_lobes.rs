@@ -183,6 +183,9 @@ pub struct KernelNeeds {
     /// `1 << LIGHT_*` bits of the kinds next-event estimation can pick; `None`: not known, or the kernel also
     /// samples lights otherwise (the real-time kernel's gradient estimates sample by power), every kind.
     pub next_event_light_kinds: Option<u32>,
+    /// Where the top level's buffer holds the wide tree (`GpuScene::wide_top_level`, `WIDE_TOP_LEVEL` of
+    /// `shaders/traversal/tlas.wgsl`): its first 16-byte word. Only the waves' kernels traverse it.
+    pub wide_top_level: Option<u32>,
 }
 
 impl KernelNeeds {
@@ -200,6 +203,9 @@ impl KernelNeeds {
         }
         if let Some(kinds) = self.next_event_light_kinds {
             constants.push(("NEXT_EVENT_LIGHT_KINDS", f64::from(kinds)));
+        }
+        if let Some(word) = self.wide_top_level {
+            constants.push(("WIDE_TOP_LEVEL", f64::from(word)));
         }
         constants
     }

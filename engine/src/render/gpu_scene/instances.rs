@@ -6,7 +6,7 @@ use super::lights::WeightedLight;
 use super::packing::{emissive_slots, gpu_material, luminance};
 use super::static_merge::{self, MergeMember};
 use super::{GpuScene, SceneWrites};
-use crate::bvh::FlatBvh;
+use crate::bvh::{FlatBvh, GpuBvhNode};
 use crate::gpu::GpuContext;
 use crate::gpu::bind::write_or_grow;
 use crate::render::layout::*;
@@ -23,6 +23,20 @@ pub struct InstanceInput {
     pub world: Mat4,
     pub mesh: u32,
     pub node: u32,
+}
+
+/// The top level as last built: the BVH2 every kernel reads (its leaves indexing the instance buffer), its
+/// leaves' world boxes in instance-buffer order from `first_leaf` on, and whether the waves asked for the wide
+/// tree over the same boxes (`crate::bvh::tlas`), packed after the BVH2 in the same buffer.
+#[derive(Default)]
+pub(super) struct TopLevel {
+    bvh2: Vec<GpuBvhNode>,
+    /// `None` for a tree handed in without boxes (tests' pathological trees): no wide tree is built over it.
+    leaf_boxes: Option<Vec<(Vec3, Vec3)>>,
+    first_leaf: u32,
+    wide_wanted: bool,
+    /// The wide tree's first 16-byte word in the buffer, where it is there.
+    wide_word: Option<u32>,
 }
 
 impl GpuScene {
@@ -52,7 +66,7 @@ impl GpuScene {
         // The merged tree is the last leaf input.
         boxes.extend(self.merge.as_ref().map(|m| m.bounds));
         let tlas = crate::bvh::build_tlas(&boxes)?;
-        self.upload_placements(ctx, scene, inputs, &members, &leaves, tlas);
+        self.upload_placements(ctx, scene, inputs, &members, &leaves, tlas, Some(&boxes));
         let (lo, hi) = boxes.iter().fold((Vec3::MAX, Vec3::MIN), |(lo, hi), b| {
             (lo.min(b.0), hi.max(b.1))
         });
@@ -173,11 +187,13 @@ impl GpuScene {
         tlas: FlatBvh,
     ) {
         let leaves: Vec<usize> = (0..inputs.len()).collect();
-        self.upload_placements(ctx, scene, inputs, &[], &leaves, tlas);
+        self.upload_placements(ctx, scene, inputs, &[], &leaves, tlas, None);
     }
 
     /// The instance buffer: `members` (inputs merged, in merge order), then `tlas`'s leaves in tree order, where
-    /// leaf `k` is input `leaves[k]` and leaf `leaves.len()` the merged tree.
+    /// leaf `k` is input `leaves[k]` and leaf `leaves.len()` the merged tree, whose world boxes `boxes` holds in
+    /// the same order where known.
+    #[allow(clippy::too_many_arguments)]
     fn upload_placements(
         &mut self,
         ctx: &GpuContext,
@@ -186,6 +202,7 @@ impl GpuScene {
         members: &[usize],
         leaves: &[usize],
         mut tlas: FlatBvh,
+        boxes: Option<&[(Vec3, Vec3)]>,
     ) {
         self.written |= SceneWrites::INSTANCES | SceneWrites::TLAS_NODES;
         let placed = |i: usize| GpuInstance::new(inputs[i].world, inputs[i].mesh);
@@ -220,24 +237,72 @@ impl GpuScene {
         }
         let triangles = self.triangle_lights(scene, &mut ordered);
         self.lights.set_triangles(triangles);
-        let instance_bytes = bytemuck::cast_slice::<_, u8>(&ordered);
-        let tlas_bytes = bytemuck::cast_slice::<_, u8>(&tlas.nodes);
-        let mut recreated = false;
-        for (buffer, bytes, label) in [
-            (&mut self.instances, instance_bytes, "instances"),
-            (&mut self.tlas_nodes, tlas_bytes, "tlas nodes"),
-        ] {
-            recreated |= write_or_grow(ctx, buffer, bytes, label);
-        }
-        if recreated {
-            self.generation += 1;
-        }
+        let mut recreated = write_or_grow(
+            ctx,
+            &mut self.instances,
+            bytemuck::cast_slice(&ordered),
+            "instances",
+        );
         self.instance_order = order;
         // The leaves follow the members in the instance buffer.
         self.sole_instance = (tlas.order.len() == 1).then_some(shift);
         self.blas_layouts = self.blas_layouts_of(&ordered[members.len()..]);
-        self.memory.instances_and_tlas = (instance_bytes.len() + tlas_bytes.len()) as u64;
         self.uploaded_instances = ordered;
+        self.top_level.leaf_boxes =
+            boxes.map(|boxes| tlas.order.iter().map(|&k| boxes[k as usize]).collect());
+        self.top_level.first_leaf = shift;
+        self.top_level.bvh2 = tlas.nodes;
+        recreated |= self.upload_top_level(ctx);
+        if recreated {
+            self.generation += 1;
+        }
+    }
+
+    /// The top level's buffer: the BVH2, then where the waves want it and the top level has more than one
+    /// leaf, the wide tree built over the same leaves. Returns whether the buffer was made anew.
+    fn upload_top_level(&mut self, ctx: &GpuContext) -> bool {
+        self.written |= SceneWrites::TLAS_NODES;
+        let top = &mut self.top_level;
+        let mut words: Vec<[u32; 4]> = bytemuck::cast_slice(&top.bvh2).to_vec();
+        top.wide_word = None;
+        let boxes = top
+            .leaf_boxes
+            .as_ref()
+            .filter(|_| top.wide_wanted && self.sole_instance.is_none());
+        if let Some(boxes) = boxes {
+            match crate::bvh::tlas::build_wide_tlas(boxes) {
+                Ok(wide) => {
+                    let base = words.len() as u32;
+                    let first = top.first_leaf;
+                    words.extend(wide.packed(base, |k| first + k));
+                    top.wide_word = Some(base);
+                }
+                // The waves trace the BVH2 instead (no placement makes a balanced wide tree this deep).
+                Err(e) => tracing::warn!("the wide top level was not built: {e}"),
+            }
+        }
+        let bytes = bytemuck::cast_slice::<_, u8>(&words);
+        self.memory.instances_and_tlas = (self.uploaded_instances.len()
+            * std::mem::size_of::<GpuInstance>()
+            + bytes.len()) as u64;
+        write_or_grow(ctx, &mut self.tlas_nodes, bytes, "tlas nodes")
+    }
+
+    /// Where the top level's buffer holds the wide tree (its first 16-byte word), if it does.
+    pub fn wide_top_level(&self) -> Option<u32> {
+        self.top_level.wide_word
+    }
+
+    /// Whether the top level's buffer should hold the wide tree (the waves trace this frame), packed again when
+    /// that changes; returns where it starts (the kernels' `WIDE_TOP_LEVEL`), or `None` where there is none.
+    pub fn want_wide_top_level(&mut self, ctx: &GpuContext, wanted: bool) -> Option<u32> {
+        if self.top_level.wide_wanted != wanted {
+            self.top_level.wide_wanted = wanted;
+            if self.upload_top_level(ctx) {
+                self.generation += 1;
+            }
+        }
+        self.top_level.wide_word
     }
 
     /// The BLAS layouts (`BLAS_LAYOUT_*` bits) of the meshes `leaves` place; the merged tree, past the meshes'

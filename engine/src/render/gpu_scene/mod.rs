@@ -210,6 +210,9 @@ pub struct GpuScene {
     /// The BLAS layouts the top level's leaves use (`BLAS_LAYOUT_*` bits): the trace kernels compile only their
     /// traversals (`BLAS_LAYOUTS`, `shaders/traversal/tlas.wgsl`).
     pub blas_layouts: u32,
+    /// The top level as last built, from which its buffer is packed again when the waves ask for the wide tree
+    /// or stop asking ([`Self::want_wide_top_level`]).
+    top_level: instances::TopLevel,
     /// The KHR_materials_variants variant whose materials the triangles hold (`None`: the file's).
     pub variant: Option<usize>,
     /// Emissive triangles per mesh (triangle slot, material), for building the light list.
@@ -442,6 +445,7 @@ impl GpuScene {
             instance_order: Vec::new(),
             sole_instance: None,
             blas_layouts: BLAS_LAYOUTS_ALL,
+            top_level: Default::default(),
             variant: scene.active_variant,
             emissive_triangles,
             uploaded_instances: Vec::new(),
