@@ -412,6 +412,19 @@ impl obvhs::Boundable for InstanceBox {
     }
 }
 
+/// Instance world-space boxes as obvhs primitives (clamped finite: its builders panic on infinite boxes), and
+/// the top levels' build settings: obvhs's fast preset (they are rebuilt every frame anything moves, on the
+/// render thread), one instance per leaf.
+fn instance_boxes(boxes: &[(Vec3, Vec3)]) -> (Vec<InstanceBox>, BvhBuildParams) {
+    let prims = boxes
+        .iter()
+        .map(|(lo, hi)| InstanceBox(Aabb::new(finite(*lo), finite(*hi))))
+        .collect();
+    let mut params = BvhBuildParams::fast_build();
+    params.max_prims_per_leaf = 1;
+    (prims, params)
+}
+
 /// Builds the top-level BVH over instance world-space boxes; leaves hold one instance each. At most
 /// [`MAX_TLAS_DEPTH`] levels for up to 2^31 instances: where obvhs's tree is deeper (degenerate placements),
 /// a balanced one replaces it.
@@ -419,12 +432,7 @@ pub fn build_tlas(boxes: &[(Vec3, Vec3)]) -> Result<FlatBvh, BvhTooDeep> {
     if boxes.is_empty() {
         return FlatBvh::from_obvhs(&Bvh2::default());
     }
-    let prims: Vec<InstanceBox> = boxes
-        .iter()
-        .map(|(lo, hi)| InstanceBox(Aabb::new(finite(*lo), finite(*hi))))
-        .collect();
-    let mut params = BvhBuildParams::fast_build();
-    params.max_prims_per_leaf = 1;
+    let (prims, params) = instance_boxes(boxes);
     let mut core = std::time::Duration::ZERO;
     let bvh = obvhs::bvh2::builder::build_bvh2(&prims, params, &mut core);
     match FlatBvh::from_obvhs(&bvh) {

@@ -4,9 +4,8 @@
 //! level as a wide tree"), while the megakernel, which shades between traversals, is faster with the BVH2.
 
 use super::wide::tree_depth;
-use super::{BvhTooDeep, InstanceBox, balanced, finite};
+use super::{BvhTooDeep, balanced, instance_boxes};
 use glam::Vec3;
-use obvhs::BvhBuildParams;
 use obvhs::aabb::Aabb;
 use obvhs::cwbvh::{CwBvh, node::CwBvhNode};
 
@@ -24,8 +23,8 @@ pub struct WideTlas {
     pub depth: u32,
 }
 
-/// Builds the wide top-level tree over instance world-space boxes, one instance per leaf slot, with obvhs's fast
-/// preset (it is rebuilt with the BVH2 whenever a placement or a deformed mesh's box changes). Where obvhs's tree
+/// Builds the wide top-level tree over instance world-space boxes, one instance per leaf slot, with the BVH2's
+/// settings (it is rebuilt with the BVH2 whenever a placement or a deformed mesh's box changes). Where obvhs's tree
 /// is deeper than [`MAX_WIDE_TLAS_DEPTH`] (degenerate placements: coincident, nested or geometrically spaced
 /// boxes chain its PLOC builder), a balanced tree is converted instead.
 pub fn build_wide_tlas(boxes: &[(Vec3, Vec3)]) -> Result<WideTlas, BvhTooDeep> {
@@ -37,12 +36,7 @@ pub fn build_wide_tlas(boxes: &[(Vec3, Vec3)]) -> Result<WideTlas, BvhTooDeep> {
             depth: 1,
         });
     }
-    let prims: Vec<InstanceBox> = boxes
-        .iter()
-        .map(|(lo, hi)| InstanceBox(Aabb::new(finite(*lo), finite(*hi))))
-        .collect();
-    let mut params = BvhBuildParams::fast_build();
-    params.max_prims_per_leaf = 1;
+    let (prims, params) = instance_boxes(boxes);
     let mut core = std::time::Duration::ZERO;
     let tlas = from_cwbvh(obvhs::cwbvh::builder::build_cwbvh(
         &prims, params, &mut core,
