@@ -92,6 +92,8 @@ pub fn render_frame(
             if scene.motion.is_none() {
                 scene.enable_motion(&ctx, &assets.0);
             }
+            // The real-time kernels traverse the BVH2: no wide top level is built while they run.
+            scene.want_wide_top_level(&ctx, false);
             encode_realtime_frame(
                 &ctx,
                 &settings,

@@ -265,6 +265,9 @@ impl GpuScene {
         let top = &mut self.top_level;
         let mut words: Vec<[u32; 4]> = bytemuck::cast_slice(&top.bvh2).to_vec();
         top.wide_word = None;
+        // The wide tree starts after room for a power of two of BVH2 nodes: its first word is a pipeline constant
+        // of the waves' kernels, which then changes only where the leaves' count crosses a power of two.
+        words.resize(4 * top.bvh2.len().next_power_of_two(), [0; 4]);
         let boxes = top
             .leaf_boxes
             .as_ref()
