@@ -6,6 +6,23 @@
 // invocation, not per instance visited).
 var<private> wide_stack: array<vec2<u32>, WIDE_STACK_SIZE>;
 
+// The ray's octant, inverted, in each byte: `intersect_wide` and `take_wide_child` order the slots by it.
+fn wide_octant_inverse4(inv_d: vec3<f32>) -> u32 {
+    return select(0u, 0x04040404u, inv_d.x >= 0.0)
+        | select(0u, 0x02020202u, inv_d.y >= 0.0)
+        | select(0u, 0x01010101u, inv_d.z >= 0.0);
+}
+
+// The node of a group's next inner child to visit (the nearest left by the ray's octant), taken out of the group.
+// A group is (first child node, inner-child hit bits 24..31 | the parent's inner-child mask in bits 0..7); inner
+// children are stored contiguously in slot order, so the child's node counts the inner slots before its own.
+fn take_wide_child(group: ptr<function, vec2<u32>>, oct_inv4: u32) -> u32 {
+    let bit = firstLeadingBit((*group).y);
+    (*group).y &= ~(1u << bit);
+    let slot = (bit - 24u) ^ (oct_inv4 & 0xffu);
+    return (*group).x + countOneBits((*group).y & 0xffu & ((1u << slot) - 1u));
+}
+
 // The ray against a wide node's 8 quantised child boxes. Returns the node's hit mask: for each inner child hit,
 // bit 24 + (slot ^ ray octant), so that taking the highest bit first visits near children first (the build
 // ordered the slots per octant); for each leaf hit, its triangles' bits (unary count << offset) in bits 0..23.
@@ -44,9 +61,7 @@ fn intersect_wide(n: WideNode, o: vec3<f32>, inv_d: vec3<f32>, oct_inv4: u32, t_
 
 fn trace_blas_wide(mesh: Mesh, instance: u32, o: vec3<f32>, d: vec3<f32>, hit: ptr<function, Hit>, any_hit: bool) -> bool {
     let inv_d = safe_inverse(d);
-    let oct_inv4 = select(0u, 0x04040404u, inv_d.x >= 0.0)
-        | select(0u, 0x02020202u, inv_d.y >= 0.0)
-        | select(0u, 0x01010101u, inv_d.z >= 0.0);
+    let oct_inv4 = wide_octant_inverse4(inv_d);
     var sp = 0u;
     // A node group: (first child node, inner-child hit bits 24..31 | the parent's inner-child mask in bits 0..7).
     // The root starts as the one hit child of a group with an empty mask, so its index resolves to the base.
@@ -57,11 +72,7 @@ fn trace_blas_wide(mesh: Mesh, instance: u32, o: vec3<f32>, d: vec3<f32>, hit: p
         var tri_base = 0u;
         var tri_bits = 0u;
         if group.y > 0x00ffffffu {
-            let bit = firstLeadingBit(group.y);
-            group.y &= ~(1u << bit);
-            let slot = (bit - 24u) ^ (oct_inv4 & 0xffu);
-            // Inner children are stored contiguously in slot order: count the inner slots before this one.
-            let child = group.x + countOneBits(group.y & 0xffu & ((1u << slot) - 1u));
+            let child = take_wide_child(&group, oct_inv4);
             if group.y > 0x00ffffffu && sp < WIDE_STACK_SIZE {
                 wide_stack[sp] = group;
                 sp++;

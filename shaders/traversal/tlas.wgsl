@@ -70,9 +70,7 @@ fn read_tlas_slot(i: u32) -> u32 {
 fn trace_wide_top_level(ray: Ray, t_max: f32, any_hit: bool) -> Hit {
     var hit = Hit(t_max, NONE, 0u, vec2<f32>(0.0));
     let inv_d = safe_inverse(ray.dir);
-    let oct_inv4 = select(0u, 0x04040404u, inv_d.x >= 0.0)
-        | select(0u, 0x02020202u, inv_d.y >= 0.0)
-        | select(0u, 0x01010101u, inv_d.z >= 0.0);
+    let oct_inv4 = wide_octant_inverse4(inv_d);
     var sp = 0u;
     // A node group, as in cwbvh.wgsl `trace_blas_wide`: the root is the one hit child of a group with an empty mask.
     var group = vec2<u32>(0u, 0x80000000u);
@@ -80,10 +78,7 @@ fn trace_wide_top_level(ray: Ray, t_max: f32, any_hit: bool) -> Hit {
         var first_slot = 0u;
         var leaf_bits = 0u;
         if group.y > 0x00ffffffu {
-            let bit = firstLeadingBit(group.y);
-            group.y &= ~(1u << bit);
-            let slot = (bit - 24u) ^ (oct_inv4 & 0xffu);
-            let child = group.x + countOneBits(group.y & 0xffu & ((1u << slot) - 1u));
+            let child = take_wide_child(&group, oct_inv4);
             if group.y > 0x00ffffffu && sp < WIDE_TLAS_STACK_SIZE {
                 wide_tlas_stack[sp] = group;
                 sp++;

@@ -282,7 +282,7 @@ pub fn measure(
             ms_to_rel_mse_0_01: time_to_reach(&reached, 0.01),
             points,
             frame_trace_ms,
-            integrator: forms_of_repeats(&forms.iter().map(String::as_str).collect::<Vec<_>>()),
+            integrator: forms_of_repeats(&forms),
             auto_trials,
             sort_trials,
         });
@@ -544,10 +544,12 @@ pub(super) fn cached_reference(
 
 /// The integrator forms of a curve's repeats as the curve records them: one name where all agree (or `none`),
 /// else every repeat's in order, so that a curve whose repeats chose differently does not read as one form.
-fn forms_of_repeats(forms: &[&str]) -> String {
+fn forms_of_repeats<S: std::borrow::Borrow<str>>(forms: &[S]) -> String {
     match forms {
         [] => "none".to_string(),
-        [first, rest @ ..] if rest.iter().all(|f| f == first) => first.to_string(),
+        [first, rest @ ..] if rest.iter().all(|f| f.borrow() == first.borrow()) => {
+            first.borrow().to_string()
+        }
         _ => forms.join(", "),
     }
 }
@@ -558,7 +560,7 @@ mod tests {
 
     #[test]
     fn repeats_that_chose_differently_are_all_named() {
-        assert_eq!(forms_of_repeats(&[]), "none");
+        assert_eq!(forms_of_repeats::<&str>(&[]), "none");
         assert_eq!(forms_of_repeats(&["wavefront", "wavefront"]), "wavefront");
         assert_eq!(
             forms_of_repeats(&["megakernel", "wavefront"]),

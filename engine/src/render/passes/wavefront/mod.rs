@@ -250,9 +250,10 @@ impl WavefrontPass {
 
     /// Compiles the kernels for `needs` (the first time; with the pass-throughs of alpha-blended surfaces where
     /// some material blends, and sorting the rays where `sort`) and makes the paths' state for the view's size
-    /// and dispatches of `spp` samples per pixel (again only when the view's targets were replaced or a wave's samples per pixel change). Where the
-    /// GPU's memory cannot hold the state, waves of half as many samples are tried, down to one; returns false
-    /// where even that does not fit (the megakernel must trace the frame).
+    /// and dispatches of `spp` samples per pixel (again only when the view's targets were replaced or a wave's
+    /// samples per pixel change; the queues alone when `sort` changes). Where the GPU's memory cannot hold the
+    /// state, waves of half as many samples are tried, down to one; returns false where even that does not fit
+    /// (the megakernel must trace the frame).
     pub fn prepare(
         &mut self,
         ctx: &GpuContext,
