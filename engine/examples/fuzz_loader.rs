@@ -694,6 +694,7 @@ fn exercise_cpu(scene: SceneAsset) -> Result<(), String> {
             BvhQuality::Fast,
             StaticLayout::Wide,
             m.is_deformable(),
+            true,
         );
         if let Ok(b) = blas {
             let (lo, hi) = b.root_bounds();

@@ -7,6 +7,7 @@
 use crate::common::{gpu_context as gpu, repo_root, shared_assets};
 
 use glam::{Vec3, Vec4};
+use obvhs::cwbvh::node::CwBvhNode;
 use raykin::bvh::GpuBvhNode;
 use raykin::camera::CameraChoice;
 use raykin::gpu_deform::DeformBackend;
@@ -145,6 +146,8 @@ struct Checked {
     moved: usize,
     worst_position: f64,
     loose_area: f64,
+    /// Wide nodes compared.
+    wide_nodes: usize,
 }
 
 /// Compares the current frame of the GPU path with the CPU path, mesh by mesh.
@@ -162,6 +165,8 @@ fn compare(scene: &Arc<SceneAsset>, cpu: &HeadlessApp, gpu_app: &HeadlessApp, t:
     );
     let nodes_g: Vec<GpuBvhNode> =
         bytemuck::cast_slice(&words(gpu_app, &scene_g.blas_nodes)).to_vec();
+    let wide_g: Vec<CwBvhNode> =
+        bytemuck::cast_slice(&words(gpu_app, &scene_g.wide_nodes)).to_vec();
     let cpu_deformed = gpu_app
         .app
         .world()
@@ -171,6 +176,7 @@ fn compare(scene: &Arc<SceneAsset>, cpu: &HeadlessApp, gpu_app: &HeadlessApp, t:
         moved: 0,
         worst_position: 0.0,
         loose_area: 0.0,
+        wide_nodes: 0,
     };
     for (m, _) in owned.iter().enumerate().filter(|(_, o)| **o) {
         let mesh = &scene.meshes[m];
@@ -222,10 +228,12 @@ fn compare(scene: &Arc<SceneAsset>, cpu: &HeadlessApp, gpu_app: &HeadlessApp, t:
                 assert_eq!(pool_c[o + 2 * v + 1], pool_g[o + 2 * v + 1], "handedness");
             }
         }
-        // Refit: the GPU's boxes are exactly a CPU refit of the same tree from the GPU's positions.
+        // Refit: the GPU's boxes are exactly a CPU refit of the same tree from the GPU's positions, and so
+        // are the wide tree's quantised boxes, which the kernels traverse.
         let tree = slot.blas.binary().expect("a deformable mesh has a BVH2");
         let count = tree.flat.nodes.len();
-        let gpu_nodes = &nodes_g[g.blas_root as usize..g.blas_root as usize + count];
+        let root = slot.blas_node_offset as usize;
+        let gpu_nodes = &nodes_g[root..root + count];
         let mut cpu_tree = tree.clone();
         cpu_tree.refit(&pg, &slot.gpu_triangles);
         assert_eq!(
@@ -233,6 +241,22 @@ fn compare(scene: &Arc<SceneAsset>, cpu: &HeadlessApp, gpu_app: &HeadlessApp, t:
             "{} t={t} mesh {m}: GPU refit boxes",
             scene.source
         );
+        let wide = cpu_tree
+            .wide
+            .as_ref()
+            .expect("deforming meshes have a wide tree");
+        let root = slot.wide_node_offset as usize;
+        assert_eq!(
+            g.blas_root,
+            slot.wide_node_offset | raykin::render::layout::WIDE_BLAS
+        );
+        assert_eq!(
+            wide.nodes,
+            &wide_g[root..root + wide.nodes.len()],
+            "{} t={t} mesh {m}: GPU wide refit",
+            scene.source
+        );
+        out.wide_nodes += wide.nodes.len();
         // The top-level bounds hold every deformed vertex.
         let (lo, hi) = slot.deformed_bounds.expect("bounds of a posed mesh");
         for p in &pg {
@@ -316,6 +340,7 @@ fn gpu_deformation_matches_cpu_reference() {
                 c.meshes, c.moved, c.worst_position, c.loose_area
             );
             assert!(c.moved > 0, "{name}: nothing deformed on the GPU");
+            assert!(c.wide_nodes > 0, "{name}: no wide tree refit");
         }
     }
 }
@@ -425,8 +450,10 @@ fn deformable_trees_take_their_backends_preset() {
             if !mesh.is_deformable() {
                 continue;
             }
-            let want = MeshBvh::build(&mesh.positions, &mesh.triangles, preset).unwrap();
-            let not = MeshBvh::build(&mesh.positions, &mesh.triangles, other).unwrap();
+            let build = |quality| {
+                MeshBvh::build_refittable(&mesh.positions, &mesh.triangles, quality, true).unwrap()
+            };
+            let (want, not) = (build(preset), build(other));
             // The two presets give this mesh different trees, so the check below tells them apart.
             assert_ne!(want.flat.order, not.flat.order);
             let got = gpu_scene.mesh_slots[m].blas.binary().unwrap();

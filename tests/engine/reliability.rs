@@ -432,6 +432,7 @@ fn enormous_geometry_builds_a_bvh() {
         raykin::bvh::BvhQuality::Medium,
         raykin::bvh::StaticLayout::Wide,
         false,
+        false,
     )
     .unwrap();
     let (lo, hi) = blas.root_bounds();

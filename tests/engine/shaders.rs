@@ -398,7 +398,10 @@ fn gpu_deform_structs_match_wgsl() {
             node_count,
             order_offset,
             level_offset,
-            levels
+            levels,
+            wide_root,
+            wide_count,
+            source_offset
         ]
     );
     same_layout!(refit, "BvhNode", raykin::bvh::GpuBvhNode, []);

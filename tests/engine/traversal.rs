@@ -459,14 +459,19 @@ fn kernels_compiled_for_the_scene_shape_render_the_general_kernels_image() {
         form.scene_shape_kernels = shaped;
         form
     };
-    // The Cornell box merged into one wide tree (one leaf); CesiumMan, one skinned instance (its BVH2) walking.
-    for (file, layouts) in [
-        ("CornellBox/CornellBox.glb", BLAS_LAYOUT_WIDE),
-        ("CesiumMan/glTF-Binary/CesiumMan.glb", BLAS_LAYOUT_BINARY),
+    // The Cornell box merged into one wide tree (one leaf); CesiumMan, one skinned instance walking, traced
+    // through the wide tree refit with its BVH2, or through the BVH2.
+    let man = "CesiumMan/glTF-Binary/CesiumMan.glb";
+    for (file, wide_deformed, layouts) in [
+        ("CornellBox/CornellBox.glb", true, BLAS_LAYOUT_WIDE),
+        (man, true, BLAS_LAYOUT_WIDE),
+        (man, false, BLAS_LAYOUT_BINARY),
     ] {
         let scene = shared_scene(file);
         let image = |shaped: bool| {
-            let app = four_samples(form(shaped), &scene, settings(24, StaticLayout::Wide, true));
+            let mut ctx = form(shaped);
+            ctx.wide_deformed = wide_deformed;
+            let app = four_samples(ctx, &scene, settings(24, StaticLayout::Wide, true));
             let shape = app.gpu_scene();
             assert!(
                 shape.sole_instance.is_some(),

@@ -9,8 +9,10 @@ mod balanced;
 pub mod refit;
 pub mod tlas;
 pub mod wide;
+pub mod wide_refit;
 
 pub use wide::{WideBvh, WideBvhError};
+pub use wide_refit::RefitWideBvh;
 
 use bytemuck::{Pod, Zeroable};
 use glam::{Vec3, Vec3A};
@@ -290,11 +292,13 @@ fn union_half_area(a: &GpuBvhChild, b: &GpuBvhChild) -> f32 {
     d.x * d.y + d.y * d.z + d.z * d.x
 }
 
-/// A mesh's BVH over its triangles, with its SAH cost at build time for the refit quality guard.
+/// A mesh's BVH over its triangles, with its SAH cost at build time for the refit quality guard, and for a
+/// deforming mesh the wide tree collapsed from it that the kernels traverse ([`RefitWideBvh`]).
 #[derive(Clone, Debug)]
 pub struct MeshBvh {
     pub flat: FlatBvh,
     pub build_sah: f32,
+    pub wide: Option<RefitWideBvh>,
 }
 
 impl MeshBvh {
@@ -311,16 +315,44 @@ impl MeshBvh {
             FlatBvh::from_obvhs(&balanced::median_split(&boxes))
         })?;
         let build_sah = flat.sah_cost();
-        Ok(Self { flat, build_sah })
+        Ok(Self {
+            flat,
+            build_sah,
+            wide: None,
+        })
+    }
+
+    /// [`Self::build`], and with `wide` the wide tree collapsed from it (where it fits the traversal's stack),
+    /// which renumbers the BVH2's triangle order to the wide leaves'.
+    pub fn build_refittable(
+        positions: &[Vec3],
+        triangles: &[[u32; 3]],
+        quality: BvhQuality,
+        wide: bool,
+    ) -> Result<Self, BvhTooDeep> {
+        let mut bvh = Self::build(positions, triangles, quality)?;
+        if wide {
+            let order = bvh.flat.order.clone();
+            bvh.wide = RefitWideBvh::collapse(&mut bvh.flat, |i| {
+                let [a, b, c] =
+                    triangles[order[i] as usize].map(|v| finite_point(positions[v as usize]));
+                (a.min(b).min(c), a.max(b).max(c))
+            });
+        }
+        Ok(bvh)
     }
 
     /// Refits to moved vertices; `gpu_triangles` are the mesh's triangles in [`FlatBvh::order`]. Returns the
     /// new [`Self::sah_ratio`].
     pub fn refit(&mut self, positions: &[Vec3], gpu_triangles: &[[u32; 3]]) -> f32 {
-        let cost = self.flat.refit(|i| {
+        let bounds = |i: usize| {
             let [a, b, c] = gpu_triangles[i].map(|v| positions[v as usize]);
             (a.min(b).min(c), a.max(b).max(c))
-        });
+        };
+        let cost = self.flat.refit(bounds);
+        if let Some(wide) = &mut self.wide {
+            wide.refit(&self.flat, bounds);
+        }
         cost / self.build_sah.max(f32::MIN_POSITIVE)
     }
 
@@ -355,20 +387,28 @@ pub enum Blas {
 }
 
 impl Blas {
-    /// Builds a static mesh's tree in `layout`, or a refittable one when the mesh deforms.
+    /// Builds a static mesh's tree in `layout`, or a refittable one when the mesh deforms: its BVH2, with the
+    /// wide tree collapsed from it where `layout` is wide and `wide_deformable` holds.
     pub fn build(
         positions: &[Vec3],
         triangles: &[[u32; 3]],
         quality: BvhQuality,
         layout: StaticLayout,
         deformable: bool,
+        wide_deformable: bool,
     ) -> Result<Self, BvhTooDeep> {
-        if !deformable && layout == StaticLayout::Wide {
-            // Where the wide build fails, traversal gives the same image through the BVH2, which is never
-            // too deep.
-            if let Ok(wide) = WideBvh::build(positions, triangles, quality) {
-                return Ok(Self::Wide(wide));
-            }
+        let wide = layout == StaticLayout::Wide;
+        if deformable {
+            return Ok(Self::Binary(MeshBvh::build_refittable(
+                positions,
+                triangles,
+                quality,
+                wide && wide_deformable,
+            )?));
+        }
+        // Where the wide build fails, traversal gives the same image through the BVH2, which is never too deep.
+        if wide && let Ok(tree) = WideBvh::build(positions, triangles, quality) {
+            return Ok(Self::Wide(tree));
         }
         Ok(Self::Binary(MeshBvh::build(positions, triangles, quality)?))
     }
@@ -473,6 +513,10 @@ const BUILD_COORDINATE_LIMIT: f32 = 1e16;
 /// areas overflow (above). Geometry beyond the limit cannot be rendered usefully in f32 anyway, and the box
 /// of the clamped vertices is the real box cut to the limit cube, so every hit inside the cube is still
 /// found (traversal tests the real coordinates).
+fn finite_point(p: Vec3) -> Vec3 {
+    Vec3::from(finite(p))
+}
+
 fn finite(p: Vec3) -> Vec3A {
     let clamp = |v: f32| {
         if v.is_nan() {

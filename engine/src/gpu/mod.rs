@@ -92,6 +92,10 @@ pub struct GpuContext {
     /// The waves traverse a wide top-level tree built beside the BVH2 (`crate::bvh::tlas`) where the scene has
     /// more than one top-level leaf. On by default; `RAYKIN_WIDE_TOP_LEVEL=off` keeps the BVH2 (A/B runs).
     pub wide_top_level: bool,
+    /// Deforming meshes get a wide tree collapsed from their BVH2 and refit with it (`crate::bvh::wide_refit`),
+    /// which every kernel traverses instead of the BVH2. On by default; `RAYKIN_WIDE_DEFORMED=off` keeps the
+    /// BVH2 (A/B runs).
+    pub wide_deformed: bool,
     /// The staging buffer of the last readback, kept for the next: allocating (and on discrete GPUs pinning)
     /// host memory for every readback cost more than the copy.
     readback_staging: Arc<std::sync::Mutex<Option<wgpu::Buffer>>>,
@@ -162,6 +166,7 @@ impl GpuContext {
             ),
             scene_shape_kernels: switch_on("RAYKIN_SCENE_SHAPE_KERNELS", true),
             wide_top_level: switch_on("RAYKIN_WIDE_TOP_LEVEL", true),
+            wide_deformed: switch_on("RAYKIN_WIDE_DEFORMED", true),
             readback_staging: Arc::default(),
             device,
             queue,

@@ -22,6 +22,7 @@ use crate::bvh::{BvhQuality, MeshBvh};
 use crate::gpu::GpuContext;
 use crate::gpu::bind::storage_with as storage;
 use crate::render::gpu_scene::GpuScene;
+use crate::render::layout::NONE;
 use crate::render::passes::deform::{DeformBuffers, DeformParams, DeformPass};
 use crate::render::passes::refit::{RefitBuffers, RefitMeshGpu, RefitPass};
 use crate::scene::SceneAsset;
@@ -87,6 +88,10 @@ pub struct GpuDeformer {
     level_order_buffer: wgpu::Buffer,
     level_start_buffer: wgpu::Buffer,
     sah_buffer: wgpu::Buffer,
+    /// Per wide node of the meshes that have a wide tree, the BVH2 node it stands for.
+    wide_source_buffer: wgpu::Buffer,
+    /// Some mesh has a wide tree: the refit pass re-quantises them.
+    wide: bool,
     refit_meshes: Vec<RefitMeshGpu>,
     matrices: Vec<Mat4>,
     weights: Vec<f32>,
@@ -163,6 +168,7 @@ impl GpuDeformer {
         let mut refit_meshes = Vec::with_capacity(eligible.len());
         let mut order_words: Vec<u32> = Vec::new();
         let mut level_starts: Vec<u32> = Vec::new();
+        let mut wide_sources: Vec<u32> = Vec::new();
         for (i, (&m, d)) in eligible.iter().zip(&inputs.meshes).enumerate() {
             index_of[m] = Some(i);
             let slot = &gpu.mesh_slots[m];
@@ -173,16 +179,31 @@ impl GpuDeformer {
                 ));
             };
             let levels = LevelOrder::of(&bvh.flat);
+            let wide = bvh.wide.as_ref().filter(|_| slot.wide_node_offset != NONE);
             let refit = RefitMeshGpu {
-                blas_root: slot.gpu.blas_root,
+                blas_root: slot.blas_node_offset,
                 triangle_offset: slot.gpu.triangle_offset,
                 position_offset: slot.gpu.position_offset,
                 node_count: bvh.flat.nodes.len() as u32,
                 order_offset: order_words.len() as u32,
                 level_offset: level_starts.len() as u32,
                 levels: levels.levels() as u32,
-                _pad: 0,
+                wide_root: if wide.is_some() {
+                    slot.wide_node_offset
+                } else {
+                    NONE
+                },
+                wide_count: wide.map_or(0, |w| w.nodes.len() as u32),
+                source_offset: wide_sources.len() as u32,
+                _pad: [0; 2],
             };
+            if let Some(w) = wide {
+                wide_sources.extend_from_slice(&w.bvh2_node);
+                wide_sources.resize(
+                    refit.source_offset as usize + slot.wide_capacity as usize,
+                    0,
+                );
+            }
             order_words.extend_from_slice(&levels.order);
             order_words.resize(refit.order_offset as usize + slot.blas_capacity as usize, 0);
             level_starts.extend_from_slice(&levels.starts);
@@ -224,6 +245,15 @@ impl GpuDeformer {
             bytemuck::cast_slice(&level_starts),
         );
         let sah_buffer = copy_dst("refit sah cost", meshes.len() as u64 * 4);
+        let wide = !wide_sources.is_empty();
+        if !wide {
+            wide_sources.push(0);
+        }
+        let wide_source_buffer = storage(
+            ctx,
+            "refit wide sources",
+            bytemuck::cast_slice(&wide_sources),
+        );
         let (x, _) = crate::gpu::bind::grid(inputs.groups);
         let params = DeformParams {
             mesh_count: meshes.len() as u32,
@@ -263,6 +293,8 @@ impl GpuDeformer {
                 level_starts: &level_start_buffer,
                 mesh_flags: &active_buffer,
                 sah_cost: &sah_buffer,
+                wide_nodes: &gpu.wide_nodes,
+                wide_sources: &wide_source_buffer,
             },
         );
         let timestamps = crate::gpu::PassTimestamps::new(ctx, "deform timestamps", 2);
@@ -276,6 +308,7 @@ impl GpuDeformer {
             &level_order_buffer,
             &level_start_buffer,
             &sah_buffer,
+            &wide_source_buffer,
         ]
         .iter()
         .map(|b| b.size())
@@ -300,6 +333,8 @@ impl GpuDeformer {
             level_order_buffer,
             level_start_buffer,
             sah_buffer,
+            wide_source_buffer,
+            wide,
             refit_meshes,
             rebuilds: Vec::new(),
             timestamps,
@@ -405,6 +440,7 @@ impl GpuDeformer {
                 &mut encoder,
                 &self.refit_group,
                 self.meshes.len() as u32,
+                self.wide,
                 ts(1),
             );
             if let Some(t) = &self.timestamps {
@@ -445,6 +481,7 @@ impl GpuDeformer {
                 i,
                 slot.gpu.position_offset,
                 scene.meshes[m].positions.len(),
+                slot.wide_node_offset != NONE,
             ));
             encoded = true;
         }
@@ -546,7 +583,8 @@ impl GpuDeformer {
         let d = &mut self.meshes[i];
         let build_sah = bvh.build_sah;
         let node_count = bvh.flat.nodes.len() as u32;
-        if !gpu.install_bvh(ctx, scene, d.mesh, bvh) || levels.starts.len() > LEVEL_SLOTS {
+        let sources = bvh.wide.as_ref().map(|w| w.bvh2_node.clone());
+        if levels.starts.len() > LEVEL_SLOTS || !gpu.install_bvh(ctx, scene, d.mesh, bvh) {
             return false;
         }
         d.build_sah = build_sah;
@@ -554,11 +592,6 @@ impl GpuDeformer {
         let refit = &mut self.refit_meshes[i];
         refit.node_count = node_count;
         refit.levels = levels.levels() as u32;
-        ctx.queue.write_buffer(
-            &self.refit_mesh_buffer,
-            (i * std::mem::size_of::<RefitMeshGpu>()) as u64,
-            bytemuck::bytes_of(refit),
-        );
         ctx.queue.write_buffer(
             &self.level_order_buffer,
             refit.order_offset as u64 * 4,
@@ -568,6 +601,20 @@ impl GpuDeformer {
             &self.level_start_buffer,
             refit.level_offset as u64 * 4,
             bytemuck::cast_slice(&levels.starts),
+        );
+        // `install_bvh` took the rebuilt wide tree only where the mesh has one.
+        if let (Some(sources), true) = (sources, refit.wide_root != NONE) {
+            refit.wide_count = sources.len() as u32;
+            ctx.queue.write_buffer(
+                &self.wide_source_buffer,
+                refit.source_offset as u64 * 4,
+                bytemuck::cast_slice(&sources),
+            );
+        }
+        ctx.queue.write_buffer(
+            &self.refit_mesh_buffer,
+            (i * std::mem::size_of::<RefitMeshGpu>()) as u64,
+            bytemuck::bytes_of(refit),
         );
         true
     }

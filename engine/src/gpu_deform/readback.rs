@@ -153,6 +153,8 @@ enum Stage {
 pub struct RebuildJob {
     /// Index among the GPU-deformed meshes.
     pub mesh: usize,
+    /// The mesh has a wide tree: the rebuild collapses one from the new BVH2.
+    wide: bool,
     stage: Stage,
 }
 
@@ -165,12 +167,14 @@ impl RebuildJob {
         mesh: usize,
         position_offset: u32,
         vertices: usize,
+        wide: bool,
     ) -> Self {
         let bytes = (vertices as u64 * POSITION_WORDS as u64 * 4).max(4);
         let staging = Staging::new(ctx, "rebuild positions", bytes);
         staging.capture(encoder, vertex_pool, position_offset as u64 * 4, bytes);
         Self {
             mesh,
+            wide,
             stage: Stage::Reading(staging, bytes),
         }
     }
@@ -195,12 +199,13 @@ impl RebuildJob {
                     .map(|p| Vec3::from_slice(p))
                     .collect();
             let scene = scene.clone();
+            let wide = self.wide;
             // A worker thread keeps the build out of the frame loop.
             let spawned = std::thread::Builder::new()
                 .name("raykin-bvh-rebuild".into())
                 .spawn(move || {
                     let triangles = &scene.meshes[scene_mesh].triangles;
-                    MeshBvh::build(&positions, triangles, quality).map(|bvh| {
+                    MeshBvh::build_refittable(&positions, triangles, quality, wide).map(|bvh| {
                         let levels = LevelOrder::of(&bvh.flat);
                         (bvh, levels)
                     })

@@ -189,7 +189,8 @@ pub fn render_frame(
         if !in_waves {
             trace.prepare(&ctx, &view, needs, aovs);
         }
-        let group = bindings.group(&ctx, &mut scene, &mut encoder, deformed_on_gpu(&deform));
+        let deformed = deformed_on_gpu(&deform, &scene);
+        let group = bindings.group(&ctx, &mut scene, &mut encoder, deformed);
         let timestamps = stats.pass_writes(TRACE_PAIR);
         match wavefront.0.as_ref().filter(|_| in_waves) {
             Some(pass) => pass.encode(
@@ -244,10 +245,13 @@ pub fn render_frame(
 }
 
 /// The scene buffers the GPU deformer's command buffers of this frame write (skinned positions, refit BLAS
-/// nodes): CPU adapters copy them into the kernels' textures after those commands.
-fn deformed_on_gpu(deform: &[wgpu::CommandBuffer]) -> SceneWrites {
+/// nodes, and the wide trees refit with them where the scene has any): CPU adapters copy them into the
+/// kernels' textures after those commands.
+fn deformed_on_gpu(deform: &[wgpu::CommandBuffer], scene: &GpuScene) -> SceneWrites {
     if deform.is_empty() {
         SceneWrites::NONE
+    } else if scene.has_wide_deformed() {
+        SceneWrites::VERTEX_POOL | SceneWrites::BLAS_NODES | SceneWrites::WIDE_NODES
     } else {
         SceneWrites::VERTEX_POOL | SceneWrites::BLAS_NODES
     }
@@ -354,9 +358,8 @@ pub fn encode_realtime_frame(
     ctx.queue
         .write_buffer(&targets.uniform, 0, bytemuck::bytes_of(&plan.uniform));
     let mut encoder = ctx.device.create_command_encoder(&Default::default());
-    let scene_group = bindings
-        .group(ctx, scene, &mut encoder, deformed_on_gpu(&deform))
-        .clone();
+    let deformed = deformed_on_gpu(&deform, scene);
+    let scene_group = bindings.group(ctx, scene, &mut encoder, deformed).clone();
     let groups = SceneGroups {
         scene: &scene_group,
         motion: &motion_group,

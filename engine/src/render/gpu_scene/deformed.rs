@@ -32,7 +32,10 @@ impl GpuScene {
             /// The triangle order went back to the upload tree's.
             restored: Option<OrderedTriangles>,
         }
-        self.written |= SceneWrites::VERTEX_POOL | SceneWrites::BLAS_NODES | SceneWrites::TRIANGLES;
+        self.written |= SceneWrites::VERTEX_POOL
+            | SceneWrites::BLAS_NODES
+            | SceneWrites::WIDE_NODES
+            | SceneWrites::TRIANGLES;
         let (materials, quality, variant) =
             (&self.material_data, self.deformable_quality, self.variant);
         let mut changed = vec![false; self.mesh_slots.len()];
@@ -127,11 +130,7 @@ impl GpuScene {
                     );
                 }
                 if let Some(bvh) = slot.blas.binary() {
-                    ctx.queue.write_buffer(
-                        &self.blas_nodes,
-                        slot.gpu.blas_root as u64 * 64,
-                        bytemuck::cast_slice(&bvh.flat.nodes),
-                    );
+                    self.write_bvh(ctx, u.mesh, bvh);
                 }
                 (u.mesh, u.sah_ratio)
             })
@@ -153,9 +152,28 @@ impl GpuScene {
             .positions
             .as_deref()
             .unwrap_or(&scene.meshes[mesh].positions);
-        let bvh = MeshBvh::build(positions, &scene.meshes[mesh].triangles, quality)?;
+        let wide = slot.wide_node_offset != NONE;
+        let bvh =
+            MeshBvh::build_refittable(positions, &scene.meshes[mesh].triangles, quality, wide)?;
         self.install_bvh(ctx, scene, mesh, bvh);
         Ok(())
+    }
+
+    /// Uploads a deforming mesh's refit BVH2 and, where it has one, its wide tree.
+    fn write_bvh(&self, ctx: &GpuContext, mesh: usize, bvh: &MeshBvh) {
+        let slot = &self.mesh_slots[mesh];
+        ctx.queue.write_buffer(
+            &self.blas_nodes,
+            slot.blas_node_offset as u64 * 64,
+            bytemuck::cast_slice(&bvh.flat.nodes),
+        );
+        if let (Some(wide), true) = (&bvh.wide, slot.wide_node_offset != NONE) {
+            ctx.queue.write_buffer(
+                &self.wide_nodes,
+                slot.wide_node_offset as u64 * 80,
+                bytemuck::cast_slice(&wide.nodes),
+            );
+        }
     }
 
     /// Replaces a deformable mesh's BLAS with `bvh` in its reserved node range and rewrites its triangle
@@ -179,7 +197,31 @@ impl GpuScene {
             );
             return false;
         }
+        // The mesh record points at the wide tree, which reads the rebuilt tree's triangle order: a rebuild
+        // without one (deeper than the wide stack) keeps the refit trees.
+        let wide = slot.wide_node_offset != NONE;
+        if wide
+            && bvh
+                .wide
+                .as_ref()
+                .is_none_or(|w| w.nodes.len() > slot.wide_capacity as usize)
+        {
+            tracing::warn!(
+                "mesh `{}`: the rebuilt BVH has no wide tree within the {} nodes reserved; kept the refit trees",
+                data.name,
+                slot.wide_capacity
+            );
+            return false;
+        }
         self.written |= SceneWrites::BLAS_NODES | SceneWrites::TRIANGLES;
+        if let (Some(w), true) = (&bvh.wide, wide) {
+            self.written |= SceneWrites::WIDE_NODES;
+            ctx.queue.write_buffer(
+                &self.wide_nodes,
+                slot.wide_node_offset as u64 * 80,
+                bytemuck::cast_slice(&w.nodes),
+            );
+        }
         let mut nodes = bvh.flat.nodes.clone();
         nodes.resize(slot.blas_capacity as usize, crate::bvh::GpuBvhNode::EMPTY);
         let ordered = order_triangles(
@@ -191,7 +233,7 @@ impl GpuScene {
         );
         ctx.queue.write_buffer(
             &self.blas_nodes,
-            slot.gpu.blas_root as u64 * 64,
+            slot.blas_node_offset as u64 * 64,
             bytemuck::cast_slice(&nodes),
         );
         ctx.queue.write_buffer(

@@ -52,7 +52,12 @@ pub struct MeshSlot {
     pub gpu: GpuMesh,
     /// Triangles in BVH order (vertex indices).
     pub gpu_triangles: Vec<[u32; 3]>,
+    /// Where the mesh's BVH2 starts in `blas_nodes` (the mesh record points at its wide tree where it has one).
     pub blas_node_offset: u32,
+    /// Where a deforming mesh's wide tree starts in `wide_nodes` ([`crate::bvh::MeshBvh::wide`]), and the nodes
+    /// reserved for it (any rebuilt tree fits: a wide node per BVH2 node at most); `NONE` and 0 without one.
+    pub wide_node_offset: u32,
+    pub wide_capacity: u32,
     pub blas: Blas,
     /// Current vertex positions of a deformed mesh; `None` while it is in its rest pose.
     pub positions: Option<Vec<Vec3>>,
@@ -81,7 +86,8 @@ impl MeshSlot {
             // Until the first rebuild the current tree has the upload topology; after one, the same
             // deterministic build over the rest positions gives it back.
             let upload = if self.rebuilt {
-                MeshBvh::build(&mesh.positions, &mesh.triangles, quality).ok()?
+                let wide = self.wide_node_offset != NONE;
+                MeshBvh::build_refittable(&mesh.positions, &mesh.triangles, quality, wide).ok()?
             } else {
                 self.blas.binary()?.clone()
             };
@@ -239,6 +245,11 @@ pub struct GpuScene {
 }
 
 impl GpuScene {
+    /// Whether any deforming mesh is traced through a wide tree refit with its BVH2.
+    pub fn has_wide_deformed(&self) -> bool {
+        self.mesh_slots.iter().any(|s| s.wide_node_offset != NONE)
+    }
+
     /// The build preset of deformable meshes' trees (every rebuild takes the upload's).
     pub fn deformable_quality(&self) -> crate::bvh::BvhQuality {
         self.deformable_quality
@@ -307,6 +318,7 @@ impl GpuScene {
                     },
                     layout,
                     deformable,
+                    ctx.wide_deformed,
                 )
                 .map_err(|source| UploadError::Bvh {
                     scene: scene.source.clone(),
@@ -328,6 +340,7 @@ impl GpuScene {
             triangles.extend_from_slice(&ordered.packed);
             let (gpu_triangles, emissive) = (ordered.indices, ordered.emissive);
             emissive_triangles.push(emissive);
+            let (mut wide_node_offset, mut wide_capacity) = (NONE, 0);
             match &blas {
                 Blas::Wide(wide) => {
                     gpu.blas_root = wide_nodes.len() as u32 | WIDE_BLAS;
@@ -335,6 +348,16 @@ impl GpuScene {
                 }
                 Blas::Binary(bvh) => {
                     gpu.blas_root = blas_nodes.len() as u32;
+                    if let Some(wide) = &bvh.wide {
+                        wide_node_offset = wide_nodes.len() as u32;
+                        wide_capacity = crate::bvh::refit::node_capacity(mesh.triangles.len())
+                            .max(wide.nodes.len()) as u32;
+                        wide_nodes.extend_from_slice(&wide.nodes);
+                        wide_nodes.resize(
+                            (wide_node_offset + wide_capacity) as usize,
+                            Default::default(),
+                        );
+                    }
                     blas_nodes.extend_from_slice(&bvh.flat.nodes);
                     // Deformable meshes reserve the largest tree a rebuild can produce, so it rewrites in place.
                     if mesh.is_deformable() {
@@ -351,10 +374,16 @@ impl GpuScene {
                 Blas::Wide(w) => w.nodes.len() as u32,
                 Blas::Binary(_) => (blas_nodes.len() - gpu.blas_root as usize) as u32,
             };
+            let blas_node_offset = gpu.blas_root;
+            if wide_node_offset != NONE {
+                gpu.blas_root = wide_node_offset | WIDE_BLAS;
+            }
             slots.push(MeshSlot {
                 gpu,
                 gpu_triangles,
-                blas_node_offset: gpu.blas_root,
+                blas_node_offset,
+                wide_node_offset,
+                wide_capacity,
                 blas,
                 positions: None,
                 blas_capacity,

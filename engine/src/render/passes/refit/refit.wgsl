@@ -4,13 +4,16 @@
 // earlier level, its leaf children read the deformed triangles. Same min/max as the CPU refit
 // (engine/src/bvh/mod.rs `FlatBvh::refit`), so both give identical boxes from identical positions. The SAH
 // cost matches `FlatBvh::sah_cost` (traversal and intersection cost 1, relative to the root's area).
+// Then `refit_wide` re-quantises the wide trees collapsed from those BVH2s (engine/src/bvh/wide_refit.rs,
+// whose `RefitWideBvh::refit` it mirrors operation for operation).
 
 const MIN_POSITIVE: f32 = 1.17549435e-38;
 
 // engine/src/gpu_deform/mod.rs `RefitMeshGpu`.
 struct RefitMesh {
     blas_root: u32, triangle_offset: u32, position_offset: u32, node_count: u32,
-    order_offset: u32, level_offset: u32, levels: u32, _pad: u32,
+    order_offset: u32, level_offset: u32, levels: u32, wide_root: u32,
+    wide_count: u32, source_offset: u32, _pad0: u32, _pad1: u32,
 }
 
 @group(0) @binding(0) var<storage, read_write> blas_nodes: array<BvhNode>;
@@ -23,6 +26,9 @@ struct RefitMesh {
 @group(0) @binding(5) var<storage, read> level_starts: array<u32>;
 @group(0) @binding(6) var<storage, read> mesh_flags: array<u32>;
 @group(0) @binding(7) var<storage, read_write> sah_cost: array<f32>;
+// The wide trees' nodes (obvhs `CwBvhNode`, 20 words each) and, per wide node, the BVH2 node it stands for.
+@group(0) @binding(8) var<storage, read_write> wide_nodes: array<u32>;
+@group(0) @binding(9) var<storage, read> wide_sources: array<u32>;
 
 var<workgroup> partial: array<f32, REFIT_GROUP>;
 
@@ -110,5 +116,96 @@ fn refit(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) 
     if lane == 0u {
         let root = blas_nodes[m.blas_root];
         sah_cost[mesh] = partial[0] / max(union_half_area(root.a, root.b), MIN_POSITIVE);
+    }
+}
+
+const WIDE_NODE_WORDS: u32 = 20u;
+const CELLS: f32 = 255.0;
+
+// `cell_exponent` in wide_refit.rs: the biased exponent of the smallest power of two c with 255 c >= extent.
+fn cell_exponent(extent: f32) -> u32 {
+    let bits = bitcast<u32>(extent * (1.0 / CELLS));
+    var e = (bits >> 23u) + select(0u, 1u, (bits & 0x7fffffu) != 0u);
+    if bitcast<f32>(min(e, 254u) << 23u) * CELLS < extent { e += 1u; }
+    return clamp(e, 1u, 253u);
+}
+
+// Sets byte `slot` of the two-word plane array starting at word `at` of the node.
+fn put_plane(planes: ptr<function, array<u32, 12>>, at: u32, slot: u32, q: f32) {
+    (*planes)[at + slot / 4u] |= u32(q) << ((slot % 4u) * 8u);
+}
+
+@compute @workgroup_size(REFIT_GROUP)
+fn refit_wide(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) lane: u32) {
+    let mesh = wg.x + wg.y * 65535u;
+    if mesh >= arrayLength(&refit_meshes) || mesh_flags[mesh] == 0u { return; }
+    let m = refit_meshes[mesh];
+    if m.wide_root == NONE { return; }
+    for (var i = lane; i < m.wide_count; i += REFIT_GROUP) {
+        let base = (m.wide_root + i) * WIDE_NODE_WORDS;
+        let imask = wide_nodes[base + 3u] >> 24u;
+        let child_base = wide_nodes[base + 4u];
+        let primitive_base = wide_nodes[base + 5u];
+        let metas = vec2<u32>(wide_nodes[base + 6u], wide_nodes[base + 7u]);
+        var lo: array<vec3<f32>, 8>;
+        var hi: array<vec3<f32>, 8>;
+        var union_lo = vec3<f32>(3.4028235e38);
+        var union_hi = vec3<f32>(-3.4028235e38);
+        var inner = 0u;
+        for (var slot = 0u; slot < 8u; slot++) {
+            let slot_meta = (metas[slot / 4u] >> ((slot % 4u) * 8u)) & 0xffu;
+            if slot_meta == 0u { continue; }
+            var b_lo = vec3<f32>(3.4028235e38);
+            var b_hi = vec3<f32>(-3.4028235e38);
+            if (imask & (1u << slot)) != 0u {
+                // An inner slot: its BVH2 node's two children, refit by `refit` before this dispatch.
+                let n = blas_nodes[m.blas_root + wide_sources[m.source_offset + child_base + inner]];
+                inner++;
+                b_lo = n.a.min;
+                b_hi = n.a.max;
+                if !is_empty(n.b) {
+                    b_lo = min(b_lo, n.b.min);
+                    b_hi = max(b_hi, n.b.max);
+                }
+            } else {
+                let first = primitive_base + (slot_meta & 0x1fu);
+                for (var k = 0u; k < countOneBits(slot_meta >> 5u); k++) {
+                    let tri = triangles[m.triangle_offset + first + k];
+                    let a = position(m, tri.x);
+                    let b = position(m, tri.y);
+                    let c = position(m, tri.z);
+                    b_lo = min(b_lo, min(min(a, b), c));
+                    b_hi = max(b_hi, max(max(a, b), c));
+                }
+            }
+            lo[slot] = b_lo;
+            hi[slot] = b_hi;
+            union_lo = min(union_lo, b_lo);
+            union_hi = max(union_hi, b_hi);
+        }
+        if union_lo.x > union_hi.x { continue; }
+        let extent = max(union_hi - union_lo, vec3<f32>(1e-20));
+        let e = vec3<u32>(cell_exponent(extent.x), cell_exponent(extent.y), cell_exponent(extent.z));
+        let inverse = bitcast<vec3<f32>>((vec3<u32>(254u) - e) << vec3<u32>(23u));
+        // Planes: min x, max x, min y, max y, min z, max z, two words (eight bytes) each.
+        var planes: array<u32, 12>;
+        for (var slot = 0u; slot < 8u; slot++) {
+            if ((metas[slot / 4u] >> ((slot % 4u) * 8u)) & 0xffu) == 0u { continue; }
+            let q_lo = clamp(floor((lo[slot] - union_lo) * inverse), vec3<f32>(0.0), vec3<f32>(CELLS));
+            let q_hi = clamp(ceil((hi[slot] - union_lo) * inverse), vec3<f32>(0.0), vec3<f32>(CELLS));
+            put_plane(&planes, 0u, slot, q_lo.x);
+            put_plane(&planes, 2u, slot, q_hi.x);
+            put_plane(&planes, 4u, slot, q_lo.y);
+            put_plane(&planes, 6u, slot, q_hi.y);
+            put_plane(&planes, 8u, slot, q_lo.z);
+            put_plane(&planes, 10u, slot, q_hi.z);
+        }
+        wide_nodes[base] = bitcast<u32>(union_lo.x);
+        wide_nodes[base + 1u] = bitcast<u32>(union_lo.y);
+        wide_nodes[base + 2u] = bitcast<u32>(union_lo.z);
+        wide_nodes[base + 3u] = e.x | (e.y << 8u) | (e.z << 16u) | (imask << 24u);
+        for (var w = 0u; w < 12u; w++) {
+            wide_nodes[base + 8u + w] = planes[w];
+        }
     }
 }
