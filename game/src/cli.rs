@@ -420,7 +420,8 @@ pub struct SceneArgs {
     pub deform: DeformArg,
     /// BVH layout of static meshes: compressed 8-wide trees with the instances that never move merged into
     /// one (fastest: overlapping meshes stop costing a descent each), the same without the merge, or the
-    /// refittable BVH2 deformable meshes use. The image is the same up to float rounding.
+    /// refittable BVH2 deformable meshes refit (with `binary` they are traced through it too, not through the
+    /// wide trees collapsed from it). The image is the same up to float rounding.
     #[arg(long, value_enum, default_value_t = StaticBvh::Merged)]
     pub static_bvh: StaticBvh,
     /// How paths are traced: one kernel per pixel's paths, or kernels per stage over a queue of the paths
@@ -512,7 +513,7 @@ pub enum StaticBvh {
     Merged,
     /// One compressed 8-wide tree per mesh, every instance through the top level.
     Wide,
-    /// The refittable BVH2 deformable meshes use, per mesh.
+    /// The refittable BVH2 deformable meshes refit, per mesh (deformable meshes traced through theirs too).
     Binary,
 }
 

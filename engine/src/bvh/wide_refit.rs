@@ -474,6 +474,39 @@ mod tests {
         check(&tree, &positions, &triangles, &order);
     }
 
+    /// No triangle, one, a pile of coincident ones, non-finite vertices: a tree (or none, never a panic) whose
+    /// leaves still hold every slot once.
+    #[test]
+    fn degenerate_meshes_collapse() {
+        let nan = Vec3::splat(f32::NAN);
+        let cases: Vec<(Vec<Vec3>, Vec<[u32; 3]>)> = vec![
+            (vec![], vec![]),
+            (vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![[0, 1, 2]]),
+            (vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![[0, 1, 2]; 50]),
+            (
+                vec![Vec3::ZERO, Vec3::X, nan, Vec3::splat(f32::INFINITY)],
+                (0..40).map(|k| [k % 4, (k + 1) % 4, (k + 2) % 4]).collect(),
+            ),
+        ];
+        for (positions, triangles) in cases {
+            let mut bvh =
+                MeshBvh::build_refittable(&positions, &triangles, BvhQuality::Fast, true).unwrap();
+            let tree = bvh.wide.clone().expect("a shallow tree");
+            let mut seen = vec![0u32; bvh.flat.order.len()];
+            for node in &tree.nodes {
+                for slot in 0..8 {
+                    if !node.is_child_empty(slot) && node.imask & (1 << slot) == 0 {
+                        let (first, count) = node.child_primitives(slot);
+                        (first..first + count).for_each(|s| seen[s as usize] += 1);
+                    }
+                }
+            }
+            assert!(seen.iter().all(|&n| n == 1), "{seen:?}");
+            let gpu_triangles = bvh.ordered_triangles(&triangles);
+            bvh.refit(&positions, &gpu_triangles);
+        }
+    }
+
     #[test]
     fn cell_exponents_span_the_extent() {
         for extent in [1e-20f32, 1e-6, 0.3, 1.0, 255.0, 256.0, 1000.0, 3.3e6, 1e30] {
