@@ -1,6 +1,6 @@
 //! GPU deformation against the CPU reference (lavapipe; tiny images): the vertex pool the deform pass
-//! writes equals what the CPU path writes, the GPU refit's node boxes equal a CPU refit of the same tree
-//! from the same positions, the GPU SAH cost equals the CPU's, and the conservative top-level bounds hold
+//! writes equals what the CPU path writes, the GPU refit's node boxes (and the wide trees' quantised boxes) equal a
+//! CPU refit of the same trees from the same positions, the GPU SAH cost equals the CPU's, and the conservative top-level bounds hold
 //! every deformed vertex. Assets: CesiumMan (also with tangents added), Fox, RobotExpressive,
 //! AnimatedMorphCube and the synthetic two-influence-set skin + morph file of the fixture tests.
 

@@ -240,6 +240,16 @@ impl RefitWideBvh {
     }
 }
 
+/// The most wide nodes [`RefitWideBvh::collapse`] makes for `triangles` triangles, which a deforming mesh reserves
+/// so that any rebuilt tree fits. Leaf slots hold at least a triangle each, so there are `L <= triangles` of them.
+/// A node left with an inner slot could not open it, so it has at least 6 slots (opening replaces one slot by at
+/// most 4: two BVH2 children of at most 4 triangles, 2 slots each); a node without one has at least 2 leaf slots
+/// (the root may have 1). With `A` and `B` nodes of each kind and `A + B - 1` inner slots, counting slots gives
+/// `L >= 5A + B` and `L >= 2B - 1`, so `A + B <= 0.6 L + 0.4`.
+pub fn node_capacity(triangles: usize) -> usize {
+    (3 * triangles).div_ceil(5) + 1
+}
+
 fn unary_count(count: u32) -> u8 {
     match count {
         1 => 0b0010_0000,
@@ -433,6 +443,7 @@ mod tests {
         let mut tree =
             RefitWideBvh::collapse(&mut bvh.flat, slot_bounds(&positions, &triangles, &order))
                 .unwrap();
+        assert!(tree.nodes.len() <= node_capacity(triangles.len()));
         assert!(
             tree.depth < before.depth,
             "{} vs {}",
@@ -492,6 +503,7 @@ mod tests {
             let mut bvh =
                 MeshBvh::build_refittable(&positions, &triangles, BvhQuality::Fast, true).unwrap();
             let tree = bvh.wide.clone().expect("a shallow tree");
+            assert!(tree.nodes.len() <= node_capacity(triangles.len()));
             let mut seen = vec![0u32; bvh.flat.order.len()];
             for node in &tree.nodes {
                 for slot in 0..8 {
@@ -505,6 +517,34 @@ mod tests {
             let gpu_triangles = bvh.ordered_triangles(&triangles);
             bvh.refit(&positions, &gpu_triangles);
         }
+    }
+
+    /// The reservation holds the largest trees the collapse makes: BVH2s of one triangle a leaf, of up to 4, and
+    /// chains (every node with a leaf and an inner child), over every preset.
+    #[test]
+    fn reserved_nodes_hold_every_collapsed_tree() {
+        let (positions, triangles) = sheet();
+        let chain_positions: Vec<Vec3> = (0..300)
+            .flat_map(|k| {
+                let p = Vec3::splat(1.5f32.powi(k % 40) * if k % 2 == 0 { 1.0 } else { -1.0 });
+                [p, p + Vec3::X, p + Vec3::Y]
+            })
+            .collect();
+        let chain: Vec<[u32; 3]> = (0..300u32).map(|t| [3 * t, 3 * t + 1, 3 * t + 2]).collect();
+        let mut worst = 0.0f64;
+        for quality in BvhQuality::ALL {
+            for (p, t) in [(&positions, &triangles), (&chain_positions, &chain)] {
+                for n in [1, 2, 3, 5, 8, 17, 64, t.len()] {
+                    let bvh = MeshBvh::build_refittable(p, &t[..n], quality, true).unwrap();
+                    let Some(tree) = bvh.wide else { continue };
+                    assert!(tree.nodes.len() <= node_capacity(n), "{quality:?} {n}");
+                    if n >= 64 {
+                        worst = worst.max(tree.nodes.len() as f64 / n as f64);
+                    }
+                }
+            }
+        }
+        eprintln!("most wide nodes per triangle from 64 triangles: {worst:.3}");
     }
 
     #[test]

@@ -32,10 +32,10 @@ impl GpuScene {
             /// The triangle order went back to the upload tree's.
             restored: Option<OrderedTriangles>,
         }
-        self.written |= SceneWrites::VERTEX_POOL
-            | SceneWrites::BLAS_NODES
-            | SceneWrites::WIDE_NODES
-            | SceneWrites::TRIANGLES;
+        self.written |= SceneWrites::VERTEX_POOL | SceneWrites::BLAS_NODES | SceneWrites::TRIANGLES;
+        if self.has_wide_deformed() {
+            self.written |= SceneWrites::WIDE_NODES;
+        }
         let (materials, quality, variant) =
             (&self.material_data, self.deformable_quality, self.variant);
         let mut changed = vec![false; self.mesh_slots.len()];

@@ -55,7 +55,7 @@ pub struct MeshSlot {
     /// Where the mesh's BVH2 starts in `blas_nodes` (the mesh record points at its wide tree where it has one).
     pub blas_node_offset: u32,
     /// Where a deforming mesh's wide tree starts in `wide_nodes` ([`crate::bvh::MeshBvh::wide`]), and the nodes
-    /// reserved for it (any rebuilt tree fits: a wide node per BVH2 node at most); `NONE` and 0 without one.
+    /// reserved for it (any rebuilt tree fits: `bvh::wide_refit::node_capacity`); `NONE` and 0 without one.
     pub wide_node_offset: u32,
     pub wide_capacity: u32,
     pub blas: Blas,
@@ -350,7 +350,7 @@ impl GpuScene {
                     gpu.blas_root = blas_nodes.len() as u32;
                     if let Some(wide) = &bvh.wide {
                         wide_node_offset = wide_nodes.len() as u32;
-                        wide_capacity = crate::bvh::refit::node_capacity(mesh.triangles.len())
+                        wide_capacity = crate::bvh::wide_refit::node_capacity(mesh.triangles.len())
                             .max(wide.nodes.len()) as u32;
                         wide_nodes.extend_from_slice(&wide.nodes);
                         wide_nodes.resize(
