@@ -167,10 +167,16 @@ impl GpuScene {
             slot.blas_node_offset as u64 * 64,
             bytemuck::cast_slice(&bvh.flat.nodes),
         );
-        if let (Some(wide), true) = (&bvh.wide, slot.wide_node_offset != NONE) {
+        self.write_wide_tree(ctx, mesh, bvh);
+    }
+
+    /// Uploads a deforming mesh's wide tree, where the mesh has one.
+    fn write_wide_tree(&self, ctx: &GpuContext, mesh: usize, bvh: &MeshBvh) {
+        let offset = self.mesh_slots[mesh].wide_node_offset;
+        if let (Some(wide), true) = (&bvh.wide, offset != NONE) {
             ctx.queue.write_buffer(
                 &self.wide_nodes,
-                slot.wide_node_offset as u64 * 80,
+                offset as u64 * 80,
                 bytemuck::cast_slice(&wide.nodes),
             );
         }
@@ -214,13 +220,9 @@ impl GpuScene {
             return false;
         }
         self.written |= SceneWrites::BLAS_NODES | SceneWrites::TRIANGLES;
-        if let (Some(w), true) = (&bvh.wide, wide) {
+        if wide {
             self.written |= SceneWrites::WIDE_NODES;
-            ctx.queue.write_buffer(
-                &self.wide_nodes,
-                slot.wide_node_offset as u64 * 80,
-                bytemuck::cast_slice(&w.nodes),
-            );
+            self.write_wide_tree(ctx, mesh, &bvh);
         }
         let mut nodes = bvh.flat.nodes.clone();
         nodes.resize(slot.blas_capacity as usize, crate::bvh::GpuBvhNode::EMPTY);
