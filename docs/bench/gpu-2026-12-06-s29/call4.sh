@@ -1,12 +1,14 @@
 #!/usr/bin/env bash
 # Twenty-ninth session, call 4: the session's head (relb/commit) under `--integrator auto`, the deforming meshes'
 # wide trees on and off (RAYKIN_WIDE_DEFORMED), on the seed-like interior and the crowd (2560x1440, 1 spp, depth
-# 6, 24 frames), two rounds -> head.txt (the columns of call2.sh's wide.txt). Carry [".gl", "relb"].
+# 6, 24 frames), two rounds; and an experiment (the binary is the head plus leaf3.patch, RAYKIN_WIDE_LEAF3=on:
+# the deforming meshes' BVH2s built with leaves of at most 3 triangles, one wide slot each, instead of 4) under
+# auto and with each form forced on the seed -> head.txt (the columns of call2.sh's wide.txt). Carry [".gl", "relb"].
 set -u
 source scripts/gpu-unpack.sh
 rows() {
   local w; w=$(mktemp -d); local label=$1 envs=$2 scene=$3; shift 3
-  [ "$(elapsed)" -lt 300 ] || return
+  [ "$(elapsed)" -lt 360 ] || return
   env $envs timeout 80 relb/head bench --suite full --parts frames --scene "$scene" "$@" \
     --frames 24 --assets relb/assets --out "$w" --cache "$w/c" > "$w/log" 2>&1
   python3 -c "
@@ -20,6 +22,14 @@ for round in 1 2; do
   for scene in seed-interior crowd; do
     rows auto-wide "RAYKIN_WIDE_DEFORMED=on" $scene --width 2560 --height 1440 --integrator auto
     rows auto-bvh2 "RAYKIN_WIDE_DEFORMED=off" $scene --width 2560 --height 1440 --integrator auto
+    rows auto-leaf3 "RAYKIN_WIDE_LEAF3=on" $scene --width 2560 --height 1440 --integrator auto
+  done
+done
+# The seed's waves and megakernel forced, leaves of 4 against 3 triangles.
+for round in 1 2; do
+  for f in wavefront megakernel; do
+    rows $f-leaf4 "RAYKIN_WAVE_SORT=on" seed-interior --width 2560 --height 1440 --integrator $f
+    rows $f-leaf3 "RAYKIN_WAVE_SORT=on RAYKIN_WIDE_LEAF3=on" seed-interior --width 2560 --height 1440 --integrator $f
   done
 done
 echo "head: $(elapsed) s" >> "$OUT/head.txt"
