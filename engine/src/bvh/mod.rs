@@ -66,9 +66,26 @@ impl GpuBvhChild {
         if self.is_empty() {
             return 0.0;
         }
-        let d = (Vec3::from(self.max) - Vec3::from(self.min)).max(Vec3::ZERO);
-        d.x * d.y + d.y * d.z + d.z * d.x
+        half_area(Vec3::from(self.max) - Vec3::from(self.min))
     }
+}
+
+/// Half the surface area of a box of extent `d` (a negative extent counts as 0).
+fn half_area(d: Vec3) -> f32 {
+    let d = d.max(Vec3::ZERO);
+    d.x * d.y + d.y * d.z + d.z * d.x
+}
+
+/// The union of boxes; an inverted box (`lo > hi`) for none.
+fn union_boxes(boxes: impl Iterator<Item = (Vec3, Vec3)>) -> (Vec3, Vec3) {
+    boxes.fold((Vec3::MAX, Vec3::MIN), |(lo, hi), (a, b)| {
+        (lo.min(a), hi.max(b))
+    })
+}
+
+/// The box of a triangle's three vertices.
+fn triangle_box([a, b, c]: [Vec3; 3]) -> (Vec3, Vec3) {
+    (a.min(b).min(c), a.max(b).max(c))
 }
 
 /// 64 bytes: two children. Node 0 is the root.
@@ -83,6 +100,16 @@ impl GpuBvhNode {
     pub const EMPTY: Self = Self {
         children: [GpuBvhChild::EMPTY; 2],
     };
+
+    /// An inner node's box: the union of its two children (inner nodes always have both; the root of a
+    /// single-leaf tree is the one node with an empty child, and [`FlatBvh::root_bounds`] handles it).
+    fn inner_box(&self) -> (Vec3, Vec3) {
+        let [a, b] = self.children;
+        (
+            Vec3::from(a.min).min(Vec3::from(b.min)),
+            Vec3::from(a.max).max(Vec3::from(b.max)),
+        )
+    }
 }
 
 /// Build effort, from obvhs's presets.
@@ -216,10 +243,6 @@ impl FlatBvh {
     /// Bottom-up box update after primitives moved; `prim_bounds(i)` bounds GPU primitive slot `i`. Returns
     /// the refit tree's [`Self::sah_cost`], summed in the same sweep (every term is a box just updated).
     pub fn refit(&mut self, prim_bounds: impl Fn(usize) -> (Vec3, Vec3)) -> f32 {
-        let half_area = |d: Vec3| {
-            let d = d.max(Vec3::ZERO);
-            d.x * d.y + d.y * d.z + d.z * d.x
-        };
         let mut cost = 0.0;
         let (mut root_lo, mut root_hi) = (Vec3::MAX, Vec3::MIN);
         for i in (0..self.nodes.len()).rev() {
@@ -231,18 +254,13 @@ impl FlatBvh {
                     continue;
                 }
                 let (lo, hi) = if c.is_leaf() {
-                    let (lo, hi) = (c.index as usize..(c.index + c.count) as usize)
-                        .map(&prim_bounds)
-                        .fold((Vec3::MAX, Vec3::MIN), |(lo, hi), (a, b)| {
-                            (lo.min(a), hi.max(b))
-                        });
+                    let (lo, hi) = union_boxes(
+                        (c.index as usize..(c.index + c.count) as usize).map(&prim_bounds),
+                    );
                     cost += half_area(hi - lo) * c.count as f32;
                     (lo, hi)
                 } else {
-                    let [a, b] = self.nodes[c.index as usize].children;
-                    let lo = Vec3::from(a.min).min(Vec3::from(b.min));
-                    let hi = Vec3::from(a.max).max(Vec3::from(b.max));
-                    (lo, hi)
+                    self.nodes[c.index as usize].inner_box()
                 };
                 self.nodes[i].children[k].set_bounds(lo, hi);
                 union_lo = union_lo.min(lo);
@@ -288,8 +306,7 @@ fn union_half_area(a: &GpuBvhChild, b: &GpuBvhChild) -> f32 {
     }
     let lo = Vec3::from(a.min).min(Vec3::from(b.min));
     let hi = Vec3::from(a.max).max(Vec3::from(b.max));
-    let d = (hi - lo).max(Vec3::ZERO);
-    d.x * d.y + d.y * d.z + d.z * d.x
+    half_area(hi - lo)
 }
 
 /// A mesh's BVH over its triangles, with its SAH cost at build time for the refit quality guard, and for a
@@ -334,9 +351,9 @@ impl MeshBvh {
         if wide {
             let order = bvh.flat.order.clone();
             bvh.wide = RefitWideBvh::collapse(&mut bvh.flat, |i| {
-                let [a, b, c] =
-                    triangles[order[i] as usize].map(|v| finite_point(positions[v as usize]));
-                (a.min(b).min(c), a.max(b).max(c))
+                triangle_box(
+                    triangles[order[i] as usize].map(|v| finite_point(positions[v as usize])),
+                )
             });
         }
         Ok(bvh)
@@ -345,10 +362,7 @@ impl MeshBvh {
     /// Refits to moved vertices; `gpu_triangles` are the mesh's triangles in [`FlatBvh::order`]. Returns the
     /// new [`Self::sah_ratio`].
     pub fn refit(&mut self, positions: &[Vec3], gpu_triangles: &[[u32; 3]]) -> f32 {
-        let bounds = |i: usize| {
-            let [a, b, c] = gpu_triangles[i].map(|v| positions[v as usize]);
-            (a.min(b).min(c), a.max(b).max(c))
-        };
+        let bounds = |i: usize| triangle_box(gpu_triangles[i].map(|v| positions[v as usize]));
         let cost = self.flat.refit(bounds);
         if let Some(wide) = &mut self.wide {
             wide.refit(&self.flat, bounds);

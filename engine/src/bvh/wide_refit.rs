@@ -6,14 +6,14 @@
 //! every wide node stands for one BVH2 node, every inner slot for an unopened BVH2 inner node, every leaf slot
 //! for (part of) a BVH2 leaf. After the BVH2 is refit, a wide node's boxes are the union of its inner slots' BVH2
 //! nodes' children and of its leaf slots' triangles: every wide node is independent of the others, so the GPU
-//! refits them all in one flat pass (`render/passes/refit/wide_refit.wgsl`, which [`RefitWideBvh::refit`]
+//! refits them all in one flat pass (`refit_wide` in `render/passes/refit/refit.wgsl`, which [`RefitWideBvh::refit`]
 //! mirrors operation for operation).
 //!
 //! Both trees read one triangle order: the collapse renumbers the BVH2's leaves so that each wide node's leaf
 //! triangles are contiguous (at most 24 from its `primitive_base_idx`), which keeps every BVH2 leaf contiguous too.
 
 use super::wide::{MAX_WIDE_DEPTH, tree_depth};
-use super::{FlatBvh, GpuBvhChild};
+use super::{FlatBvh, GpuBvhChild, half_area, union_boxes};
 use glam::Vec3;
 use obvhs::cwbvh::node::CwBvhNode;
 
@@ -87,7 +87,7 @@ impl RefitWideBvh {
                 match *item {
                     Item::Inner { lo, hi, .. } => (lo, hi),
                     Item::Leaf { first, count } => {
-                        union((first..first + count).map(|i| slot_bounds(i as usize)))
+                        union_boxes((first..first + count).map(|i| slot_bounds(i as usize)))
                     }
                 }
             };
@@ -206,7 +206,7 @@ impl RefitWideBvh {
     }
 
     /// Re-quantises every node from `flat`'s (refit) boxes and the triangles: `slot_bounds(i)` bounds the
-    /// triangle in slot `i` of the shared order. The same operations as `refit_wide` in `wide_refit.wgsl`,
+    /// triangle in slot `i` of the shared order. The same operations as `refit_wide` in `render/passes/refit/refit.wgsl`,
     /// so both give the same bits.
     pub fn refit(&mut self, flat: &FlatBvh, slot_bounds: impl Fn(usize) -> (Vec3, Vec3)) {
         for node in &mut self.nodes {
@@ -220,19 +220,12 @@ impl RefitWideBvh {
                 *b = Some(if node.imask & (1 << slot) != 0 {
                     let child = node.child_base_idx + inner;
                     inner += 1;
-                    let [a, c] = flat.nodes[self.bvh2_node[child as usize] as usize].children;
-                    if c.is_empty() {
-                        (Vec3::from(a.min), Vec3::from(a.max))
-                    } else {
-                        (
-                            Vec3::from(a.min).min(Vec3::from(c.min)),
-                            Vec3::from(a.max).max(Vec3::from(c.max)),
-                        )
-                    }
+                    // An inner slot's BVH2 node is never the root, so it has both children.
+                    flat.nodes[self.bvh2_node[child as usize] as usize].inner_box()
                 } else {
                     let first = node.primitive_base_idx + (meta & 0x1f) as u32;
                     let count = (meta >> 5).count_ones();
-                    union((first..first + count).map(|i| slot_bounds(i as usize)))
+                    union_boxes((first..first + count).map(|i| slot_bounds(i as usize)))
                 });
             }
             quantise(node, &boxes);
@@ -258,22 +251,11 @@ fn unary_count(count: u32) -> u8 {
     }
 }
 
-fn union(boxes: impl Iterator<Item = (Vec3, Vec3)>) -> (Vec3, Vec3) {
-    boxes.fold((Vec3::MAX, Vec3::MIN), |(lo, hi), (a, b)| {
-        (lo.min(a), hi.max(b))
-    })
-}
-
-fn half_area(d: Vec3) -> f32 {
-    let d = d.max(Vec3::ZERO);
-    d.x * d.y + d.y * d.z + d.z * d.x
-}
-
 /// Slot of each child, so that the traversal, which visits slot `s ^ octant` in descending order, meets near
 /// children first: slot `s` holds a child far along the axes whose bit in `s` is set (x = 4, y = 2, z = 1).
 /// Greedy: the cheapest (child, slot) pair first, cost the child centre's offset against the slot's direction.
 fn order_slots(boxes: &[(Vec3, Vec3)]) -> [usize; 8] {
-    let (lo, hi) = union(boxes.iter().copied());
+    let (lo, hi) = union_boxes(boxes.iter().copied());
     let centre = (lo + hi) * 0.5;
     let direction = |s: usize| {
         Vec3::new(
@@ -309,7 +291,7 @@ fn order_slots(boxes: &[(Vec3, Vec3)]) -> [usize; 8] {
 /// two that spans the union in 255 cells, each child rounded outwards onto it. Integer exponent arithmetic (no
 /// `log2`), so the GPU's copy gives the same bits.
 fn quantise(node: &mut CwBvhNode, boxes: &[Option<(Vec3, Vec3)>; 8]) {
-    let (lo, hi) = union(boxes.iter().flatten().copied());
+    let (lo, hi) = union_boxes(boxes.iter().flatten().copied());
     if lo.x > hi.x {
         return;
     }

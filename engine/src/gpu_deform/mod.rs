@@ -188,11 +188,7 @@ impl GpuDeformer {
                 order_offset: order_words.len() as u32,
                 level_offset: level_starts.len() as u32,
                 levels: levels.levels() as u32,
-                wide_root: if wide.is_some() {
-                    slot.wide_node_offset
-                } else {
-                    NONE
-                },
+                wide_root: wide.map_or(NONE, |_| slot.wide_node_offset),
                 wide_count: wide.map_or(0, |w| w.nodes.len() as u32),
                 source_offset: wide_sources.len() as u32,
                 _pad: [0; 2],

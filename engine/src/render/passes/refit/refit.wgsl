@@ -41,27 +41,39 @@ fn is_empty(c: BvhChild) -> bool {
     return c.count == 0u && c.index == NONE;
 }
 
+struct Box { lo: vec3<f32>, hi: vec3<f32> }
+
+// The box of `count` triangles from slot `first` of the mesh's triangle range.
+fn triangles_box(m: RefitMesh, first: u32, count: u32) -> Box {
+    var b = Box(vec3<f32>(3.4028235e38), vec3<f32>(-3.4028235e38));
+    for (var i = 0u; i < count; i++) {
+        let tri = triangles[m.triangle_offset + first + i];
+        let p0 = position(m, tri.x);
+        let p1 = position(m, tri.y);
+        let p2 = position(m, tri.z);
+        b.lo = min(b.lo, min(min(p0, p1), p2));
+        b.hi = max(b.hi, max(max(p0, p1), p2));
+    }
+    return b;
+}
+
+// The box of an inner BVH2 node: the union of its two children (inner nodes always have both).
+fn inner_node_box(m: RefitMesh, node: u32) -> Box {
+    let n = blas_nodes[m.blas_root + node];
+    return Box(min(n.a.min, n.b.min), max(n.a.max, n.b.max));
+}
+
 fn refit_child(m: RefitMesh, c: BvhChild) -> BvhChild {
     if is_empty(c) { return c; }
     var out = c;
+    var b: Box;
     if c.count > 0u {
-        var lo = vec3<f32>(3.4028235e38);
-        var hi = vec3<f32>(-3.4028235e38);
-        for (var i = 0u; i < c.count; i++) {
-            let tri = triangles[m.triangle_offset + c.index + i];
-            let a = position(m, tri.x);
-            let b = position(m, tri.y);
-            let d = position(m, tri.z);
-            lo = min(lo, min(min(a, b), d));
-            hi = max(hi, max(max(a, b), d));
-        }
-        out.min = lo;
-        out.max = hi;
+        b = triangles_box(m, c.index, c.count);
     } else {
-        let child = blas_nodes[m.blas_root + c.index];
-        out.min = min(child.a.min, child.b.min);
-        out.max = max(child.a.max, child.b.max);
+        b = inner_node_box(m, c.index);
     }
+    out.min = b.lo;
+    out.max = b.hi;
     return out;
 }
 
@@ -130,6 +142,11 @@ fn cell_exponent(extent: f32) -> u32 {
     return clamp(e, 1u, 253u);
 }
 
+// Byte `slot` of an eight-byte array held in two words.
+fn slot_byte(words: vec2<u32>, slot: u32) -> u32 {
+    return (words[slot / 4u] >> ((slot % 4u) * 8u)) & 0xffu;
+}
+
 // Sets byte `slot` of the two-word plane array starting at word `at` of the node.
 fn put_plane(planes: ptr<function, array<u32, 12>>, at: u32, slot: u32, q: f32) {
     (*planes)[at + slot / 4u] |= u32(q) << ((slot % 4u) * 8u);
@@ -147,41 +164,24 @@ fn refit_wide(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_in
         let child_base = wide_nodes[base + 4u];
         let primitive_base = wide_nodes[base + 5u];
         let metas = vec2<u32>(wide_nodes[base + 6u], wide_nodes[base + 7u]);
-        var lo: array<vec3<f32>, 8>;
-        var hi: array<vec3<f32>, 8>;
+        var boxes: array<Box, 8>;
         var union_lo = vec3<f32>(3.4028235e38);
         var union_hi = vec3<f32>(-3.4028235e38);
         var inner = 0u;
         for (var slot = 0u; slot < 8u; slot++) {
-            let slot_meta = (metas[slot / 4u] >> ((slot % 4u) * 8u)) & 0xffu;
+            let slot_meta = slot_byte(metas, slot);
             if slot_meta == 0u { continue; }
-            var b_lo = vec3<f32>(3.4028235e38);
-            var b_hi = vec3<f32>(-3.4028235e38);
+            var b: Box;
             if (imask & (1u << slot)) != 0u {
                 // An inner slot: its BVH2 node's two children, refit by `refit` before this dispatch.
-                let n = blas_nodes[m.blas_root + wide_sources[m.source_offset + child_base + inner]];
+                b = inner_node_box(m, wide_sources[m.source_offset + child_base + inner]);
                 inner++;
-                b_lo = n.a.min;
-                b_hi = n.a.max;
-                if !is_empty(n.b) {
-                    b_lo = min(b_lo, n.b.min);
-                    b_hi = max(b_hi, n.b.max);
-                }
             } else {
-                let first = primitive_base + (slot_meta & 0x1fu);
-                for (var k = 0u; k < countOneBits(slot_meta >> 5u); k++) {
-                    let tri = triangles[m.triangle_offset + first + k];
-                    let a = position(m, tri.x);
-                    let b = position(m, tri.y);
-                    let c = position(m, tri.z);
-                    b_lo = min(b_lo, min(min(a, b), c));
-                    b_hi = max(b_hi, max(max(a, b), c));
-                }
+                b = triangles_box(m, primitive_base + (slot_meta & 0x1fu), countOneBits(slot_meta >> 5u));
             }
-            lo[slot] = b_lo;
-            hi[slot] = b_hi;
-            union_lo = min(union_lo, b_lo);
-            union_hi = max(union_hi, b_hi);
+            boxes[slot] = b;
+            union_lo = min(union_lo, b.lo);
+            union_hi = max(union_hi, b.hi);
         }
         if union_lo.x > union_hi.x { continue; }
         let extent = max(union_hi - union_lo, vec3<f32>(1e-20));
@@ -190,9 +190,9 @@ fn refit_wide(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_in
         // Planes: min x, max x, min y, max y, min z, max z, two words (eight bytes) each.
         var planes: array<u32, 12>;
         for (var slot = 0u; slot < 8u; slot++) {
-            if ((metas[slot / 4u] >> ((slot % 4u) * 8u)) & 0xffu) == 0u { continue; }
-            let q_lo = clamp(floor((lo[slot] - union_lo) * inverse), vec3<f32>(0.0), vec3<f32>(CELLS));
-            let q_hi = clamp(ceil((hi[slot] - union_lo) * inverse), vec3<f32>(0.0), vec3<f32>(CELLS));
+            if slot_byte(metas, slot) == 0u { continue; }
+            let q_lo = clamp(floor((boxes[slot].lo - union_lo) * inverse), vec3<f32>(0.0), vec3<f32>(CELLS));
+            let q_hi = clamp(ceil((boxes[slot].hi - union_lo) * inverse), vec3<f32>(0.0), vec3<f32>(CELLS));
             put_plane(&planes, 0u, slot, q_lo.x);
             put_plane(&planes, 2u, slot, q_hi.x);
             put_plane(&planes, 4u, slot, q_lo.y);
