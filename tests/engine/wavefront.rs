@@ -63,6 +63,60 @@ fn waves_through_the_wide_top_level_trace_the_megakernels_paths() {
     }
 }
 
+/// Extend with refill (`shaders/traversal/refill.wgsl`): with one or two workgroups each invocation traces
+/// dozens of rays, each started inside the traversal loop where the last ended, and the hits are those of the
+/// one-ray-an-invocation extend, so the image is the same bit for bit: through the wide top level (the interior's
+/// box, CesiumMan and the Fox; closest hits and shadow rays' any hits), through one merged tree (the Cornell box),
+/// sorted and not, from storage buffers and from textures. A step that visited a node out of order, skipped an
+/// instance or ended a shadow ray late would change some pixel.
+#[test]
+fn waves_with_refill_trace_the_same_hits() {
+    use raykin::render::passes::wavefront::WavefrontSlot;
+    let (ctx, _gpu) = gpu();
+    let interior = raykin::animation::interior_scene(shared_assets()).expect("the interior scene");
+    let scenes = [
+        ("the interior", Arc::new(interior.scene)),
+        ("the Cornell box", shared_scene("CornellBox/CornellBox.glb")),
+    ];
+    for (name, scene) in &scenes {
+        for textures in [false, true] {
+            let render = |refill: Option<u32>, sorted: bool| {
+                let mut ctx = ctx.clone();
+                ctx.scene_in_textures = textures;
+                ctx.wide_top_level = true;
+                ctx.wave_refill = refill;
+                let mut app = small_app(&ctx, scene, Integrator::Wavefront);
+                app.app
+                    .world_mut()
+                    .resource_mut::<IntegratorChoice>()
+                    .force_ray_sort(Some(sorted));
+                app.accumulate(4, 1, |_| {});
+                let refilling = app
+                    .app
+                    .world()
+                    .resource::<WavefrontSlot>()
+                    .0
+                    .as_ref()
+                    .is_some_and(|pass| pass.refilling());
+                assert_eq!(refilling, refill.is_some(), "{name}: extend with refill");
+                let rays = app.view().read_ray_count(&app.ctx);
+                (app.radiance(), rays)
+            };
+            for (groups, sorted) in [(1, false), (2, true)] {
+                let what = format!("{name}, textures {textures}, {groups} groups, sorted {sorted}");
+                let (plain, plain_rays) = render(None, sorted);
+                let (refilled, refilled_rays) = render(Some(groups), sorted);
+                assert_eq!(refilled_rays, plain_rays, "{what}: rays traced");
+                assert!(
+                    plain.iter().flatten().any(|&v| v > 0.0),
+                    "{what}: the image is black"
+                );
+                assert_eq!(refilled, plain, "{what}: the refilled waves' image");
+            }
+        }
+    }
+}
+
 #[test]
 fn waves_trace_the_megakernels_paths() {
     let (ctx, _gpu) = gpu();

@@ -96,6 +96,10 @@ pub struct GpuContext {
     /// which every kernel traverses instead of the BVH2. On by default; `RAYKIN_WIDE_DEFORMED=off` keeps the
     /// BVH2 (A/B runs).
     pub wide_deformed: bool,
+    /// The waves' extend stage as a fixed grid of at most this many workgroups whose invocations start their
+    /// next ray inside the traversal loop (`shaders/traversal/refill.wgsl`), where the scene's shape allows it;
+    /// `None`: one ray an invocation. `RAYKIN_WAVE_REFILL=on|off` and `RAYKIN_WAVE_REFILL_GROUPS=N` (A/B runs).
+    pub wave_refill: Option<u32>,
     /// The staging buffer of the last readback, kept for the next: allocating (and on discrete GPUs pinning)
     /// host memory for every readback cost more than the copy.
     readback_staging: Arc<std::sync::Mutex<Option<wgpu::Buffer>>>,
@@ -167,6 +171,10 @@ impl GpuContext {
             scene_shape_kernels: switch_on("RAYKIN_SCENE_SHAPE_KERNELS", true),
             wide_top_level: switch_on("RAYKIN_WIDE_TOP_LEVEL", true),
             wide_deformed: switch_on("RAYKIN_WIDE_DEFORMED", true),
+            wave_refill: switch_on("RAYKIN_WAVE_REFILL", false).then(|| {
+                number_from_env("RAYKIN_WAVE_REFILL_GROUPS", WAVE_REFILL_GROUPS).clamp(1, 32768)
+                    as u32
+            }),
             readback_staging: Arc::default(),
             device,
             queue,
@@ -359,6 +367,10 @@ fn path_regeneration_on(info: &wgpu::AdapterInfo) -> bool {
         info.device_type == wgpu::DeviceType::Cpu,
     )
 }
+
+/// Workgroups of 128 invocations the waves' extend with refill runs at most: about what an H100's 132
+/// multiprocessors hold at once at the kernel's occupancy (more would run as a second round of whole strides).
+const WAVE_REFILL_GROUPS: u64 = 1024;
 
 /// A number from the environment variable `name` (A/B runs of a tuning constant), else `default`.
 pub(crate) fn number_from_env(name: &str, default: u64) -> u64 {

@@ -46,6 +46,7 @@ pub const LIBRARY: &[ShaderModule] = library! {
     "traversal/bvh2" => ["traversal/primitive", "traversal/stats"],
     "traversal/cwbvh" => ["traversal/primitive", "traversal/stats"],
     "traversal/tlas" => ["traversal/bvh2", "traversal/cwbvh", "traversal/stats", "math"],
+    "traversal/refill" => ["traversal/tlas"],
     "bsdf/bsdf" => [],
     "bsdf/microfacet" => ["math"],
     "bsdf/sheen_albedo" => [],

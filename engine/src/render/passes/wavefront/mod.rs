@@ -8,7 +8,9 @@
 use crate::gpu::GpuContext;
 use crate::gpu::PassTimestamps;
 use crate::gpu::bind::{Binding, bind_group, compute_layout, storage_buffer};
-use crate::render::layout::{SORT_BLOCKS, SORT_WORDS, WAVE_CONTROL_RAYS, WAVE_CONTROL_WORDS};
+use crate::render::layout::{
+    BLAS_LAYOUT_WIDE, SORT_BLOCKS, SORT_WORDS, WAVE_CONTROL_RAYS, WAVE_CONTROL_WORDS,
+};
 use crate::render::material_lobes::{KernelNeeds, LobeKernels};
 use crate::render::shaders::{ShaderModule, compose};
 use crate::render::view::ViewTargets;
@@ -17,7 +19,12 @@ use bevy_ecs::prelude::Resource;
 pub const KERNEL: ShaderModule = ShaderModule {
     name: "wavefront",
     source: include_str!("wavefront.wgsl"),
-    requires: &["constants", "sampler", "integrator/path"],
+    requires: &[
+        "constants",
+        "sampler",
+        "integrator/path",
+        "traversal/refill",
+    ],
 };
 
 /// The counters' and the sort's bytes at the start of the queues' buffer (`Queues::control`, `Queues::sort` in
@@ -90,6 +97,8 @@ struct Kernels {
     /// of alpha-blended surfaces (`WAVE_PASS_THROUGHS`): `[sort][pass-throughs]`.
     first_bounce: [[LobeKernels; 2]; 2],
     extend: [[LobeKernels; 2]; 2],
+    /// Extend with refill (`GpuContext::wave_refill`), unsorted and sorted.
+    extend_refill: [LobeKernels; 2],
     shade: [LobeKernels; 2],
     advance: LobeKernels,
     /// The ray sort's two kernels (`WAVE_SORT`), run after each `advance` where the rays are sorted.
@@ -180,6 +189,22 @@ pub struct WavefrontPass {
     /// The view generation and samples per wave for which no state fitted, so that it is not tried every frame.
     no_room: Option<(u64, u64)>,
     profile: Option<WaveProfile>,
+    /// `GpuContext::wave_refill` was set: extend runs with refill where [`refill_traverses`] the scene.
+    refill: bool,
+    /// The last prepared kernels extend with refill.
+    refilling: bool,
+}
+
+/// Offset of extend_refill's dispatch size in the sizes buffer (`dispatch_args[8..11)`).
+const REFILL_ARGS: u64 = 32;
+
+/// Whether extend with refill traverses kernels compiled for `needs` (`refill_supported` in
+/// `shaders/traversal/refill.wgsl`): a wide top level or one merged tree over wide meshes only, and no
+/// alpha-blended surface to pass through.
+fn refill_traverses(needs: KernelNeeds) -> bool {
+    (needs.wide_top_level.is_some() || needs.sole_instance.is_some())
+        && needs.blas_layouts == BLAS_LAYOUT_WIDE
+        && !needs.materials.alpha_blend
 }
 
 impl WavefrontPass {
@@ -212,6 +237,7 @@ impl WavefrontPass {
                 .with_constants(constants)
         };
         let kernel = |entry, layouts: &[_]| kernel_with(entry, layouts, constants);
+        let refill_groups = ctx.wave_refill.unwrap_or(0);
         let sorted = |entry, sort: f64| {
             kernel_with(entry, &queue, &[("PATH_AOVS", 0.0), ("WAVE_SORT", sort)])
         };
@@ -233,8 +259,16 @@ impl WavefrontPass {
                 begin_wave: kernel("begin_wave", &sizing),
                 first_bounce: [0.0, 1.0].map(|sort| passing("first_bounce", sort)),
                 extend: [0.0, 1.0].map(|sort| passing("extend", sort)),
+                extend_refill: [0.0, 1.0].map(|sort| sorted("extend_refill", sort)),
                 shade: [0.0, 1.0].map(|sort| sorted("shade", sort)),
-                advance: kernel("advance", &sizing),
+                advance: kernel_with(
+                    "advance",
+                    &sizing,
+                    &[
+                        ("PATH_AOVS", 0.0),
+                        ("WAVE_REFILL_GROUPS", f64::from(refill_groups)),
+                    ],
+                ),
                 sort_prefix: kernel("sort_prefix", &queue),
                 sort_scatter: kernel("sort_scatter", &queue),
                 finish: kernel("finish", &queue),
@@ -245,7 +279,15 @@ impl WavefrontPass {
             buffers: None,
             no_room: None,
             profile: WaveProfile::new(ctx),
+            refill: refill_groups > 0,
+            refilling: false,
         }
+    }
+
+    /// Whether the kernels of the last [`Self::prepare`] extend with refill (`GpuContext::wave_refill`, where the
+    /// scene's shape allows it).
+    pub fn refilling(&self) -> bool {
+        self.refilling
     }
 
     /// Compiles the kernels for `needs` (the first time; with the pass-throughs of alpha-blended surfaces where
@@ -263,11 +305,18 @@ impl WavefrontPass {
         sort: bool,
     ) -> bool {
         let (passing, sorted) = (needs.materials.alpha_blend as usize, sort as usize);
+        let refill = self.refill && refill_traverses(needs);
+        self.refilling = refill;
         let k = &mut self.kernels;
+        let extend = if refill {
+            &mut k.extend_refill[sorted]
+        } else {
+            &mut k.extend[sorted][passing]
+        };
         for kernels in [
             &mut k.begin_wave,
             &mut k.first_bounce[sorted][passing],
-            &mut k.extend[sorted][passing],
+            extend,
             &mut k.shade[sorted],
             &mut k.advance,
             &mut k.finish,
@@ -352,7 +401,7 @@ impl WavefrontPass {
         let shadows = storage_buffer(ctx, "wavefront shadow rays", paths * SHADOW_ENTRY);
         let args = ctx.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("wavefront dispatch sizes"),
-            size: 32,
+            size: 48,
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::INDIRECT,
             mapped_at_creation: false,
         });
@@ -404,7 +453,14 @@ impl WavefrontPass {
         encoder.clear_buffer(&buffers.queues, 0, Some(CONTROL_BYTES));
         // The kernels with or without the pass-throughs of alpha-blended surfaces, sorting or not.
         let (passing, sorted) = (self.needs.materials.alpha_blend as usize, sort as usize);
-        let extend = pipeline(&k.extend[sorted][passing]);
+        let extend = if self.refilling {
+            (
+                pipeline(&k.extend_refill[sorted]),
+                Step::Indirect(REFILL_ARGS),
+            )
+        } else {
+            (pipeline(&k.extend[sorted][passing]), Step::Indirect(0))
+        };
         let (x, y) = view.workgroups();
         let samples_per_wave = buffers.samples_per_wave as u32;
         // After a shading kernel: the next bounce's counts, and where the rays are sorted, the sort (its
@@ -425,13 +481,13 @@ impl WavefrontPass {
         first.extend(advance.iter().copied());
         let mut stages = vec![first];
         for _ in 1..=max_depth {
-            stages.push(vec![(extend, Step::Indirect(0))]);
+            stages.push(vec![extend]);
             let mut shade = vec![(pipeline(&k.shade[sorted]), Step::Indirect(12))];
             shade.extend(advance.iter().copied());
             stages.push(shade);
         }
         // The last bounce's shadow rays, then the wave's radiance into the accumulation.
-        stages.push(vec![(extend, Step::Indirect(0))]);
+        stages.push(vec![extend]);
         stages.push(vec![(pipeline(&k.finish), Step::Direct(x, y, 1))]);
         let waves = spp.div_ceil(samples_per_wave);
         let profile = self

@@ -54,8 +54,9 @@ struct ShadowRay {
 }
 @group(1) @binding(10) var<storage, read_write> shadow_rays: array<ShadowRay>;
 // Indirect dispatch sizes, written by begin_wave and advance only (a buffer read as dispatch arguments cannot be
-// bound to the kernels it sizes): [0..3) extend (live paths and shadow rays), [3..6) shade (live paths).
-@group(2) @binding(0) var<storage, read_write> dispatch_args: array<u32, 8>;
+// bound to the kernels it sizes): [0..3) extend (live paths and shadow rays), [3..6) shade (live paths), [8..11)
+// extend_refill (the same rays, at most WAVE_REFILL_GROUPS workgroups).
+@group(2) @binding(0) var<storage, read_write> dispatch_args: array<u32, 12>;
 
 // The queue read this bounce holds CONTROL_LIVE paths, from CONTROL_PARITY x N on.
 const CONTROL_LIVE: u32 = 0u;
@@ -87,6 +88,10 @@ override WAVE_PASS_THROUGHS: bool = true;
 // key's next slot. The sizes come from the generated constants (engine/src/render/layout.rs), which the pass
 // sizes the buffer by. A pipeline constant, so that scenes which do not gain compile none of it.
 override WAVE_SORT: bool = false;
+
+// Extend with refill (`extend_refill`): the most workgroups its dispatch takes, each invocation tracing every
+// stride-th ray; 0 where the pass does not run it (advance writes its size only then). Set on `advance`.
+override WAVE_REFILL_GROUPS: u32 = 0u;
 
 // Queue kernels run 128 paths a workgroup over a 2D grid of workgroups (65535 per side at most).
 const QUEUE_GROUP: u32 = 128u;
@@ -120,7 +125,10 @@ fn queue_index(group: vec3<u32>, groups: vec3<u32>, lid: u32) -> u32 {
 }
 
 fn write_dispatch(first: u32, items: u32) {
-    let groups = (items + QUEUE_GROUP - 1u) / QUEUE_GROUP;
+    write_dispatch_groups(first, (items + QUEUE_GROUP - 1u) / QUEUE_GROUP);
+}
+
+fn write_dispatch_groups(first: u32, groups: u32) {
     let x = min(groups, MAX_GROUPS_X);
     dispatch_args[first] = x;
     dispatch_args[first + 1u] = select(0u, (groups + x - 1u) / max(x, 1u), groups > 0u);
@@ -149,6 +157,9 @@ fn advance() {
     atomicStore(&queues.control[CONTROL_PARITY], 1u - atomicLoad(&queues.control[CONTROL_PARITY]));
     write_dispatch(0u, live + shadows);
     write_dispatch(3u, live);
+    if WAVE_REFILL_GROUPS > 0u {
+        write_dispatch_groups(8u, min((live + shadows + QUEUE_GROUP - 1u) / QUEUE_GROUP, WAVE_REFILL_GROUPS));
+    }
 }
 
 // A live path's state (what trace_path_from keeps in registers across a bounce).
@@ -430,6 +441,12 @@ fn live_path(i: u32) -> u32 {
     return queues.entries[atomicLoad(&queues.control[CONTROL_PARITY]) * path_count() + i];
 }
 
+// The path of extend's ray i (i < live): in the keys' order where the rays are sorted.
+fn extended_path(i: u32) -> u32 {
+    if WAVE_SORT { return queues.entries[3u * path_count() + i]; }
+    return live_path(i);
+}
+
 // The queue's rays (invocations [0, live)), then the shadow rays queued the bounce before ([live, live +
 // shadows)): one dispatch for both, and one call of the traversal (a second call site would inline it twice).
 @compute @workgroup_size(128)
@@ -445,11 +462,7 @@ fn extend(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgroups) grou
     var p: WavePath;
     var t_max = MISS;
     if is_path {
-        if WAVE_SORT {
-            path = queues.entries[3u * path_count() + i];
-        } else {
-            path = live_path(i);
-        }
+        path = extended_path(i);
         p = load_path(path);
     } else if is_shadow {
         let origin = shadow_rays[i - live].origin;
@@ -480,6 +493,63 @@ fn extend(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgroups) grou
     workgroupBarrier();
     if lid == 0u {
         atomicAdd(&queues.control[WAVE_CONTROL_RAYS], atomicLoad(&workgroup_rays));
+    }
+}
+
+// Extend's work with refill (traversal/refill.wgsl): a fixed grid of at most WAVE_REFILL_GROUPS workgroups
+// whose invocations trace rays i, i + stride, ... (no atomics), each starting its next ray inside the traversal
+// loop as soon as its last one ends, so that a warp's lanes stay busy until the rays run out instead of waiting
+// for its longest ray. The same hits as `extend`; only where `refill_supported` and nothing is alpha-blended
+// (the pass checks both).
+@compute @workgroup_size(128)
+fn extend_refill(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
+                 @builtin(local_invocation_index) lid: u32) {
+    clear_workgroup_counts(lid);
+    rays_traced = 0u;
+    let live = atomicLoad(&queues.control[CONTROL_LIVE]);
+    let total = live + atomicLoad(&queues.control[CONTROL_SHADOWS]);
+    let stride = groups.x * groups.y * QUEUE_GROUP;
+    var i = queue_index(group, groups, lid);
+    if i < total {
+        start_extended_ray(i, live);
+        loop {
+            if refill_step() {
+                end_extended_ray(i, live);
+                i += stride;
+                if i >= total { break; }
+                start_extended_ray(i, live);
+            }
+        }
+    }
+    atomicAdd(&workgroup_rays, rays_traced);
+    workgroupBarrier();
+    if lid == 0u {
+        atomicAdd(&queues.control[WAVE_CONTROL_RAYS], atomicLoad(&workgroup_rays));
+    }
+}
+
+// Ray i of extend_refill: a live path's ray (i < live), else a shadow ray, which any hit ends.
+fn start_extended_ray(i: u32, live: u32) {
+    rays_traced++;
+    if i < live {
+        let path = extended_path(i);
+        refill_start(Ray(path_origin[path].xyz, path_dir[path].xyz), MISS, false);
+    } else {
+        let shadow = shadow_rays[i - live];
+        refill_start(Ray(shadow.origin.xyz, shadow.dir.xyz), shadow.origin.w, true);
+    }
+}
+
+// What ray i found, stored as `extend` stores it.
+fn end_extended_ray(i: u32, live: u32) {
+    let hit = refill_result();
+    if i < live {
+        let path = extended_path(i);
+        path_hit[path] = vec4<u32>(bitcast<u32>(hit.t), hit.instance, hit.triangle, bitcast<u32>(hit.bary.x));
+        path_vertex[path].w = hit.bary.y;
+    } else if hit.instance == NONE {
+        let path = bitcast<u32>(shadow_rays[i - live].dir.w);
+        path_radiance[path] += vec4<f32>(shadow_rays[i - live].light.xyz, 0.0);
     }
 }
 
