@@ -66,9 +66,10 @@ fn waves_through_the_wide_top_level_trace_the_megakernels_paths() {
 /// Extend with refill (`shaders/traversal/refill.wgsl`): with one or two workgroups each invocation traces
 /// dozens of rays, each started inside the traversal loop where the last ended, and the hits are those of the
 /// one-ray-an-invocation extend, so the image is the same bit for bit: through the wide top level (the interior's
-/// box, CesiumMan and the Fox; closest hits and shadow rays' any hits), through one merged tree (the Cornell box),
-/// sorted and not, from storage buffers and from textures. A step that visited a node out of order, skipped an
-/// instance or ended a shadow ray late would change some pixel.
+/// box, CesiumMan and the Fox; closest hits and shadow rays' any hits), through one merged tree (the Cornell box,
+/// and alpha-blended surfaces passed through, each next segment started in the loop), sorted and not, from
+/// storage buffers and from textures. A step that visited a node out of order, skipped an instance or ended a
+/// shadow ray late would change some pixel.
 #[test]
 fn waves_with_refill_trace_the_same_hits() {
     use raykin::render::passes::wavefront::WavefrontSlot;
@@ -77,6 +78,10 @@ fn waves_with_refill_trace_the_same_hits() {
     let scenes = [
         ("the interior", Arc::new(interior.scene)),
         ("the Cornell box", shared_scene("CornellBox/CornellBox.glb")),
+        (
+            "alpha blending",
+            shared_scene("AlphaBlendModeTest/glTF-Binary/AlphaBlendModeTest.glb"),
+        ),
     ];
     for (name, scene) in &scenes {
         for textures in [false, true] {

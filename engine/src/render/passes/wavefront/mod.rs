@@ -97,8 +97,8 @@ struct Kernels {
     /// of alpha-blended surfaces (`WAVE_PASS_THROUGHS`): `[sort][pass-throughs]`.
     first_bounce: [[LobeKernels; 2]; 2],
     extend: [[LobeKernels; 2]; 2],
-    /// Extend with refill (`GpuContext::wave_refill`), unsorted and sorted.
-    extend_refill: [LobeKernels; 2],
+    /// Extend with refill (`GpuContext::wave_refill`), as `extend`: `[sort][pass-throughs]`.
+    extend_refill: [[LobeKernels; 2]; 2],
     shade: [LobeKernels; 2],
     advance: LobeKernels,
     /// The ray sort's two kernels (`WAVE_SORT`), run after each `advance` where the rays are sorted.
@@ -199,12 +199,10 @@ pub struct WavefrontPass {
 const REFILL_ARGS: u64 = 32;
 
 /// Whether extend with refill traverses kernels compiled for `needs` (`refill_supported` in
-/// `shaders/traversal/refill.wgsl`): a wide top level or one merged tree over wide meshes only, and no
-/// alpha-blended surface to pass through.
+/// `shaders/traversal/refill.wgsl`): a wide top level or one merged tree over wide meshes only.
 fn refill_traverses(needs: KernelNeeds) -> bool {
     (needs.wide_top_level.is_some() || needs.sole_instance.is_some())
         && needs.blas_layouts == BLAS_LAYOUT_WIDE
-        && !needs.materials.alpha_blend
 }
 
 impl WavefrontPass {
@@ -259,7 +257,7 @@ impl WavefrontPass {
                 begin_wave: kernel("begin_wave", &sizing),
                 first_bounce: [0.0, 1.0].map(|sort| passing("first_bounce", sort)),
                 extend: [0.0, 1.0].map(|sort| passing("extend", sort)),
-                extend_refill: [0.0, 1.0].map(|sort| sorted("extend_refill", sort)),
+                extend_refill: [0.0, 1.0].map(|sort| passing("extend_refill", sort)),
                 shade: [0.0, 1.0].map(|sort| sorted("shade", sort)),
                 advance: kernel_with(
                     "advance",
@@ -309,7 +307,7 @@ impl WavefrontPass {
         self.refilling = refill;
         let k = &mut self.kernels;
         let extend = if refill {
-            &mut k.extend_refill[sorted]
+            &mut k.extend_refill[sorted][passing]
         } else {
             &mut k.extend[sorted][passing]
         };
@@ -455,7 +453,7 @@ impl WavefrontPass {
         let (passing, sorted) = (self.needs.materials.alpha_blend as usize, sort as usize);
         let extend = if self.refilling {
             (
-                pipeline(&k.extend_refill[sorted]),
+                pipeline(&k.extend_refill[sorted][passing]),
                 Step::Indirect(REFILL_ARGS),
             )
         } else {

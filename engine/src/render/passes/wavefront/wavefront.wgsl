@@ -499,8 +499,8 @@ fn extend(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgroups) grou
 // Extend's work with refill (traversal/refill.wgsl): a fixed grid of at most WAVE_REFILL_GROUPS workgroups
 // whose invocations trace rays i, i + stride, ... (no atomics), each starting its next ray inside the traversal
 // loop as soon as its last one ends, so that a warp's lanes stay busy until the rays run out instead of waiting
-// for its longest ray. The same hits as `extend`; only where `refill_supported` and nothing is alpha-blended
-// (the pass checks both).
+// for its longest ray. The same hits as `extend`, and the same pass-throughs of alpha-blended surfaces (each
+// one's next segment started in the loop like a new ray); only where `refill_supported` (the pass checks).
 @compute @workgroup_size(128)
 fn extend_refill(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
                  @builtin(local_invocation_index) lid: u32) {
@@ -514,7 +514,7 @@ fn extend_refill(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgroup
         start_extended_ray(i, live);
         loop {
             if refill_step() {
-                end_extended_ray(i, live);
+                if end_extended_ray(i, live) { continue; }
                 i += stride;
                 if i >= total { break; }
                 start_extended_ray(i, live);
@@ -540,17 +540,30 @@ fn start_extended_ray(i: u32, live: u32) {
     }
 }
 
-// What ray i found, stored as `extend` stores it.
-fn end_extended_ray(i: u32, live: u32) {
+// What ray i found, stored as `extend` stores it; or, where a path's ray passes through an alpha-blended surface,
+// the path's origin and throughput moved past it and the ray from there started (returns true: not ended).
+fn end_extended_ray(i: u32, live: u32) -> bool {
     let hit = refill_result();
     if i < live {
         let path = extended_path(i);
+        // The material's flag first: most hits are on surfaces that do not blend, and need no path state.
+        if WAVE_PASS_THROUGHS && hit.instance != NONE
+            && (read_material(read_triangle(hit.triangle).w).flags & MATERIAL_ALPHA_BLEND) != 0u {
+            var p = load_path(path);
+            if pass_through(path, &p, hit) {
+                store_origin_and_throughput(path, p);
+                rays_traced++;
+                refill_start(p.ray, MISS, false);
+                return true;
+            }
+        }
         path_hit[path] = vec4<u32>(bitcast<u32>(hit.t), hit.instance, hit.triangle, bitcast<u32>(hit.bary.x));
         path_vertex[path].w = hit.bary.y;
     } else if hit.instance == NONE {
         let path = bitcast<u32>(shadow_rays[i - live].dir.w);
         path_radiance[path] += vec4<f32>(shadow_rays[i - live].light.xyz, 0.0);
     }
+    return false;
 }
 
 // Depth 1 on: what extend found, shaded.
