@@ -8,7 +8,7 @@ set -u
 source scripts/gpu-unpack.sh
 rows() {
   local w; w=$(mktemp -d); local label=$1 envs=$2 scene=$3; shift 3
-  [ "$(elapsed)" -lt 260 ] || return
+  [ "$(elapsed)" -lt 170 ] || return
   env $envs timeout 80 relb/head bench --suite full --parts frames --scene "$scene" "$@" \
     --frames 24 --assets relb/assets --out "$w" --cache "$w/c" > "$w/log" 2>&1
   python3 -c "
