@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # Thirtieth session, call 1. relb/head.xz = 0d7310a: the waves' extend with refill (RAYKIN_WAVE_REFILL=on,
 # RAYKIN_WAVE_REFILL_GROUPS=N workgroups at most; off: one ray an invocation, the default).
+# (Ran on an H100, so part 1 was skipped. This binary refilled only scenes without alpha-blended materials, a gate
+# faef3f2 removed: the seed-like interior, whose FlightHelmets blend, never refilled, hence its equal rows.)
 # 1. On an H200 only (the target's card; none came in the last six sessions): the Cornell box's side by side.
 # 2. The seed-like interior and the crowd at 2560x1440, 1 spp, depth 6, waves forced, two rounds: sorted with
 #    refill off and at 512, 1024, 2048, 4096 groups; unsorted off and 1024 -> refill.txt: label, scene, width,
