@@ -368,9 +368,10 @@ fn path_regeneration_on(info: &wgpu::AdapterInfo) -> bool {
     )
 }
 
-/// Workgroups of 128 invocations the waves' extend with refill runs at most: about what an H100's 132
-/// multiprocessors hold at once at the kernel's occupancy (more would run as a second round of whole strides).
-const WAVE_REFILL_GROUPS: u64 = 1024;
+/// Workgroups of 128 invocations the waves' extend with refill runs at most: on an H100 the crowd's waves took
+/// 0.82x the plain extend's time with 2048 and 0.89x with 1024 (docs/BENCHMARKS.md, "The waves' extend with
+/// refill"); a GPU that holds fewer at once runs the rest as a second round of whole strides.
+const WAVE_REFILL_GROUPS: u64 = 2048;
 
 /// A number from the environment variable `name` (A/B runs of a tuning constant), else `default`.
 pub(crate) fn number_from_env(name: &str, default: u64) -> u64 {
