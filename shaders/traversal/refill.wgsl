@@ -102,7 +102,7 @@ fn refill_step() -> bool {
         }
     }
     // One wide node, of the mesh or of the top level: one call of the box tests for both.
-    var child: u32;
+    var n: WideNode;
     var o = refill_origin;
     var inv_d = refill_inv_d;
     var octant = refill_octant;
@@ -110,7 +110,7 @@ fn refill_step() -> bool {
     var group: vec2<u32>;
     if refill_in_mesh {
         group = refill_mesh_group;
-        child = take_wide_child(&group, refill_object_octant);
+        n = read_wide_node(take_wide_child(&group, refill_object_octant));
         if group.y > 0x00ffffffu && refill_mesh_sp < WIDE_STACK_SIZE {
             wide_stack[refill_mesh_sp] = group;
             refill_mesh_sp++;
@@ -120,17 +120,11 @@ fn refill_step() -> bool {
         octant = refill_object_octant;
     } else {
         group = refill_top_group;
-        child = take_wide_child(&group, refill_octant);
+        n = read_wide_tlas_node(take_wide_child(&group, refill_octant));
         if group.y > 0x00ffffffu && refill_top_sp < WIDE_TLAS_STACK_SIZE {
             wide_tlas_stack[refill_top_sp] = group;
             refill_top_sp++;
         }
-    }
-    var n: WideNode;
-    if refill_in_mesh {
-        n = read_wide_node(child);
-    } else {
-        n = read_wide_tlas_node(child);
     }
     let mask = intersect_wide(n, o, inv_d, octant, refill_hit.t);
     let next = vec2<u32>(n.w1.x, (mask & 0xff000000u) | (n.w0.w >> 24u));

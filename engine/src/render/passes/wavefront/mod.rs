@@ -191,8 +191,6 @@ pub struct WavefrontPass {
     profile: Option<WaveProfile>,
     /// `GpuContext::wave_refill` was set: extend runs with refill where [`refill_traverses`] the scene.
     refill: bool,
-    /// The last prepared kernels extend with refill.
-    refilling: bool,
 }
 
 /// Offset of extend_refill's dispatch size in the sizes buffer (`dispatch_args[8..11)`).
@@ -278,14 +276,13 @@ impl WavefrontPass {
             no_room: None,
             profile: WaveProfile::new(ctx),
             refill: refill_groups > 0,
-            refilling: false,
         }
     }
 
     /// Whether the kernels of the last [`Self::prepare`] extend with refill (`GpuContext::wave_refill`, where the
     /// scene's shape allows it).
     pub fn refilling(&self) -> bool {
-        self.refilling
+        self.refill && refill_traverses(self.needs)
     }
 
     /// Compiles the kernels for `needs` (the first time; with the pass-throughs of alpha-blended surfaces where
@@ -304,7 +301,6 @@ impl WavefrontPass {
     ) -> bool {
         let (passing, sorted) = (needs.materials.alpha_blend as usize, sort as usize);
         let refill = self.refill && refill_traverses(needs);
-        self.refilling = refill;
         let k = &mut self.kernels;
         let extend = if refill {
             &mut k.extend_refill[sorted][passing]
@@ -451,7 +447,7 @@ impl WavefrontPass {
         encoder.clear_buffer(&buffers.queues, 0, Some(CONTROL_BYTES));
         // The kernels with or without the pass-throughs of alpha-blended surfaces, sorting or not.
         let (passing, sorted) = (self.needs.materials.alpha_blend as usize, sort as usize);
-        let extend = if self.refilling {
+        let extend = if self.refilling() {
             (
                 pipeline(&k.extend_refill[sorted][passing]),
                 Step::Indirect(REFILL_ARGS),

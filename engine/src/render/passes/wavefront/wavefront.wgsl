@@ -210,8 +210,7 @@ fn wave_sampler(path: u32) -> Sampler {
 // medium's attenuation over the segment). If so, `p` has the ray from behind the surface, the pass-through
 // counted and the throughput attenuated.
 fn pass_through(path: u32, p: ptr<function, WavePath>, hit: Hit) -> bool {
-    if !WAVE_PASS_THROUGHS || hit.instance == NONE || (*p).pass_throughs >= MAX_PASS_THROUGHS { return false; }
-    if (read_material(read_triangle(hit.triangle).w).flags & MATERIAL_ALPHA_BLEND) == 0u { return false; }
+    if !hit_blends(hit) || (*p).pass_throughs >= MAX_PASS_THROUGHS { return false; }
     let s = resolve_hit(hit, (*p).ray);
     let u = get_1d(wave_sampler(path), DIM_PASS_THROUGH + (*p).depth * MAX_PASS_THROUGHS + (*p).pass_throughs);
     if u < s.alpha { return false; }
@@ -219,6 +218,12 @@ fn pass_through(path: u32, p: ptr<function, WavePath>, hit: Hit) -> bool {
     (*p).ray.origin = offset_ray_origin(s.p, -s.ng);
     (*p).pass_throughs++;
     return true;
+}
+
+// Whether `hit` is on an alpha-blended surface a path may pass through (compiled out without WAVE_PASS_THROUGHS).
+fn hit_blends(hit: Hit) -> bool {
+    return WAVE_PASS_THROUGHS && hit.instance != NONE
+        && (read_material(read_triangle(hit.triangle).w).flags & MATERIAL_ALPHA_BLEND) != 0u;
 }
 
 // One bounce of trace_path_from's loop (integrator/path.wgsl) from the surface (or the sky) the path's ray met:
@@ -479,16 +484,24 @@ fn extend(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgroups) grou
             hit = trace(p.ray, t_max, is_shadow);
             if is_shadow || !pass_through(path, &p, hit) { break; }
         }
-        if is_shadow {
-            if hit.instance == NONE {
-                path_radiance[path] += vec4<f32>(shadow_rays[i - live].light.xyz, 0.0);
-            }
-        } else {
-            if p.pass_throughs != pass_throughs { store_origin_and_throughput(path, p); }
-            path_hit[path] = vec4<u32>(bitcast<u32>(hit.t), hit.instance, hit.triangle, bitcast<u32>(hit.bary.x));
-            path_vertex[path].w = hit.bary.y;
-        }
+        if is_path && p.pass_throughs != pass_throughs { store_origin_and_throughput(path, p); }
+        store_extended(i, live, path, hit);
     }
+    count_workgroup_rays(lid);
+}
+
+// What extend's ray i (of `path`) found: a path's hit for shade, or a shadow ray's light where nothing blocked it.
+fn store_extended(i: u32, live: u32, path: u32, hit: Hit) {
+    if i < live {
+        path_hit[path] = vec4<u32>(bitcast<u32>(hit.t), hit.instance, hit.triangle, bitcast<u32>(hit.bary.x));
+        path_vertex[path].w = hit.bary.y;
+    } else if hit.instance == NONE {
+        path_radiance[path] += vec4<f32>(shadow_rays[i - live].light.xyz, 0.0);
+    }
+}
+
+// Adds the workgroup's rays to the count (every invocation, in uniform control flow).
+fn count_workgroup_rays(lid: u32) {
     atomicAdd(&workgroup_rays, rays_traced);
     workgroupBarrier();
     if lid == 0u {
@@ -511,58 +524,48 @@ fn extend_refill(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgroup
     let stride = groups.x * groups.y * QUEUE_GROUP;
     var i = queue_index(group, groups, lid);
     if i < total {
-        start_extended_ray(i, live);
+        var path = start_extended_ray(i, live);
         loop {
             if refill_step() {
-                if end_extended_ray(i, live) { continue; }
+                if end_extended_ray(i, live, path) { continue; }
                 i += stride;
                 if i >= total { break; }
-                start_extended_ray(i, live);
+                path = start_extended_ray(i, live);
             }
         }
     }
-    atomicAdd(&workgroup_rays, rays_traced);
-    workgroupBarrier();
-    if lid == 0u {
-        atomicAdd(&queues.control[WAVE_CONTROL_RAYS], atomicLoad(&workgroup_rays));
-    }
+    count_workgroup_rays(lid);
 }
 
-// Ray i of extend_refill: a live path's ray (i < live), else a shadow ray, which any hit ends.
-fn start_extended_ray(i: u32, live: u32) {
+// Starts ray i of extend_refill, a live path's ray (i < live) or else a shadow ray, which any hit ends. Returns
+// its path.
+fn start_extended_ray(i: u32, live: u32) -> u32 {
     rays_traced++;
     if i < live {
         let path = extended_path(i);
         refill_start(Ray(path_origin[path].xyz, path_dir[path].xyz), MISS, false);
-    } else {
-        let shadow = shadow_rays[i - live];
-        refill_start(Ray(shadow.origin.xyz, shadow.dir.xyz), shadow.origin.w, true);
+        return path;
     }
+    let shadow = shadow_rays[i - live];
+    refill_start(Ray(shadow.origin.xyz, shadow.dir.xyz), shadow.origin.w, true);
+    return bitcast<u32>(shadow.dir.w);
 }
 
 // What ray i found, stored as `extend` stores it; or, where a path's ray passes through an alpha-blended surface,
 // the path's origin and throughput moved past it and the ray from there started (returns true: not ended).
-fn end_extended_ray(i: u32, live: u32) -> bool {
+fn end_extended_ray(i: u32, live: u32, path: u32) -> bool {
     let hit = refill_result();
-    if i < live {
-        let path = extended_path(i);
-        // The material's flag first: most hits are on surfaces that do not blend, and need no path state.
-        if WAVE_PASS_THROUGHS && hit.instance != NONE
-            && (read_material(read_triangle(hit.triangle).w).flags & MATERIAL_ALPHA_BLEND) != 0u {
-            var p = load_path(path);
-            if pass_through(path, &p, hit) {
-                store_origin_and_throughput(path, p);
-                rays_traced++;
-                refill_start(p.ray, MISS, false);
-                return true;
-            }
+    // The material's flag first: most hits are on surfaces that do not blend, and need no path state.
+    if i < live && hit_blends(hit) {
+        var p = load_path(path);
+        if pass_through(path, &p, hit) {
+            store_origin_and_throughput(path, p);
+            rays_traced++;
+            refill_start(p.ray, MISS, false);
+            return true;
         }
-        path_hit[path] = vec4<u32>(bitcast<u32>(hit.t), hit.instance, hit.triangle, bitcast<u32>(hit.bary.x));
-        path_vertex[path].w = hit.bary.y;
-    } else if hit.instance == NONE {
-        let path = bitcast<u32>(shadow_rays[i - live].dir.w);
-        path_radiance[path] += vec4<f32>(shadow_rays[i - live].light.xyz, 0.0);
     }
+    store_extended(i, live, path, hit);
     return false;
 }
 
