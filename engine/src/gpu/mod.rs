@@ -98,7 +98,9 @@ pub struct GpuContext {
     pub wide_deformed: bool,
     /// The waves' extend stage as a fixed grid of at most this many workgroups whose invocations start their
     /// next ray inside the traversal loop (`shaders/traversal/refill.wgsl`), where the scene's shape allows it;
-    /// `None`: one ray an invocation. `RAYKIN_WAVE_REFILL=on|off` and `RAYKIN_WAVE_REFILL_GROUPS=N` (A/B runs).
+    /// `None`: one ray an invocation. On by default on GPUs (measured faster under auto on every bench scene whose
+    /// waves trace, docs/BENCHMARKS.md); CPU adapters, which trace waves only when asked, keep one ray an
+    /// invocation (unmeasured there). `RAYKIN_WAVE_REFILL=on|off` and `RAYKIN_WAVE_REFILL_GROUPS=N` (A/B runs).
     pub wave_refill: Option<u32>,
     /// The staging buffer of the last readback, kept for the next: allocating (and on discrete GPUs pinning)
     /// host memory for every readback cost more than the copy.
@@ -171,7 +173,11 @@ impl GpuContext {
             scene_shape_kernels: switch_on("RAYKIN_SCENE_SHAPE_KERNELS", true),
             wide_top_level: switch_on("RAYKIN_WIDE_TOP_LEVEL", true),
             wide_deformed: switch_on("RAYKIN_WIDE_DEFORMED", true),
-            wave_refill: switch_on("RAYKIN_WAVE_REFILL", false).then(|| {
+            wave_refill: switch_on(
+                "RAYKIN_WAVE_REFILL",
+                info.device_type != wgpu::DeviceType::Cpu,
+            )
+            .then(|| {
                 number_from_env("RAYKIN_WAVE_REFILL_GROUPS", WAVE_REFILL_GROUPS).clamp(1, 32768)
                     as u32
             }),
@@ -368,10 +374,11 @@ fn path_regeneration_on(info: &wgpu::AdapterInfo) -> bool {
     )
 }
 
-/// Workgroups of 128 invocations the waves' extend with refill runs at most: on an H100 the crowd's waves took
-/// 0.82x the plain extend's time with 2048 and 0.89x with 1024 (docs/BENCHMARKS.md, "The waves' extend with
-/// refill"); a GPU that holds fewer at once runs the rest as a second round of whole strides.
-const WAVE_REFILL_GROUPS: u64 = 2048;
+/// Workgroups of 128 invocations the waves' extend with refill runs at most: on an H100 4096 was the fastest of
+/// 1024-32768 on the seed-like interior, the crowd and the static scenes the waves trace, or within 0.2% of it
+/// (docs/BENCHMARKS.md, "The waves' extend with refill"); a GPU that holds fewer at once runs the rest as
+/// further rounds of whole strides.
+const WAVE_REFILL_GROUPS: u64 = 4096;
 
 /// A number from the environment variable `name` (A/B runs of a tuning constant), else `default`.
 pub(crate) fn number_from_env(name: &str, default: u64) -> u64 {
