@@ -23,15 +23,13 @@
 @group(1) @binding(3) var<storage, read_write> path_dir: array<vec4<f32>>;
 // Throughput and the medium the ray travels in (bits; NONE in the open).
 @group(1) @binding(4) var<storage, read_write> path_throughput: array<vec4<f32>>;
-// Where the path last scattered (next-event estimation's point, read only to weigh an emitter the path meets);
-// w: the hit's t (extend -> shade, read only in a medium). So a bounce that meets no emitter outside a medium
-// reads neither this nor the normal: 32 bytes a path less of shade's state traffic.
+// Where the path last scattered (next-event estimation's point); w: the hit's second barycentric (extend -> shade).
 @group(1) @binding(5) var<storage, read_write> path_vertex: array<vec4<f32>>;
 // The geometric normal there.
 @group(1) @binding(6) var<storage, read_write> path_normal: array<vec4<f32>>;
 // The sample's radiance so far.
 @group(1) @binding(7) var<storage, read_write> path_radiance: array<vec4<f32>>;
-// What extend found: second barycentric (bits), instance (NONE: nothing), triangle slot, first barycentric (bits).
+// What extend found: t (bits), instance (NONE: nothing), triangle slot, first barycentric (bits).
 @group(1) @binding(8) var<storage, read_write> path_hit: array<vec4<u32>>;
 // The counters (CONTROL_*, zeroed before the pass), then two queues of path indices, [0, N) and [N, 2N): one read
 // this bounce, the other filled for the next. One binding for both, and the shadow rays one array of a struct,
@@ -172,6 +170,7 @@ struct WavePath {
     last_bsdf_pdf: f32,
     throughput: vec3<f32>,
     medium: u32,
+    last_vertex: LightSampleContext,
 }
 
 fn load_path(path: u32) -> WavePath {
@@ -179,13 +178,9 @@ fn load_path(path: u32) -> WavePath {
     let dir = path_dir[path];
     let carried = path_throughput[path];
     let state = bitcast<u32>(origin.w);
+    let vertex = LightSampleContext(path_vertex[path].xyz, path_normal[path].xyz);
     return WavePath(Ray(origin.xyz, dir.xyz), state & 0xffffu, state >> 16u, dir.w, carried.xyz,
-        bitcast<u32>(carried.w));
-}
-
-// Where the path last scattered, as next-event estimation saw it there.
-fn load_last_vertex(path: u32) -> LightSampleContext {
-    return LightSampleContext(path_vertex[path].xyz, path_normal[path].xyz);
+        bitcast<u32>(carried.w), vertex);
 }
 
 // The ray's origin, depth and pass-throughs, and the throughput and medium: what a pass-through changes.
@@ -194,11 +189,11 @@ fn store_origin_and_throughput(path: u32, p: WavePath) {
     path_throughput[path] = vec4<f32>(p.throughput, bitcast<f32>(p.medium));
 }
 
-fn store_path(path: u32, p: WavePath, vertex: LightSampleContext) {
+fn store_path(path: u32, p: WavePath) {
     store_origin_and_throughput(path, p);
     path_dir[path] = vec4<f32>(p.ray.dir, p.last_bsdf_pdf);
-    path_vertex[path] = vec4<f32>(vertex.p, 0.0);
-    path_normal[path] = vec4<f32>(vertex.n, 0.0);
+    path_vertex[path] = vec4<f32>(p.last_vertex.p, 0.0);
+    path_normal[path] = vec4<f32>(p.last_vertex.n, 0.0);
 }
 
 // The sample a path traces: the sampler's index of its pixel's sample.
@@ -255,7 +250,7 @@ fn shade_bounce(path: u32, state: WavePath, hit: Hit) -> BounceStep {
     if any(s.emission > vec3<f32>(0.0)) && emits_towards_viewer(s) {
         var weight = 1.0;
         if nee && p.last_bsdf_pdf > 0.0 {
-            weight = power_heuristic(p.last_bsdf_pdf, direct_pdf_of_hit(hit, s.p, load_last_vertex(path), p.ray.dir));
+            weight = power_heuristic(p.last_bsdf_pdf, direct_pdf_of_hit(hit, s.p, p.last_vertex, p.ray.dir));
         }
         path_radiance[path] += vec4<f32>(p.throughput * s.emission * weight, 0.0);
     }
@@ -287,7 +282,8 @@ fn shade_bounce(path: u32, state: WavePath, hit: Hit) -> BounceStep {
     }
     p.ray = Ray(offset_ray_origin(s.p, select(s.ng, -s.ng, transmitted)), dir);
     if transmitted { p.medium = medium_after_transmission(s, p.medium); }
-    store_path(path, p, LightSampleContext(s.p, s.ng));
+    p.last_vertex = LightSampleContext(s.p, s.ng);
+    store_path(path, p);
     step.continues = true;
     if WAVE_SORT { step.key = sort_key(p.ray); }
     return step;
@@ -433,7 +429,7 @@ fn first_bounce(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_in
     let path = gid.z * pixel_count() + pixel;
     if gid.x < frame.width && gid.y < frame.height && gid.z < wave_samples() {
         let sample = camera_sample(gid.xy, pixel, path_sample(path));
-        var p = WavePath(sample.ray, 0u, 0u, 0.0, vec3<f32>(1.0), NONE);
+        var p = WavePath(sample.ray, 0u, 0u, 0.0, vec3<f32>(1.0), NONE, LightSampleContext(sample.ray.origin, vec3<f32>(0.0)));
         var hit: Hit;
         loop {
             rays_traced++;
@@ -497,8 +493,8 @@ fn extend(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgroups) grou
 // What extend's ray i (of `path`) found: a path's hit for shade, or a shadow ray's light where nothing blocked it.
 fn store_extended(i: u32, live: u32, path: u32, hit: Hit) {
     if i < live {
-        path_hit[path] = vec4<u32>(bitcast<u32>(hit.bary.y), hit.instance, hit.triangle, bitcast<u32>(hit.bary.x));
-        path_vertex[path].w = hit.t;
+        path_hit[path] = vec4<u32>(bitcast<u32>(hit.t), hit.instance, hit.triangle, bitcast<u32>(hit.bary.x));
+        path_vertex[path].w = hit.bary.y;
     } else if hit.instance == NONE {
         path_radiance[path] += vec4<f32>(shadow_rays[i - live].light.xyz, 0.0);
     }
@@ -585,11 +581,8 @@ fn shade(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgroups) group
     if i < atomicLoad(&queues.control[CONTROL_LIVE]) {
         path = live_path(i);
         let h = path_hit[path];
-        let p = load_path(path);
-        // The hit's t matters only to a medium's attenuation (shade_bounce).
-        var t = 0.0;
-        if p.medium != NONE { t = path_vertex[path].w; }
-        step = shade_bounce(path, p, Hit(t, h.y, h.z, vec2<f32>(bitcast<f32>(h.w), bitcast<f32>(h.x))));
+        let hit = Hit(bitcast<f32>(h.x), h.y, h.z, vec2<f32>(bitcast<f32>(h.w), path_vertex[path].w));
+        step = shade_bounce(path, load_path(path), hit);
     }
     queue_step(step, path, lid);
 }
