@@ -8,7 +8,9 @@
 //! Where the waves trace, a second trial then times them with each bounce's rays sorted before they are traced
 //! and without (`wavefront.wgsl`, `WAVE_SORT`): the same paths again, faster only where the scene's trees are
 //! too large for the caches (on an H100 the seed-like interior's trace 0.93x, the Cornell box's and the
-//! environment-lit scene's 1.2x; docs/BENCHMARKS.md). `RAYKIN_WAVE_SORT=on|off` forces it, for any waves.
+//! environment-lit scene's 1.2x; docs/BENCHMARKS.md). Since the waves' extend refills its lanes (the default on
+//! GPUs) no bench scene gains from the sort any more, the seed-like interior included; the trial stays for
+//! scenes whose trees outgrow the caches further. `RAYKIN_WAVE_SORT=on|off` forces it, for any waves.
 //!
 //! CPU adapters (lavapipe) keep the megakernel without a trial: it is the faster form there on every scene
 //! measured, their timestamps can miss compute work, and a trial would compile the wavefront's kernels, seconds
