@@ -233,6 +233,40 @@ fn zero_area_triangles_are_dropped() {
     renders_visibly(scene);
 }
 
+/// Many primitives with a few slivers each (the spheres of MetalRoughSpheresNoTextures) give one warning for the
+/// file, with the total, the primitives' count and the first few named, not a warning per primitive.
+#[test]
+fn zero_area_triangles_of_many_primitives_are_reported_once() {
+    let (mut p, mut i) = quad();
+    p.push([0.5, 0.5, 0.0]);
+    i.extend([0, 0, 1, 0, 2, 4]);
+    let slivered = (p, i);
+    let path = write(
+        "zero_area_many.gltf",
+        &gltf_json(&[
+            slivered.clone(),
+            quad(),
+            slivered.clone(),
+            slivered.clone(),
+            slivered,
+        ]),
+    );
+    let scene = load(&path).expect("loads");
+    let dropped: Vec<&String> = scene
+        .warnings
+        .iter()
+        .filter(|w| w.contains("zero-area"))
+        .collect();
+    assert_eq!(dropped.len(), 1, "{:?}", scene.warnings);
+    for part in [
+        "8 zero-area triangles dropped from 4 primitives",
+        "mesh 0 `` primitive 0: 2; mesh 0 `` primitive 2: 2; mesh 0 `` primitive 3: 2; and 1 more",
+    ] {
+        assert!(dropped[0].contains(part), "{part:?} in {dropped:?}");
+    }
+    assert_eq!(scene.triangle_count(), 5 * 2);
+}
+
 #[test]
 fn unsupported_required_extension_is_refused() {
     let mut doc = gltf_json(&[quad()]);

@@ -498,6 +498,9 @@ impl<'a> Loader<'a> {
     ) -> Result<Vec<MeshData>, SceneError> {
         let meshes: Vec<_> = self.document.meshes().collect();
         let mut out = Vec::with_capacity(meshes.len());
+        // Reported once for the file: a model of a hundred primitives with a couple of slivers each (the spheres
+        // of MetalRoughSpheresNoTextures) would otherwise repeat one warning a hundred times.
+        let mut dropped_by_primitive = Vec::new();
         // Meshes that use glTF's default material get it appended once, after the file's materials.
         let default_material = materials.len() as u32;
         for mesh in meshes {
@@ -520,9 +523,9 @@ impl<'a> Loader<'a> {
                     continue;
                 }
                 match self.read_primitive(&primitive) {
-                    Ok((part, note)) => {
-                        if let Some(note) = note {
-                            self.warn(format!("{label}: {note}"));
+                    Ok((part, dropped)) => {
+                        if dropped.any() {
+                            dropped_by_primitive.push((label.clone(), dropped));
                         }
                         let mut notes = Vec::new();
                         mappings.push(super::variants::read_mappings(
@@ -569,14 +572,17 @@ impl<'a> Loader<'a> {
             }
             out.push(data);
         }
+        for warning in dropped_triangle_warnings(&dropped_by_primitive) {
+            self.warn(warning);
+        }
         Ok(out)
     }
 
-    /// Reads one primitive; returns its data and an optional note about dropped triangles.
+    /// Reads one primitive; returns its data and the triangles it dropped.
     fn read_primitive(
         &self,
         primitive: &gltf::Primitive,
-    ) -> Result<(PrimitiveData, Option<String>), String> {
+    ) -> Result<(PrimitiveData, DroppedTriangles), String> {
         // Refuse points and lines before decoding anything.
         assemble_triangles(primitive.mode(), &[])?;
         let draco = primitive
@@ -739,18 +745,18 @@ impl<'a> Loader<'a> {
         }
         let triangles = assemble_triangles(primitive.mode(), &indices)?;
 
-        let (mut non_finite, mut degenerate) = (0usize, 0usize);
+        let mut dropped = DroppedTriangles::default();
         part.triangles = triangles
             .into_iter()
             .filter(|t| {
                 let [a, b, c] = t.map(|i| part.positions[i as usize]);
                 if !(a.is_finite() && b.is_finite() && c.is_finite()) {
-                    non_finite += 1;
+                    dropped.non_finite += 1;
                     return false;
                 }
                 // Zero-area triangles can never be hit, and their normals are undefined: drop them.
                 if (b - a).cross(c - a).length_squared() <= 0.0 {
-                    degenerate += 1;
+                    dropped.zero_area += 1;
                     return false;
                 }
                 true
@@ -762,23 +768,15 @@ impl<'a> Loader<'a> {
                 *p = Vec3::ZERO;
             }
         }
-        let mut notes = Vec::new();
-        if non_finite > 0 {
-            notes.push(format!(
-                "{non_finite} triangles with NaN or infinite vertex positions dropped"
-            ));
-        }
-        if degenerate > 0 {
-            notes.push(format!("{degenerate} zero-area triangles dropped"));
-        }
         if part.triangles.is_empty() {
+            let notes = dropped.notes();
             return Err(if notes.is_empty() {
                 "it has no triangles".into()
             } else {
                 notes.join(", ")
             });
         }
-        Ok((part, (!notes.is_empty()).then(|| notes.join(", "))))
+        Ok((part, dropped))
     }
 
     fn load_cameras(&self) -> Vec<PerspectiveCamera> {
@@ -1440,4 +1438,76 @@ impl Finite for Vec4 {
 }
 fn finite_or<T: Finite>(v: T, fallback: T) -> T {
     if v.all_finite() { v } else { fallback }
+}
+
+/// Triangles a primitive lost on loading.
+#[derive(Clone, Copy, Debug, Default)]
+struct DroppedTriangles {
+    /// With a NaN or infinite vertex position.
+    non_finite: usize,
+    /// Of zero area (repeated or collinear vertices).
+    zero_area: usize,
+}
+
+impl DroppedTriangles {
+    fn any(&self) -> bool {
+        self.non_finite > 0 || self.zero_area > 0
+    }
+
+    fn notes(&self) -> Vec<String> {
+        let mut notes = Vec::new();
+        if self.non_finite > 0 {
+            notes.push(format!(
+                "{} triangles with NaN or infinite vertex positions dropped",
+                self.non_finite
+            ));
+        }
+        if self.zero_area > 0 {
+            notes.push(format!("{} zero-area triangles dropped", self.zero_area));
+        }
+        notes
+    }
+}
+
+/// The primitives named in a summed warning before "and N more".
+const DROPPED_NAMED: usize = 3;
+
+/// One warning per kind of dropped triangle for the whole file: the primitive's label where one primitive
+/// dropped any, else the total, the number of primitives and the first few with their counts.
+fn dropped_triangle_warnings(dropped: &[(String, DroppedTriangles)]) -> Vec<String> {
+    let kinds: [(&str, fn(&DroppedTriangles) -> usize); 2] = [
+        ("triangles with NaN or infinite vertex positions", |d| {
+            d.non_finite
+        }),
+        ("zero-area triangles", |d| d.zero_area),
+    ];
+    let mut warnings = Vec::new();
+    for (what, count) in kinds {
+        let hit: Vec<(&str, usize)> = dropped
+            .iter()
+            .map(|(label, d)| (label.as_str(), count(d)))
+            .filter(|&(_, n)| n > 0)
+            .collect();
+        match hit.as_slice() {
+            [] => {}
+            [(label, n)] => warnings.push(format!("{label}: {n} {what} dropped")),
+            _ => {
+                let total: usize = hit.iter().map(|&(_, n)| n).sum();
+                let mut named: Vec<String> = hit
+                    .iter()
+                    .take(DROPPED_NAMED)
+                    .map(|(label, n)| format!("{label}: {n}"))
+                    .collect();
+                if hit.len() > DROPPED_NAMED {
+                    named.push(format!("and {} more", hit.len() - DROPPED_NAMED));
+                }
+                warnings.push(format!(
+                    "{total} {what} dropped from {} primitives ({})",
+                    hit.len(),
+                    named.join("; ")
+                ));
+            }
+        }
+    }
+    warnings
 }
