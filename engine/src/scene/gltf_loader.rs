@@ -1475,22 +1475,15 @@ const DROPPED_NAMED: usize = 3;
 /// One warning per kind of dropped triangle for the whole file: the primitive's label where one primitive
 /// dropped any, else the total, the number of primitives and the first few with their counts.
 fn dropped_triangle_warnings(dropped: &[(String, DroppedTriangles)]) -> Vec<String> {
-    let kinds: [(&str, fn(&DroppedTriangles) -> usize); 2] = [
-        ("triangles with NaN or infinite vertex positions", |d| {
-            d.non_finite
-        }),
-        ("zero-area triangles", |d| d.zero_area),
-    ];
-    let mut warnings = Vec::new();
-    for (what, count) in kinds {
+    let kind = |what: &str, count: fn(&DroppedTriangles) -> usize| -> Option<String> {
         let hit: Vec<(&str, usize)> = dropped
             .iter()
             .map(|(label, d)| (label.as_str(), count(d)))
             .filter(|&(_, n)| n > 0)
             .collect();
         match hit.as_slice() {
-            [] => {}
-            [(label, n)] => warnings.push(format!("{label}: {n} {what} dropped")),
+            [] => None,
+            [(label, n)] => Some(format!("{label}: {n} {what} dropped")),
             _ => {
                 let total: usize = hit.iter().map(|&(_, n)| n).sum();
                 let mut named: Vec<String> = hit
@@ -1501,13 +1494,21 @@ fn dropped_triangle_warnings(dropped: &[(String, DroppedTriangles)]) -> Vec<Stri
                 if hit.len() > DROPPED_NAMED {
                     named.push(format!("and {} more", hit.len() - DROPPED_NAMED));
                 }
-                warnings.push(format!(
+                Some(format!(
                     "{total} {what} dropped from {} primitives ({})",
                     hit.len(),
                     named.join("; ")
-                ));
+                ))
             }
         }
-    }
-    warnings
+    };
+    [
+        kind("triangles with NaN or infinite vertex positions", |d| {
+            d.non_finite
+        }),
+        kind("zero-area triangles", |d| d.zero_area),
+    ]
+    .into_iter()
+    .flatten()
+    .collect()
 }
