@@ -444,7 +444,7 @@ impl<'a> Loader<'a> {
             );
             let extensions = super::material_extensions::read(&m, &mut slots);
             if m.occlusion_texture().is_some() {
-                occluded.push(name.clone());
+                occluded.push(format!("material {} `{name}`", out.len()));
             }
             for w in slots.notes {
                 self.warn(w);
@@ -483,7 +483,7 @@ impl<'a> Loader<'a> {
         }
         if !occluded.is_empty() {
             self.warn(format!(
-                "occlusion textures ignored ({} materials, e.g. `{}`): a path tracer computes occlusion itself",
+                "occlusion textures ignored ({} materials, e.g. {}): a path tracer computes occlusion itself",
                 occluded.len(),
                 occluded[0]
             ));
