@@ -1449,23 +1449,29 @@ struct DroppedTriangles {
     zero_area: usize,
 }
 
+/// What each of [`DroppedTriangles::counts`] counts, as the warnings say it.
+const DROPPED_KINDS: [&str; 2] = [
+    "triangles with NaN or infinite vertex positions",
+    "zero-area triangles",
+];
+
 impl DroppedTriangles {
+    /// The counts in [`DROPPED_KINDS`]' order.
+    fn counts(&self) -> [usize; 2] {
+        [self.non_finite, self.zero_area]
+    }
+
     fn any(&self) -> bool {
-        self.non_finite > 0 || self.zero_area > 0
+        self.counts().iter().any(|&n| n > 0)
     }
 
     fn notes(&self) -> Vec<String> {
-        let mut notes = Vec::new();
-        if self.non_finite > 0 {
-            notes.push(format!(
-                "{} triangles with NaN or infinite vertex positions dropped",
-                self.non_finite
-            ));
-        }
-        if self.zero_area > 0 {
-            notes.push(format!("{} zero-area triangles dropped", self.zero_area));
-        }
-        notes
+        DROPPED_KINDS
+            .iter()
+            .zip(self.counts())
+            .filter(|&(_, n)| n > 0)
+            .map(|(what, n)| format!("{n} {what} dropped"))
+            .collect()
     }
 }
 
@@ -1475,15 +1481,16 @@ const DROPPED_NAMED: usize = 3;
 /// One warning per kind of dropped triangle for the whole file: the primitive's label where one primitive
 /// dropped any, else the total, the number of primitives and the first few with their counts.
 fn dropped_triangle_warnings(dropped: &[(String, DroppedTriangles)]) -> Vec<String> {
-    let kind = |what: &str, count: fn(&DroppedTriangles) -> usize| -> Option<String> {
+    let mut warnings = Vec::new();
+    for (kind, what) in DROPPED_KINDS.iter().enumerate() {
         let hit: Vec<(&str, usize)> = dropped
             .iter()
-            .map(|(label, d)| (label.as_str(), count(d)))
+            .map(|(label, d)| (label.as_str(), d.counts()[kind]))
             .filter(|&(_, n)| n > 0)
             .collect();
         match hit.as_slice() {
-            [] => None,
-            [(label, n)] => Some(format!("{label}: {n} {what} dropped")),
+            [] => {}
+            [(label, n)] => warnings.push(format!("{label}: {n} {what} dropped")),
             _ => {
                 let total: usize = hit.iter().map(|&(_, n)| n).sum();
                 let mut named: Vec<String> = hit
@@ -1494,21 +1501,13 @@ fn dropped_triangle_warnings(dropped: &[(String, DroppedTriangles)]) -> Vec<Stri
                 if hit.len() > DROPPED_NAMED {
                     named.push(format!("and {} more", hit.len() - DROPPED_NAMED));
                 }
-                Some(format!(
+                warnings.push(format!(
                     "{total} {what} dropped from {} primitives ({})",
                     hit.len(),
                     named.join("; ")
-                ))
+                ));
             }
         }
-    };
-    [
-        kind("triangles with NaN or infinite vertex positions", |d| {
-            d.non_finite
-        }),
-        kind("zero-area triangles", |d| d.zero_area),
-    ]
-    .into_iter()
-    .flatten()
-    .collect()
+    }
+    warnings
 }
